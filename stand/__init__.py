@@ -1,0 +1,18 @@
+"""Host software of a soft-bearing two-plane rotor balancing stand.
+
+Layers (data flows one way):
+CAN frame -> decoded samples and marks per node -> complex 1x amplitude per
+support -> unbalance per plane -> correction.
+
+- :mod:`stand.core`: the pure numerical core (model, inverse, time path);
+  arrays in, arrays out, no I/O.
+- :mod:`stand.config`: the TOML configuration, validated.
+- :mod:`stand.cli`: the ``stand`` command.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("rotor-stand")
+except PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = "0+unknown"

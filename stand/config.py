@@ -1,0 +1,156 @@
+"""The stand configuration: one TOML file, validated by pydantic.
+
+Tables (SI units, the seed's symbols)::
+
+    [stand]   M1 M2 C1 C2 [H1 H2 reference_angle_deg]
+    [rotor]   M3 J3 a b c d R1 R2
+
+Unknown keys and tables are refused (``extra="forbid"``); numbers must be
+TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
+checks are :meth:`stand.core.model.StandParameters.check`; their errors are
+reported here with the file and the key.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
+
+from stand.core.model import STAND_KEYS, ParameterError, StandParameters
+from stand.errors import ConfigError
+
+_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+class StandTable(BaseModel):
+    """``[stand]``: the supports (kg, N/m, N s/m) and the reference sensor (deg)."""
+
+    model_config = _STRICT
+
+    M1: FiniteFloat
+    M2: FiniteFloat
+    C1: FiniteFloat
+    C2: FiniteFloat
+    H1: FiniteFloat = 0.0
+    H2: FiniteFloat = 0.0
+    reference_angle_deg: FiniteFloat = 0.0
+
+
+class RotorTable(BaseModel):
+    """``[rotor]``: mass (kg), inertia (kg m^2), lengths and radii (m)."""
+
+    model_config = _STRICT
+
+    M3: FiniteFloat
+    J3: FiniteFloat
+    a: FiniteFloat
+    b: FiniteFloat
+    c: FiniteFloat
+    d: FiniteFloat
+    R1: FiniteFloat
+    R2: FiniteFloat
+
+
+class Config(BaseModel):
+    """A whole configuration file."""
+
+    model_config = _STRICT
+
+    stand: StandTable
+    rotor: RotorTable
+
+    def parameters(self) -> StandParameters:
+        """The core's parameter object (raises :class:`ParameterError`)."""
+        values = {**self.stand.model_dump(), **self.rotor.model_dump()}
+        del values["reference_angle_deg"]
+        return StandParameters(**values)
+
+
+def _describe(err: dict[str, Any]) -> tuple[str, str]:
+    loc = [str(x) for x in err["loc"]]
+    key = ".".join(loc)
+    msg = str(err["msg"])
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key (not part of the configuration)" if len(loc) > 1 else "unknown table"
+    elif err["type"] != "missing":
+        msg = f"{msg}, got {err['input']!r}"
+    return key, msg
+
+
+def config_from_dict(
+    data: dict[str, Any], source: str = "<config>"
+) -> tuple[Config, StandParameters]:
+    """Validate a parsed configuration; return it and the core parameters.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``source``, the first bad key and what is wrong with it.
+    """
+    try:
+        cfg = Config.model_validate(data)
+    except ValidationError as exc:
+        # an unknown key is usually a typo, and the cause of a "missing" one: report it first
+        errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
+        key, msg = _describe(dict(errors[0]))
+        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        raise ConfigError(msg + more, source=source, key=key) from None
+    try:
+        params = cfg.parameters()
+    except ParameterError as exc:
+        table = "stand" if exc.key in STAND_KEYS else "rotor"
+        raise ConfigError(
+            str(exc).split(": ", 1)[1], source=source, key=f"{table}.{exc.key}"
+        ) from None
+    return cfg, params
+
+
+def load_config(path: str | Path) -> tuple[Config, StandParameters]:
+    """Read, parse and validate a configuration file.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> text = '''[stand]
+    ... M1 = 8.0
+    ... M2 = 9.0
+    ... C1 = 4.5e4
+    ... C2 = 5.2e4
+    ... [rotor]
+    ... M3 = 60.0
+    ... J3 = 21.0
+    ... a = 0.15
+    ... b = 0.85
+    ... c = 0.70
+    ... d = 0.20
+    ... R1 = 0.09
+    ... R2 = "0.08"
+    ... '''
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".toml", delete=False) as f:
+    ...     _ = f.write(text)
+    >>> try:
+    ...     load_config(f.name)
+    ... except ConfigError as e:
+    ...     print(str(e).replace(f.name, "stand.toml"))
+    stand.toml: [rotor.R2]: Input should be a valid number, got '0.08'
+    >>> os.unlink(f.name)
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot read the configuration: {exc.strerror}", source=str(path)
+        ) from None
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"not UTF-8 text ({exc.reason} at byte {exc.start})", source=str(path)
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"not valid TOML: {exc}", source=str(path)) from None
+    return config_from_dict(data, source=str(path))

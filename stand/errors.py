@@ -1,0 +1,77 @@
+"""The project's one exception tree.
+
+Every error the software raises on purpose derives from :class:`StandError`.
+Each subclass also inherits the standard-library type it resembles, so a
+caller that only knows ``ValueError`` or ``TimeoutError`` still catches it,
+and carries the figures that explain it as attributes.
+
+The CLI turns any :class:`StandError` into one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+
+class StandError(Exception):
+    """Base of every error raised on purpose by this project."""
+
+
+class ConfigError(StandError, ValueError):
+    """A configuration file (or value) is missing, malformed or physically refused.
+
+    Parameters
+    ----------
+    message
+        What was expected and what came.
+    source
+        The file (or other origin) the bad value came from, if any.
+    key
+        The dotted key of the bad value, e.g. ``"rotor.b"``, if any.
+    """
+
+    def __init__(self, message: str, *, source: str | None = None, key: str | None = None):
+        self.source = source
+        self.key = key
+        where = ": ".join(p for p in (source, f"[{key}]" if key else None) if p)
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class ModelError(StandError, ValueError):
+    """The stand model cannot answer for these inputs (bad speed, shapes, ...)."""
+
+
+class PlanesTooCloseError(ModelError):
+    """The two-plane split is too ill-conditioned to be trusted.
+
+    The static resultant (``U1 + U2``, i.e. the unbalance a single plane
+    would correct) is still well determined and is carried here.
+
+    Attributes
+    ----------
+    split_condition : float
+        2-norm condition number of the plane split (dimensionless; inf when
+        the planes coincide).
+    limit : float
+        The largest split condition number accepted.
+    separation_m : float
+        Distance between the correction planes, ``b + c`` [m].
+    static_unbalance_kg_m : complex
+        The static resultant ``q1 R1 e^{-i phi1} + q2 R2 e^{-i phi2}`` [kg m].
+    """
+
+    def __init__(
+        self,
+        *,
+        split_condition: float,
+        limit: float,
+        separation_m: float,
+        static_unbalance_kg_m: complex,
+    ):
+        self.split_condition = split_condition
+        self.limit = limit
+        self.separation_m = separation_m
+        self.static_unbalance_kg_m = static_unbalance_kg_m
+        super().__init__(
+            f"correction planes {separation_m * 1e3:.4g} mm apart: the two-plane split has "
+            f"condition number {split_condition:.3g} (limit {limit:.3g}); "
+            f"static resultant is {abs(static_unbalance_kg_m) * 1e6:.6g} g mm"
+        )

@@ -1,0 +1,97 @@
+"""The TOML configuration: what is accepted, and one clear line for what is not."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from stand.config import load_config
+from stand.errors import ConfigError, StandError
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "examples" / "demo-stand.toml"
+
+MINIMAL = """\
+[stand]
+M1 = 8.0
+M2 = 9.0
+C1 = 4.5e4
+C2 = 5.2e4
+
+[rotor]
+M3 = 60.0
+J3 = 21.0
+a = 0.15
+b = 0.85
+c = 0.70
+d = 0.20
+R1 = 0.09
+R2 = 0.08
+"""
+
+
+def write(tmp_path: Path, text: str) -> Path:
+    f = tmp_path / "stand.toml"
+    f.write_text(text)
+    return f
+
+
+def test_the_shipped_demo_config_loads() -> None:
+    cfg, p = load_config(DEMO)
+    assert p.M3 == 60.0 and p.C2 == 5.2e4 and cfg.stand.reference_angle_deg == 0.0
+
+
+def test_the_two_tables_alone_work_with_defaults(tmp_path: Path) -> None:
+    cfg, p = load_config(write(tmp_path, MINIMAL))
+    assert (p.H1, p.H2, cfg.stand.reference_angle_deg) == (0.0, 0.0, 0.0)
+
+
+def test_integers_are_numbers(tmp_path: Path) -> None:
+    _, p = load_config(write(tmp_path, MINIMAL.replace("M1 = 8.0", "M1 = 8")))
+    assert p.M1 == 8.0
+
+
+@pytest.mark.parametrize(
+    ("edit", "where", "what"),
+    [
+        (("J3 = 21.0\n", ""), "[rotor.J3]", "Field required"),
+        (("R2 = 0.08", 'R2 = "0.08"'), "[rotor.R2]", "valid number"),
+        (("R2 = 0.08", "R2 = true"), "[rotor.R2]", "valid number"),
+        (("C1 = 4.5e4", "C1 = inf"), "[stand.C1]", "finite"),
+        (("C1 = 4.5e4", "C1 = nan"), "[stand.C1]", "finite"),
+        (("M1 = 8.0", "M1 = 8.0\nmass = 3"), "[stand.mass]", "unknown key"),
+        (("[rotor]", "[rotors]"), "[rotors]", "unknown table"),
+        (("C1 = 4.5e4", "C1 = -4.5e4"), "[stand.C1]", "must be > 0"),
+        (("M2 = 9.0", "M2 = -1.0"), "[stand.M2]", "must be >= 0"),
+        (("a = 0.15", "a = -0.9"), "[rotor.b]", "centre of mass"),
+        (("c = 0.70\nd = 0.20", "c = -0.9\nd = 1.2"), "[rotor.c]", "b + c"),
+        (("J3 = 21.0", "J3 = 0.0"), "[rotor.J3]", "must be > 0"),
+    ],
+)
+def test_bad_values_name_the_file_and_the_key(
+    tmp_path: Path, edit: tuple[str, str], where: str, what: str
+) -> None:
+    f = write(tmp_path, MINIMAL.replace(*edit))
+    with pytest.raises(ConfigError) as err:
+        load_config(f)
+    msg = str(err.value)
+    assert msg.startswith(f"{f}: {where}: "), msg
+    assert what in msg
+    assert "\n" not in msg
+    assert isinstance(err.value, StandError) and isinstance(err.value, ValueError)
+
+
+def test_toml_syntax_error_names_the_file_and_line(tmp_path: Path) -> None:
+    f = write(tmp_path, MINIMAL.replace("M2 = 9.0", "M2 = = 9.0"))
+    with pytest.raises(ConfigError, match=r"stand\.toml: not valid TOML: .*line 3"):
+        load_config(f)
+
+
+def test_missing_and_binary_files(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="cannot read the configuration"):
+        load_config(tmp_path / "nope.toml")
+    f = tmp_path / "bin.toml"
+    f.write_bytes(b"\xff\xfe\x00garbage")
+    with pytest.raises(ConfigError, match="not UTF-8"):
+        load_config(f)

@@ -1,0 +1,56 @@
+"""The import direction: the pure core never reaches out to I/O, drivers or the CLI."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CORE = sorted((ROOT / "stand" / "core").glob("*.py"))
+FORBIDDEN_IN_CORE = (
+    "can",
+    "h5py",
+    "drivers",
+    "calib",
+    "stand.cli",
+    "stand.config",
+    "pydantic",
+    "tomllib",
+    "matplotlib",
+    "rich",
+    "cantools",
+)
+
+
+def imported_modules(path: Path) -> set[str]:
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+    return names
+
+
+@pytest.mark.parametrize("path", CORE, ids=lambda p: p.name)
+def test_core_module_imports_nothing_outside_the_core(path: Path) -> None:
+    bad = {
+        m
+        for m in imported_modules(path)
+        if any(m == f or m.startswith(f + ".") for f in FORBIDDEN_IN_CORE)
+    }
+    assert not bad, f"{path.name} imports {sorted(bad)}"
+
+
+def test_importing_the_core_and_the_cli_loads_no_heavy_module() -> None:
+    code = (
+        "import sys, stand.core, stand.cli; "
+        "heavy = [m for m in ('scipy.integrate', 'scipy.signal', 'matplotlib', 'can', 'h5py') "
+        "if m in sys.modules]; print(heavy)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
