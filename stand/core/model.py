@@ -258,7 +258,10 @@ def plane_matrix(p: StandParameters, omega_rad_s: ArrayLike) -> ComplexArray:
     lost to ``c + L1`` or ``c - L2``, and evaluated in double-double so that
     it is correct to the last place whatever its terms cancel.
     """
-    t = _Terms(p, _omega(omega_rad_s))
+    return _plane_matrix(p, _Terms(p, _omega(omega_rad_s)))
+
+
+def _plane_matrix(p: StandParameters, t: _Terms) -> ComplexArray:
     M3, J3 = DD(p.M3), DD(p.J3)
     abc = t.L1 + p.c
     bcd = DD(p.b) + p.c + p.d
@@ -278,7 +281,10 @@ def support_determinant(p: StandParameters, omega_rad_s: ArrayLike) -> ComplexAr
     zero at an undamped natural frequency, and nowhere else.  Evaluated in
     double-double: correct to the last place however close to resonance.
     """
-    t = _Terms(p, _omega(omega_rad_s))
+    return _support_determinant(p, _Terms(p, _omega(omega_rad_s)))
+
+
+def _support_determinant(p: StandParameters, t: _Terms) -> ComplexArray:
     M3, J3 = DD(p.M3), DD(p.J3)
     P1 = (J3 + M3 * t.L1 * t.L1) / t.L
     P2 = (J3 + M3 * t.L2 * t.L2) / t.L
@@ -349,8 +355,9 @@ def forward(p: StandParameters, omega_rad_s: ArrayLike, U_kg_m: ArrayLike) -> Co
     U = np.asarray(U_kg_m, dtype=np.complex128)
     if U.shape[-1:] != (2,):
         raise ModelError(f"unbalances need a last axis of length 2, got shape {U.shape}")
-    N = plane_matrix(p, w)
-    det = support_determinant(p, w)
+    terms = _Terms(p, w)
+    N = _plane_matrix(p, terms)
+    det = _support_determinant(p, terms)
     if np.any(det == 0):
         raise ModelError(
             "the speed is a natural frequency of the undamped stand: no steady state exists"
