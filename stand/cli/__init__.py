@@ -16,15 +16,12 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from stand import __version__
+from stand.cli.common import UsageError
 from stand.errors import StandError
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
-
-
-class UsageError(StandError, ValueError):
-    """A command-line argument is missing or malformed."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -64,10 +61,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args_list
     try:
-        args = build_parser().parse_args(args_list)
+        parser = build_parser()
+        args = parser.parse_args(args_list)
         run: Callable[[argparse.Namespace], int] | None = getattr(args, "run", None)
         if run is None:
-            build_parser().print_help(sys.stderr)
+            parser.print_help(sys.stderr)
             return EXIT_BAD_INPUT
         return run(args)
     except StandError as exc:

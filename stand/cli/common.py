@@ -8,6 +8,11 @@ import sys
 from collections.abc import Iterable
 
 from stand.core import Diagnostic
+from stand.errors import StandError
+
+
+class UsageError(StandError, ValueError):
+    """A command-line argument is missing or malformed."""
 
 
 def parse_rpm(text: str) -> float:

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from stand.cli.common import parse_rpm, parse_unbalance, print_warnings
+from stand.cli.common import UsageError, parse_rpm, parse_unbalance, print_warnings
 from stand.config import load_config
 from stand.core import (
     forward,
@@ -35,8 +35,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli import UsageError
-
     if len(args.unbalance) != 2:
         n = len(args.unbalance)
         raise UsageError(f"stand forward: expected --unbalance twice (plane 1, plane 2), got {n}")

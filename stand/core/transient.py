@@ -228,12 +228,10 @@ def integrate(
     if max_step_s is None:
         max_step_s = 0.25 * 2 * math.pi / w_top
     if atol_scale is None:
-        x_ss = (
-            np.abs(forward(p, speed.max_omega_rad_s, U)) / speed.max_omega_rad_s**2
-            if (speed.max_omega_rad_s > 0)
-            else np.zeros(2)
-        )
-        atol_scale = float(max(np.max(x_ss), 1e-300))
+        atol_scale = 1e-300  # a rotor that never turns: nothing moves
+        if speed.max_omega_rad_s > 0:
+            x_ss = np.abs(forward(p, speed.max_omega_rad_s, U)) / speed.max_omega_rad_s**2
+            atol_scale = max(float(np.max(x_ss)), atol_scale)
     atol = rtol * np.array([atol_scale, atol_scale, w_top * atol_scale, w_top * atol_scale])
 
     Minv = np.linalg.inv(mass_matrix(p))
