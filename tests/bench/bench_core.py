@@ -10,16 +10,15 @@ from __future__ import annotations
 
 import time
 import timeit
+from pathlib import Path
 
 import numpy as np
 
-from stand.core import StandParameters, forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
+from stand.config import load_config
+from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
 from stand.core.transient import SpeedProfile, integrate
 
-DEMO = StandParameters(
-    M1=8.0, M2=9.0, C1=4.5e4, C2=5.2e4, M3=60.0, J3=21.0,
-    a=0.15, b=0.85, c=0.70, d=0.20, R1=0.09, R2=0.08,
-)  # fmt: skip
+_, DEMO = load_config(Path(__file__).resolve().parents[2] / "examples" / "demo-stand.toml")
 
 
 def main() -> None:
