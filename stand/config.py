@@ -4,6 +4,8 @@ Tables (SI units, the seed's symbols)::
 
     [stand]   M1 M2 C1 C2 [H1 H2 reference_angle_deg]
     [rotor]   M3 J3 a b c d R1 R2
+    [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
+              channel, bitrate and any option of the python-can interface
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -61,6 +63,7 @@ class Config(BaseModel):
 
     stand: StandTable
     rotor: RotorTable
+    bus: dict[str, str | int | float | bool] | None = None
 
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""
@@ -108,6 +111,26 @@ def config_from_dict(
     return cfg, params
 
 
+def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
+    """The text of a TOML file and its parsed content (:class:`ConfigError` if unreadable)."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot read the configuration: {exc.strerror}", source=str(path)
+        ) from None
+    try:
+        text = raw.decode("utf-8")
+        return text, tomllib.loads(text)
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"not UTF-8 text ({exc.reason} at byte {exc.start})", source=str(path)
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"not valid TOML: {exc}", source=str(path)) from None
+
+
 def load_config(path: str | Path) -> tuple[Config, StandParameters]:
     """Read, parse and validate a configuration file.
 
@@ -138,19 +161,5 @@ def load_config(path: str | Path) -> tuple[Config, StandParameters]:
     stand.toml: [rotor.R2]: Input should be a valid number, got '0.08'
     >>> os.unlink(f.name)
     """
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ConfigError(
-            f"cannot read the configuration: {exc.strerror}", source=str(path)
-        ) from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise ConfigError(
-            f"not UTF-8 text ({exc.reason} at byte {exc.start})", source=str(path)
-        ) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", source=str(path)) from None
+    _, data = read_toml(path)
     return config_from_dict(data, source=str(path))

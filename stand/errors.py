@@ -75,3 +75,69 @@ class PlanesTooCloseError(ModelError):
             f"condition number {split_condition:.3g} (limit {limit:.3g}); "
             f"static resultant is {abs(static_unbalance_kg_m) * 1e6:.6g} g mm"
         )
+
+
+class NoStatusError(StandError, ValueError):
+    """A node's samples cannot be scaled: no STATUS frame came in time.
+
+    Attributes
+    ----------
+    node : int
+        The node id.
+    frame : int
+        Index of the node's first frame in the run.
+    """
+
+    def __init__(self, message: str, *, node: int, frame: int):
+        self.node = node
+        self.frame = frame
+        super().__init__(message)
+
+
+class RecordingError(StandError, ValueError):
+    """A run file or CAN log cannot be read (corrupt, truncated, garbage, no protocol frames).
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    line : int or None
+        The 1-based line (text logs) or frame index where it went wrong, if known.
+    """
+
+    def __init__(self, message: str, *, path: str, line: int | None = None):
+        self.path = path
+        self.line = line
+        where = f"{path}:{line}" if line is not None else path
+        super().__init__(f"{where}: {message}")
+
+
+class BusError(StandError, ConnectionError):
+    """The CAN interface failed: cannot open, bus-off, interface gone.
+
+    Attributes
+    ----------
+    channel : str
+        The interface and channel, e.g. ``"socketcan:can0"``.
+    frames_received : int
+        Frames received (and kept) before the failure.
+    """
+
+    def __init__(self, message: str, *, channel: str, frames_received: int = 0):
+        self.channel = channel
+        self.frames_received = frames_received
+        super().__init__(f"{channel}: {message}")
+
+
+class BusTimeoutError(BusError, TimeoutError):
+    """No frames (or not the frames waited for) within the time allowed.
+
+    Attributes
+    ----------
+    timeout_s : float
+        The time waited [s].
+    """
+
+    def __init__(self, message: str, *, channel: str, timeout_s: float, frames_received: int = 0):
+        self.timeout_s = timeout_s
+        super().__init__(message, channel=channel, frames_received=frames_received)

@@ -54,3 +54,26 @@ def test_importing_the_core_and_the_cli_loads_no_heavy_module() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+DRIVERS = sorted((ROOT / "drivers").glob("*.py"))
+
+
+@pytest.mark.parametrize("path", DRIVERS, ids=lambda p: p.name)
+def test_drivers_never_reach_up_into_the_cli_or_the_config(path: Path) -> None:
+    bad = {
+        m
+        for m in imported_modules(path)
+        if any(m == f or m.startswith(f + ".") for f in ("stand.cli", "stand.config", "calib"))
+    }
+    assert not bad, f"{path.name} imports {sorted(bad)}"
+
+
+def test_decoding_loads_neither_python_can_nor_h5py() -> None:
+    """The bulk decoder is numpy only: can and h5py load where a bus or a file is opened."""
+    code = (
+        "import sys, drivers.protocol, drivers.streams, drivers.nodes; "
+        "print([m for m in ('can', 'h5py', 'cantools') if m in sys.modules])"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

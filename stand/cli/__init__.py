@@ -32,9 +32,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _subcommands() -> dict[str, ModuleType]:
-    from stand.cli import forward
+    from stand.cli import convert, forward, inspect, record
 
-    return {"forward": forward}
+    return {"forward": forward, "inspect": inspect, "record": record, "convert": convert}
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
 from stand.core import Diagnostic
 from stand.errors import StandError
@@ -48,3 +48,51 @@ def print_warnings(warnings: Iterable[Diagnostic]) -> None:
     """Warnings to stderr, one line each."""
     for w in warnings:
         print(f"warning: {w.message}", file=sys.stderr)
+
+
+def add_bus_arguments(p: argparse.ArgumentParser) -> None:
+    """python-can's usual bus options; they override the config's ``[bus]`` table."""
+    g = p.add_argument_group("bus (override the config's [bus] table)")
+    g.add_argument(
+        "-i",
+        "--interface",
+        help="python-can interface: socketcan, pcan, kvaser, vector, slcan, virtual, ...",
+    )
+    g.add_argument("-c", "--channel", help="channel, e.g. can0, PCAN_USBBUS1, 0")
+    g.add_argument("-b", "--bitrate", type=int, help="bit rate [bit/s]")
+    g.add_argument("--fd", action="store_true", default=None, help="CAN FD interface mode")
+    g.add_argument("--data-bitrate", type=int, help="CAN FD data-phase bit rate [bit/s]")
+    g.add_argument(
+        "--bus-option",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="any other can.Bus option (repeatable); VALUE is read as int, float, "
+        "true/false, else text",
+    )
+
+
+def _option_value(text: str) -> str | int | float | bool:
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> dict[str, object]:
+    """The ``[bus]`` table with the command-line options applied (what goes to ``can.Bus``)."""
+    kwargs = dict(table or {})
+    for key in ("interface", "channel", "bitrate", "fd", "data_bitrate"):
+        value = getattr(args, key, None)
+        if value is not None:
+            kwargs[key] = value
+    for item in args.bus_option:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise UsageError(f"--bus-option: expected KEY=VALUE, got {item!r}")
+        kwargs[key.strip()] = _option_value(value.strip())
+    return kwargs

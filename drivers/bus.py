@@ -1,0 +1,271 @@
+"""Live frames from a python-can bus, in blocks.
+
+The driver boundary follows python-can's ``BusABC``: a small primitive
+(:meth:`FrameSource.read_block`) behind a base class, context managers and
+an idempotent ``close()``.  The bus itself is opened by the caller
+(:func:`open_bus`, from the configuration's ``[bus]`` table) and passed in,
+as cantools' ``Tester`` takes it; nothing deep inside opens a bus.
+
+:class:`BusReader` runs one thread that only calls ``bus.recv()`` and
+appends the message's fields to lists (a few microseconds a frame); the
+caller takes whole blocks with :meth:`~BusReader.read_block` and decodes them
+with numpy.  What waits between the two is bounded (:data:`MAX_PENDING`
+frames); frames beyond it are dropped *and counted* (``overruns``).
+"""
+
+from __future__ import annotations
+
+import abc
+import threading
+import time
+from typing import Any
+
+from drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
+from stand.errors import BusError, BusTimeoutError
+
+MAX_PENDING = 1_000_000
+"""Frames that may wait for :meth:`BusReader.read_block` (about 6 min of two nodes at 4 kHz)."""
+SILENCE_TIMEOUT_S = 2.0
+"""No frame at all for this long ends a live run [s]."""
+SOCKETCAN_ERR_BUSOFF = 0x40
+"""Error class bit of a bus-off error frame (SocketCAN ``CAN_ERR_BUSOFF``)."""
+
+
+def describe_bus(kwargs: dict[str, Any]) -> str:
+    """``interface:channel`` for messages, e.g. ``"socketcan:can0"``."""
+    return f"{kwargs.get('interface', '?')}:{kwargs.get('channel', '?')}"
+
+
+def open_bus(kwargs: dict[str, Any]) -> Any:
+    """``can.Bus(**kwargs)``, its failures as one :class:`BusError`.
+
+    Parameters
+    ----------
+    kwargs
+        The ``[bus]`` table with the command-line overrides applied:
+        ``interface``, ``channel``, ``bitrate`` and any option the
+        python-can interface takes.
+    """
+    import can
+
+    where = describe_bus(kwargs)
+    if "interface" not in kwargs:
+        raise BusError(
+            "no CAN interface given: set [bus] interface in the config or --interface",
+            channel=where,
+        )
+    try:
+        return can.Bus(**kwargs)
+    except (can.CanError, ValueError, TypeError, OSError, ImportError) as exc:
+        raise BusError(
+            f"cannot open the bus ({type(exc).__name__}: {exc})", channel=where
+        ) from None
+
+
+class FrameSource(abc.ABC):
+    """Blocks of frames from somewhere (a bus, a replay).
+
+    Subclasses implement :meth:`read_block` and :meth:`_close`.
+    """
+
+    channel_info: str = "frames"
+    _closed = False
+
+    @abc.abstractmethod
+    def read_block(self, timeout_s: float = 0.1) -> Frames:
+        """The frames that arrived since the last call (waiting up to ``timeout_s``).
+
+        Raises
+        ------
+        BusError
+            The source failed; frames received before are already returned.
+        BusTimeoutError
+            No frame for the source's silence timeout.
+        """
+
+    def close(self) -> None:
+        """Stop reading (idempotent).  The bus itself belongs to the caller."""
+        if not self._closed:
+            self._closed = True
+            self._close()
+
+    @abc.abstractmethod
+    def _close(self) -> None: ...
+
+    def __enter__(self) -> FrameSource:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class BusReader(FrameSource):
+    """Receive a python-can bus on a thread; hand over blocks of frames.
+
+    Parameters
+    ----------
+    bus
+        An open ``can.BusABC`` (closed by its owner, not here).
+    silence_timeout_s
+        No frame for this long raises :class:`BusTimeoutError` [s].
+    max_pending
+        Bound on frames waiting for :meth:`read_block`.
+    """
+
+    def __init__(
+        self,
+        bus: Any,
+        *,
+        channel_info: str | None = None,
+        silence_timeout_s: float = SILENCE_TIMEOUT_S,
+        max_pending: int = MAX_PENDING,
+    ):
+        self.bus = bus
+        self.channel_info = channel_info or str(getattr(bus, "channel_info", "bus"))
+        self.silence_timeout_s = silence_timeout_s
+        self.max_pending = max_pending
+        self.frames_received = 0
+        self.overruns = 0
+        self._lock = threading.Lock()
+        self._ready = threading.Event()
+        self._stop = threading.Event()
+        self._error: BaseException | None = None
+        self._last_frame = time.monotonic()
+        self._t: list[float] = []
+        self._id: list[int] = []
+        self._dlc: list[int] = []
+        self._flags: list[int] = []
+        self._data: list[bytes] = []
+        self._thread = threading.Thread(
+            target=self._run, name=f"stand rx {self.channel_info}", daemon=True
+        )
+        self._thread.start()
+
+    def _run(self) -> None:
+        recv = self.bus.recv
+        stop = self._stop.is_set
+        try:
+            while not stop():
+                m = recv(0.05)
+                if m is None:
+                    continue
+                flags = (
+                    (FLAG_EXTENDED if m.is_extended_id else 0)
+                    | (FLAG_REMOTE if m.is_remote_frame else 0)
+                    | (FLAG_ERROR if m.is_error_frame else 0)
+                    | (FLAG_FD if m.is_fd else 0)
+                )
+                with self._lock:
+                    if len(self._t) >= self.max_pending:
+                        self.overruns += 1
+                        continue
+                    self._t.append(m.timestamp)
+                    self._id.append(m.arbitration_id)
+                    self._dlc.append(m.dlc)
+                    self._flags.append(flags)
+                    self._data.append(bytes(m.data))
+                self._ready.set()
+        except BaseException as exc:  # the interface went away: keep it for read_block
+            self._error = exc
+            self._ready.set()
+
+    def read_block(self, timeout_s: float = 0.1) -> Frames:
+        self._ready.wait(timeout_s)
+        with self._lock:
+            self._ready.clear()
+            t, ids, dlc, flags, data = self._t, self._id, self._dlc, self._flags, self._data
+            self._t, self._id, self._dlc, self._flags, self._data = [], [], [], [], []
+        now = time.monotonic()
+        n = len(t)
+        if n:
+            self._last_frame = now
+            self.frames_received += n
+            frames = Frames.from_lists(t, ids, dlc, flags, data)
+            if ((frames.flags & FLAG_ERROR) != 0).any():
+                err = frames.can_id[(frames.flags & FLAG_ERROR) != 0]
+                if (err & SOCKETCAN_ERR_BUSOFF).any():
+                    self._error = BusError(
+                        "bus-off (error frame)",
+                        channel=self.channel_info,
+                        frames_received=self.frames_received,
+                    )
+            return frames
+        if self._error is not None:
+            exc = self._error
+            if isinstance(exc, BusError):
+                raise exc
+            raise BusError(
+                f"the interface failed ({type(exc).__name__}: {exc}); "
+                f"{self.frames_received} frames received before",
+                channel=self.channel_info,
+                frames_received=self.frames_received,
+            )
+        if now - self._last_frame > self.silence_timeout_s:
+            if self.frames_received == 0:
+                what = (
+                    f"no frames at all for {self.silence_timeout_s:g} s: is the bus "
+                    "connected, the bitrate right, are the nodes powered?"
+                )
+            else:
+                what = (
+                    f"no more frames for {self.silence_timeout_s:g} s "
+                    f"(after {self.frames_received})"
+                )
+            raise BusTimeoutError(
+                what,
+                channel=self.channel_info,
+                timeout_s=self.silence_timeout_s,
+                frames_received=self.frames_received,
+            )
+        return Frames.empty()
+
+    def _close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+
+
+def play(
+    bus: Any,
+    frames: Frames,
+    *,
+    realtime: bool = True,
+    stop: threading.Event | None = None,
+    tick_s: float = 0.005,
+) -> int:
+    """Send frames on a bus, paced by their host timestamps (the simulated nodes' side).
+
+    Parameters
+    ----------
+    bus
+        An open ``can.BusABC``.
+    frames
+        The frames to send, in order.
+    realtime
+        Pace by ``t_s`` (frames due within each ``tick_s`` go together);
+        if False, send as fast as the bus takes them.
+    stop
+        Set it to stop early.
+
+    Returns
+    -------
+    int
+        Frames sent.
+    """
+    from drivers.logs import messages_from_frames
+
+    if len(frames) == 0:
+        return 0
+    t_rel = frames.t_s - frames.t_s[0]
+    start = time.monotonic()
+    sent = 0
+    for m, due in zip(messages_from_frames(frames), t_rel.tolist(), strict=True):
+        if stop is not None and stop.is_set():
+            break
+        if realtime:
+            late = due - (time.monotonic() - start)
+            if late > tick_s:
+                time.sleep(late)
+        m.timestamp = 0.0  # the receiving interface stamps it
+        bus.send(m)
+        sent += 1
+    return sent

@@ -1,0 +1,423 @@
+"""Sensor-node protocol v1 in numpy: a block of raw frames, decoded all at once.
+
+The wire contract is ``spec/can-protocol.md``; its machine-readable form is
+``drivers/sensor_node_v1.dbc``, and ``tests/test_protocol.py`` shows that
+:func:`decode` agrees with cantools' decoding of that DBC for random frames
+and that :data:`LAYOUT` below is the DBC's signal layout.
+
+Nothing here loops over frames in Python: a block of frames is a few numpy
+arrays (:class:`Frames`), and :func:`decode` sorts it into SAMPLES, STATUS
+and MARK records with vectorised masks and byte views.  The live reader and
+the offline readers share it.
+
+Examples
+--------
+>>> f = encode_samples(node=1, seq=[7], counts=[[10, -32768, -1]], t_s=[0.5])
+>>> d = decode(f)
+>>> d.samples.node.tolist(), d.samples.seq.tolist(), d.samples.counts.tolist()
+([1], [7], [[10, -32768, -1]])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+DBC_PATH = Path(__file__).with_name("sensor_node_v1.dbc")
+"""The protocol as a DBC file (nodes 1 and 2; more nodes repeat the three messages)."""
+
+PROTOCOL_VERSION = 1
+SAMPLES_BASE, STATUS_BASE, MARK_BASE = 0x100, 0x140, 0x180
+MAX_NODE = 15
+FRAME_DLC = 8
+SAMPLES_PER_FRAME = 3
+INVALID_COUNT = -32768
+"""The count that marks an invalid sample (sensor fault, overrange): missing data."""
+FRAC_SCALE = 65536
+"""MARK ``frac`` is in 1/65536 of a sample period."""
+
+# Frame flags (our own bit set, kept per frame in recordings).
+FLAG_EXTENDED = 1
+FLAG_REMOTE = 2
+FLAG_ERROR = 4
+FLAG_FD = 8
+
+STATUS_FLAG_NAMES = {0: "overrange", 1: "sensor_fault", 2: "no_reference"}
+"""STATUS ``flags`` bits."""
+
+LAYOUT: dict[str, dict[str, tuple[int, str]]] = {
+    "SAMPLES": {"seq": (0, "<u2"), "s0": (2, "<i2"), "s1": (4, "<i2"), "s2": (6, "<i2")},
+    "STATUS": {"rate": (0, "<u2"), "scale": (2, "<u2"), "flags": (4, "u1"), "version": (5, "u1")},
+    "MARK": {"seq": (0, "<u2"), "slot": (2, "u1"), "frac": (3, "<u2"), "rev": (5, "<u2")},
+}
+"""Byte offset and numpy type of each field (little-endian), per message kind."""
+
+
+def _u8(a: ArrayLike, n: int) -> NDArray[np.uint8]:
+    return np.broadcast_to(np.asarray(a, dtype=np.uint8), (n,)).copy()
+
+
+@dataclass(frozen=True)
+class Frames:
+    """A block of raw CAN frames, in arrival order.
+
+    Attributes
+    ----------
+    t_s : ndarray of float64, shape (n,)
+        Host receive timestamps [s] (informational: timing comes from the
+        nodes' sample indices).
+    can_id : ndarray of uint32, shape (n,)
+        Arbitration id (11 or 29 bits, see ``flags``).
+    dlc : ndarray of uint8, shape (n,)
+        Data length in bytes (0..8, up to 64 for CAN FD).
+    data : ndarray of uint8, shape (n, w)
+        Payload, zero-padded to the width ``w`` (8, or 64 once a CAN FD
+        frame longer than 8 bytes is present): nothing is truncated.
+    flags : ndarray of uint8, shape (n,)
+        :data:`FLAG_EXTENDED`, :data:`FLAG_REMOTE`, :data:`FLAG_ERROR`,
+        :data:`FLAG_FD` bits.
+    """
+
+    t_s: NDArray[np.float64]
+    can_id: NDArray[np.uint32]
+    dlc: NDArray[np.uint8]
+    data: NDArray[np.uint8]
+    flags: NDArray[np.uint8]
+
+    def __post_init__(self) -> None:
+        n = len(self.t_s)
+        if not (len(self.can_id) == len(self.dlc) == len(self.flags) == len(self.data) == n):
+            raise ValueError("Frames: arrays of different lengths")
+        if self.data.ndim != 2 or self.data.shape[1] < FRAME_DLC:
+            raise ValueError(f"Frames: data must be (n, >=8) bytes, got {self.data.shape}")
+
+    @classmethod
+    def build(
+        cls,
+        t_s: ArrayLike,
+        can_id: ArrayLike,
+        data: ArrayLike,
+        dlc: ArrayLike | None = None,
+        flags: ArrayLike = 0,
+    ) -> Frames:
+        """Frames from array-likes; ``data`` is (n, 8) bytes, ``dlc`` defaults to 8."""
+        t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+        n = len(t)
+        raw = np.asarray(data, dtype=np.uint8)
+        raw = raw.reshape(n, raw.shape[-1] if raw.ndim == 2 else FRAME_DLC)
+        if raw.shape[1] < FRAME_DLC:
+            raw = np.pad(raw, ((0, 0), (0, FRAME_DLC - raw.shape[1])))
+        return cls(
+            t_s=t,
+            can_id=np.broadcast_to(np.asarray(can_id, dtype=np.uint32), (n,)).copy(),
+            dlc=_u8(FRAME_DLC if dlc is None else dlc, n),
+            data=np.ascontiguousarray(raw),
+            flags=_u8(flags, n),
+        )
+
+    @classmethod
+    def empty(cls) -> Frames:
+        """No frames."""
+        return cls.build(np.empty(0), np.empty(0), np.empty((0, FRAME_DLC)))
+
+    @classmethod
+    def from_lists(
+        cls,
+        t_s: Sequence[float],
+        can_id: Sequence[int],
+        dlc: Sequence[int],
+        flags: Sequence[int],
+        payloads: Sequence[bytes],
+    ) -> Frames:
+        """Frames from per-frame Python lists (a block just received, a log just read)."""
+        n = len(t_s)
+        if n == 0:
+            return cls.empty()
+        lengths = np.fromiter(map(len, payloads), np.int64, count=n)
+        if (lengths == FRAME_DLC).all():  # the protocol's case: one join, one view
+            data = np.frombuffer(b"".join(payloads), np.uint8).reshape(n, FRAME_DLC).copy()
+        else:
+            data = np.zeros((n, max(FRAME_DLC, int(lengths.max()))), np.uint8)
+            for i, p in enumerate(payloads):
+                data[i, : len(p)] = np.frombuffer(p, np.uint8)
+        return cls(
+            np.asarray(t_s, np.float64),
+            np.asarray(can_id, np.uint32),
+            np.asarray(dlc, np.uint8),
+            data,
+            np.asarray(flags, np.uint8),
+        )
+
+    def __len__(self) -> int:
+        return len(self.t_s)
+
+    def take(self, index: ArrayLike) -> Frames:
+        """The frames at ``index`` (an integer array, a boolean mask or a slice)."""
+        i = index if isinstance(index, slice) else np.asarray(index)
+        return Frames(self.t_s[i], self.can_id[i], self.dlc[i], self.data[i], self.flags[i])
+
+    @staticmethod
+    def concat(blocks: Sequence[Frames]) -> Frames:
+        """The blocks one after the other (data widened to the widest block)."""
+        blocks = [b for b in blocks if len(b)]
+        if not blocks:
+            return Frames.empty()
+        width = max(b.data.shape[1] for b in blocks)
+        data = [
+            b.data
+            if b.data.shape[1] == width
+            else np.pad(b.data, ((0, 0), (0, width - b.data.shape[1])))
+            for b in blocks
+        ]
+        return Frames(
+            np.concatenate([b.t_s for b in blocks]),
+            np.concatenate([b.can_id for b in blocks]),
+            np.concatenate([b.dlc for b in blocks]),
+            np.concatenate(data),
+            np.concatenate([b.flags for b in blocks]),
+        )
+
+    def sorted_by_time(self) -> Frames:
+        """The frames in timestamp order (stable: equal times keep their order)."""
+        return self.take(np.argsort(self.t_s, kind="stable"))
+
+
+@dataclass(frozen=True)
+class SamplesRecords:
+    """Decoded SAMPLES frames: ``frame`` is the index into the decoded block."""
+
+    frame: NDArray[np.int64]
+    node: NDArray[np.uint8]
+    seq: NDArray[np.uint16]
+    counts: NDArray[np.int16]  # (n, 3): s0, s1, s2
+
+
+@dataclass(frozen=True)
+class StatusRecords:
+    """Decoded STATUS frames."""
+
+    frame: NDArray[np.int64]
+    node: NDArray[np.uint8]
+    rate: NDArray[np.uint16]
+    scale: NDArray[np.uint16]
+    flags: NDArray[np.uint8]
+    version: NDArray[np.uint8]
+
+
+@dataclass(frozen=True)
+class MarkRecords:
+    """Decoded MARK frames."""
+
+    frame: NDArray[np.int64]
+    node: NDArray[np.uint8]
+    seq: NDArray[np.uint16]
+    slot: NDArray[np.uint8]
+    frac: NDArray[np.uint16]
+    rev: NDArray[np.uint16]
+
+
+@dataclass(frozen=True)
+class BadFrame:
+    """A frame of a protocol id that cannot be decoded (counted, never fatal)."""
+
+    frame: int
+    can_id: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class Decoded:
+    """A block of frames sorted into protocol records.
+
+    Attributes
+    ----------
+    samples, status, marks
+        The well-formed frames of each kind.
+    unknown_frames : int
+        Frames with other ids (or extended ids): ignored, counted.
+    error_frames : int
+        CAN error frames reported by the interface.
+    bad : tuple of BadFrame
+        Frames of a protocol id that are malformed (wrong length, remote
+        frame, CAN FD, slot out of range, other protocol version).
+    """
+
+    samples: SamplesRecords
+    status: StatusRecords
+    marks: MarkRecords
+    unknown_frames: int
+    error_frames: int
+    bad: tuple[BadFrame, ...] = field(default=())
+
+
+def _field(d8: NDArray[np.uint8], rows: NDArray[np.int64], kind: str, name: str) -> NDArray:  # type: ignore[type-arg]
+    offset, dtype = LAYOUT[kind][name]
+    size = np.dtype(dtype).itemsize
+    return np.ascontiguousarray(d8[rows, offset : offset + size]).view(dtype).reshape(-1)
+
+
+def decode(frames: Frames) -> Decoded:
+    """Sort and decode a block of frames, all at once.
+
+    Parameters
+    ----------
+    frames
+        Any frames, in arrival order.
+
+    Returns
+    -------
+    Decoded
+        Records of each kind carry ``frame``, their index in ``frames``.
+    """
+    cid = frames.can_id.astype(np.int64)
+    error = (frames.flags & FLAG_ERROR) != 0
+    standard = (frames.flags & (FLAG_EXTENDED | FLAG_ERROR)) == 0
+    base = cid & ~0x3F
+    node = cid & 0x3F
+    protocol = standard & np.isin(base, (SAMPLES_BASE, STATUS_BASE, MARK_BASE))
+    protocol &= (node >= 1) & (node <= MAX_NODE)
+
+    reason = np.zeros(len(frames), dtype=np.int8)  # 0 = fine
+    reasons = [
+        "",
+        "remote frame on a protocol id",
+        "CAN FD frame, expected classic CAN",
+        "wrong length",
+        "MARK slot out of range 0..2",
+        "other protocol version",
+    ]
+    remote = (frames.flags & FLAG_REMOTE) != 0
+    fd = (frames.flags & FLAG_FD) != 0
+    reason[protocol & (frames.dlc != FRAME_DLC)] = 3
+    reason[protocol & fd] = 2
+    reason[protocol & remote] = 1
+    d8 = frames.data[:, :FRAME_DLC]
+    is_mark = protocol & (base == MARK_BASE) & (reason == 0)
+    reason[is_mark & (d8[:, 2] > SAMPLES_PER_FRAME - 1)] = 4
+    is_status = protocol & (base == STATUS_BASE) & (reason == 0)
+    reason[is_status & (d8[:, 5] != PROTOCOL_VERSION)] = 5
+
+    good = protocol & (reason == 0)
+    rows = {
+        k: np.flatnonzero(good & (base == b))
+        for k, b in (("SAMPLES", SAMPLES_BASE), ("STATUS", STATUS_BASE), ("MARK", MARK_BASE))
+    }
+
+    r = rows["SAMPLES"]
+    samples = SamplesRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "SAMPLES", "seq"),
+        counts=np.ascontiguousarray(d8[r, 2:8]).view("<i2").reshape(-1, 3).astype(np.int16),
+    )
+    r = rows["STATUS"]
+    status = StatusRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        rate=_field(d8, r, "STATUS", "rate"),
+        scale=_field(d8, r, "STATUS", "scale"),
+        flags=_field(d8, r, "STATUS", "flags"),
+        version=_field(d8, r, "STATUS", "version"),
+    )
+    r = rows["MARK"]
+    marks = MarkRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "MARK", "seq"),
+        slot=_field(d8, r, "MARK", "slot"),
+        frac=_field(d8, r, "MARK", "frac"),
+        rev=_field(d8, r, "MARK", "rev"),
+    )
+    bad_rows = np.flatnonzero(reason)
+    bad = []
+    for i in bad_rows.tolist():
+        why = reasons[reason[i]]
+        if reason[i] == 3:
+            why = f"wrong length: DLC {frames.dlc[i]}, expected {FRAME_DLC}"
+        elif reason[i] == 4:
+            why = f"MARK slot {d8[i, 2]}, expected 0..2"
+        elif reason[i] == 5:
+            why = f"STATUS protocol version {d8[i, 5]}, expected {PROTOCOL_VERSION}"
+        bad.append(BadFrame(frame=i, can_id=int(cid[i]), reason=why))
+    return Decoded(
+        samples=samples,
+        status=status,
+        marks=marks,
+        unknown_frames=int(np.count_nonzero(~protocol & ~error)),
+        error_frames=int(np.count_nonzero(error)),
+        bad=tuple(bad),
+    )
+
+
+# --- encoding: what a node sends (the simulator and the tests use it) ---
+
+
+def _pack(n: int, fields: dict[int, tuple[str, ArrayLike]]) -> NDArray[np.uint8]:
+    data = np.zeros((n, FRAME_DLC), dtype=np.uint8)
+    for offset, (dtype, values) in fields.items():
+        v = np.broadcast_to(np.asarray(values), (n,)).astype(dtype)
+        size = np.dtype(dtype).itemsize
+        data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
+    return data
+
+
+def encode_samples(node: int, seq: ArrayLike, counts: ArrayLike, t_s: ArrayLike) -> Frames:
+    """SAMPLES frames of one node: ``seq`` (u16, wrapped here), ``counts`` (n, 3) int16."""
+    seq_a = np.asarray(seq, dtype=np.int64).reshape(-1)
+    c = np.asarray(counts, dtype=np.int16).reshape(len(seq_a), SAMPLES_PER_FRAME)
+    data = np.zeros((len(seq_a), FRAME_DLC), dtype=np.uint8)
+    data[:, :2] = (seq_a % 65536).astype("<u2").view(np.uint8).reshape(-1, 2)
+    data[:, 2:] = np.ascontiguousarray(c.astype("<i2")).view(np.uint8).reshape(-1, 6)
+    return Frames.build(t_s, SAMPLES_BASE + node, data)
+
+
+def encode_status(
+    node: int,
+    rate: ArrayLike,
+    scale: ArrayLike,
+    flags: ArrayLike,
+    t_s: ArrayLike,
+    version: int = PROTOCOL_VERSION,
+) -> Frames:
+    """STATUS frames of one node (``rate`` Hz, ``scale`` µm/s² per count, ``flags`` bits)."""
+    t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+    data = _pack(
+        len(t), {0: ("<u2", rate), 2: ("<u2", scale), 4: ("u1", flags), 5: ("u1", version)}
+    )
+    return Frames.build(t, STATUS_BASE + node, data)
+
+
+def encode_marks(
+    node: int, seq: ArrayLike, slot: ArrayLike, frac: ArrayLike, rev: ArrayLike, t_s: ArrayLike
+) -> Frames:
+    """MARK frames of one node; ``seq`` and ``rev`` are wrapped to u16 here."""
+    t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+    data = _pack(
+        len(t),
+        {
+            0: ("<u2", np.asarray(seq, dtype=np.int64) % 65536),
+            2: ("u1", slot),
+            3: ("<u2", frac),
+            5: ("<u2", np.asarray(rev, dtype=np.int64) % 65536),
+        },
+    )
+    return Frames.build(t, MARK_BASE + node, data)
+
+
+def edge_fields(
+    position: ArrayLike,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """MARK ``(F, slot, frac)`` for edges at sample positions ``position`` (>= 0).
+
+    ``frac`` is rounded to the nearest 1/65536 sample; a round-up to a whole
+    sample moves the edge to the next sample, as a node would report it.
+    """
+    p = np.asarray(position, dtype=np.float64)
+    ticks = np.rint(p * FRAC_SCALE).astype(np.int64)
+    sample, frac = np.divmod(ticks, FRAC_SCALE)
+    frame, slot = np.divmod(sample, SAMPLES_PER_FRAME)
+    return frame, slot, frac

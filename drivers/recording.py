@@ -1,0 +1,375 @@
+"""HDF5 run files, written as frames arrive, readable after any crash.
+
+A run file holds everything needed to reprocess a run::
+
+    /                attrs: format = "rotor-stand-run", format_version = 1,
+                     software, start_time (ISO 8601, UTC), source (the bus),
+                     config_toml (the configuration text used, or ""),
+                     frames_committed, complete, end_time
+    /frames/t_s      float64 (n,)     host receive time [s]
+    /frames/can_id   uint32  (n,)
+    /frames/dlc      uint8   (n,)
+    /frames/flags    uint8   (n,)     1 extended, 2 remote, 4 error, 8 CAN FD
+    /frames/data     uint8   (n, 8)   (n, 64) once a long CAN FD frame came
+    /warnings/code, /warnings/message  (variable-length UTF-8 strings)
+    /nodes/<n>/...   the decoded stream of node n (written at the end):
+                     index, segment, accel_m_s2, counts, mark_position,
+                     mark_segment, mark_rev; attrs rate_hz, scale_um_s2, ...
+
+**Crash safety.**  The writer keeps the file *closed* between flushes: every
+``flush_interval_s`` (0.5 s) it opens the file, appends the frames that
+came, flushes, then raises ``frames_committed`` and closes it.  A kill at
+any moment leaves a file that plain ``h5py.File(path)`` opens, and
+``frames_committed`` rows of every ``/frames`` dataset are complete: at
+most the last interval is lost.  (HDF5's SWMR mode was tried and refused:
+after a crash the file only opens in SWMR-read mode or after ``h5clear``.)
+The file is created under a temporary name and renamed, so a half-made
+header never sits under the run's name.  ``tests/test_recording.py`` kills a
+recording process at random times and reopens the file.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from drivers.protocol import FRAME_DLC, Frames
+from drivers.streams import RunStreams
+from stand.core import Diagnostic
+from stand.errors import RecordingError
+
+RUN_FORMAT = "rotor-stand-run"
+RUN_FORMAT_VERSION = 1
+RUN_SUFFIXES = (".h5", ".hdf5")
+FLUSH_INTERVAL_S = 0.5
+"""Frames reach the disk at least this often [s]; a crash loses at most this much."""
+RETRY_FOR_S = 10.0
+"""A flush that fails (file locked by a reader) is retried for this long before giving up [s]."""
+_CHUNK_ROWS = 16384
+# the decoded streams are written once, at the end: compress them (the raw frames are
+# not compressed, so an append never moves a chunk that is already on disk)
+_COMPRESSED: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+_MAX_WIDTH = 64
+_FRAME_FIELDS = {
+    "t_s": np.float64,
+    "can_id": np.uint32,
+    "dlc": np.uint8,
+    "flags": np.uint8,
+}
+
+
+@dataclass(frozen=True)
+class Recording:
+    """The frames of a run and what is known about it.
+
+    ``meta`` holds the run file's attributes (``software``, ``start_time``,
+    ``source``, ``config_toml``, ``complete`` ...); it is empty for a plain
+    CAN log.  ``warnings`` are those recorded during the run.
+    """
+
+    path: str
+    frames: Frames
+    meta: dict[str, Any] = field(default_factory=dict)
+    warnings: tuple[Diagnostic, ...] = ()
+
+
+def _h5py() -> Any:
+    import h5py
+
+    return h5py
+
+
+def _utc_now() -> str:
+    return _dt.datetime.now(_dt.UTC).isoformat(timespec="milliseconds")
+
+
+class RunWriter:
+    """Append frames to an HDF5 run file as they arrive.
+
+    Parameters
+    ----------
+    path
+        The run file to create (an existing file is refused).
+    source
+        What the frames come from (e.g. ``"socketcan:can0"``, ``"replay of x.log"``).
+    config_toml
+        The configuration text in force, stored verbatim.
+    software
+        Software name and version.
+    flush_interval_s
+        Longest time frames wait in memory [s].
+
+    Use as a context manager; :meth:`close` is idempotent and is where the
+    decoded streams are added.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        source: str,
+        config_toml: str = "",
+        software: str = "",
+        flush_interval_s: float = FLUSH_INTERVAL_S,
+    ):
+        self.path = Path(path)
+        self.flush_interval_s = flush_interval_s
+        self._pending: list[Frames] = []
+        self._warnings: list[Diagnostic] = []
+        self._n = 0
+        self._width = FRAME_DLC
+        self._closed = False
+        self._last_flush = self._last_success = time.monotonic()
+        if self.path.exists():
+            raise RecordingError("exists already: refusing to overwrite a run", path=str(self.path))
+        h5py = _h5py()
+        tmp = self.path.with_name(self.path.name + ".part")
+        try:
+            with h5py.File(tmp, "w") as f:
+                f.attrs.update(
+                    format=RUN_FORMAT,
+                    format_version=RUN_FORMAT_VERSION,
+                    software=software,
+                    start_time=_utc_now(),
+                    source=source,
+                    config_toml=config_toml,
+                    frames_committed=0,
+                    complete=False,
+                )
+                g = f.create_group("frames")
+                for name, dtype in _FRAME_FIELDS.items():
+                    g.create_dataset(
+                        name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(_CHUNK_ROWS,)
+                    )
+                g.create_dataset(
+                    "data",
+                    shape=(0, FRAME_DLC),
+                    maxshape=(None, _MAX_WIDTH),
+                    dtype=np.uint8,
+                    chunks=(_CHUNK_ROWS, FRAME_DLC),
+                )
+                w = f.create_group("warnings")
+                for name in ("code", "message"):
+                    w.create_dataset(
+                        name, shape=(0,), maxshape=(None,), dtype=h5py.string_dtype(), chunks=(256,)
+                    )
+            os.replace(tmp, self.path)
+        except OSError as exc:
+            raise RecordingError(
+                f"cannot create the run file: {exc}", path=str(self.path)
+            ) from None
+
+    @property
+    def frames_written(self) -> int:
+        """Frames committed to the file so far."""
+        return self._n
+
+    def append(self, frames: Frames) -> None:
+        """Take a block of frames; they reach the disk within ``flush_interval_s``."""
+        if self._closed:
+            raise RecordingError("run file already closed", path=str(self.path))
+        if len(frames):
+            self._pending.append(frames)
+        if time.monotonic() - self._last_flush >= self.flush_interval_s:
+            try:
+                self.flush()
+            except RecordingError:
+                # e.g. another program holds the file's lock for a moment: keep the frames
+                # and retry at the next interval; give up only after RETRY_FOR_S
+                if time.monotonic() - self._last_success > RETRY_FOR_S:
+                    raise
+
+    def warn(self, warnings: Iterable[Diagnostic]) -> None:
+        """Record warnings (written with the next flush)."""
+        self._warnings.extend(warnings)
+
+    def flush(self) -> None:
+        """Open the file, append what is pending, commit, close."""
+        self._last_flush = time.monotonic()
+        if not self._pending and not self._warnings:
+            return
+        block = Frames.concat(self._pending)
+        warns, self._warnings = self._warnings, []
+        n, k = self._n, len(block)
+        try:
+            with _h5py().File(self.path, "a") as f:
+                g = f["frames"]
+                if k:
+                    for name in _FRAME_FIELDS:
+                        g[name].resize((n + k,))
+                        g[name][n:] = getattr(block, name)
+                    width = max(self._width, block.data.shape[1])
+                    if width != self._width:
+                        g["data"].resize((g["data"].shape[0], width))
+                        self._width = width
+                    g["data"].resize((n + k, width))
+                    g["data"][n:, : block.data.shape[1]] = block.data
+                if warns:
+                    w = f["warnings"]
+                    m = w["code"].shape[0]
+                    for name in ("code", "message"):
+                        w[name].resize((m + len(warns),))
+                        w[name][m:] = [getattr(x, name) for x in warns]
+                f.flush()
+                f.attrs["frames_committed"] = n + k
+        except OSError as exc:
+            self._pending = [block]  # keep them: a later flush may succeed
+            self._warnings = warns + self._warnings
+            raise RecordingError(
+                f"cannot append to the run file: {exc}", path=str(self.path)
+            ) from None
+        self._pending = []
+        self._n = n + k
+        self._last_success = time.monotonic()
+
+    def close(self, streams: RunStreams | None = None) -> None:
+        """Flush, add the decoded streams (if given), mark the run complete.  Idempotent."""
+        if self._closed:
+            return
+        self.flush()
+        self._closed = True
+        with _h5py().File(self.path, "a") as f:
+            if streams is not None:
+                write_streams(f, streams)
+            f.attrs["end_time"] = _utc_now()
+            f.attrs["complete"] = True
+
+    def __enter__(self) -> RunWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def write_streams(f: Any, streams: RunStreams) -> None:
+    """Write the decoded per-node streams into an open run file (``/nodes``)."""
+    if "nodes" in f:
+        del f["nodes"]
+    nodes = f.create_group("nodes")
+    for n, s in streams.nodes.items():
+        g = nodes.create_group(str(n))
+        for name in ("index", "segment", "counts", "mark_position", "mark_segment", "mark_rev"):
+            g.create_dataset(name, data=getattr(s, name), **_COMPRESSED)
+        if s.accel_m_s2 is not None:
+            g.create_dataset("accel_m_s2", data=s.accel_m_s2, **_COMPRESSED)
+        for name in (
+            "frames",
+            "samples",
+            "invalid_samples",
+            "lost_frames",
+            "duplicate_frames",
+            "status_frames",
+            "lost_marks",
+            "segments",
+        ):
+            g.attrs[name] = getattr(s, name)
+        g.attrs["rate_hz"] = np.nan if s.rate_hz is None else s.rate_hz
+        g.attrs["scale_um_s2"] = np.nan if s.scale_um_s2 is None else s.scale_um_s2
+        g.attrs["flags"] = json.dumps(list(s.flags))
+    f.attrs["unknown_frames"] = streams.unknown_frames
+    f.attrs["bad_frames"] = streams.bad_frames
+
+
+def read_run(path: str | Path) -> Recording:
+    """Read an HDF5 run file (complete, or cut short by a crash).
+
+    Raises
+    ------
+    RecordingError
+        Not an HDF5 file, truncated beyond use, or not a run file.
+    """
+    path = Path(path)
+    h5py = _h5py()
+    if not path.is_file():
+        raise RecordingError("no such file", path=str(path))
+    try:
+        # without HDF5's lock, so that reading a run being recorded never blocks its writer
+        with h5py.File(path, "r", locking=False) as f:
+            if f.attrs.get("format") != RUN_FORMAT:
+                raise RecordingError(
+                    f"an HDF5 file but not a run file (format attribute "
+                    f"{f.attrs.get('format')!r}, expected {RUN_FORMAT!r})",
+                    path=str(path),
+                )
+            version = int(f.attrs.get("format_version", -1))
+            if version > RUN_FORMAT_VERSION:
+                raise RecordingError(
+                    f"run file format {version} is newer than this software "
+                    f"reads ({RUN_FORMAT_VERSION})",
+                    path=str(path),
+                )
+            g = f["frames"]
+            n = int(f.attrs["frames_committed"])
+            n = min([n, *(g[k].shape[0] for k in (*_FRAME_FIELDS, "data"))])
+            cols = {k: g[k][:n] for k in _FRAME_FIELDS}
+            data = g["data"][:n]
+            meta = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
+            w = f["warnings"]
+            m = min(w["code"].shape[0], w["message"].shape[0])
+            codes = w["code"].asstr()[:m]
+            msgs = w["message"].asstr()[:m]
+    except RecordingError:
+        raise
+    except (OSError, KeyError, ValueError) as exc:
+        raise RecordingError(f"not a readable run file ({exc})", path=str(path)) from None
+    frames = Frames(
+        cols["t_s"].astype(np.float64),
+        cols["can_id"].astype(np.uint32),
+        cols["dlc"].astype(np.uint8),
+        np.ascontiguousarray(data, dtype=np.uint8),
+        cols["flags"].astype(np.uint8),
+    )
+    warnings = tuple(
+        Diagnostic(str(c), str(s), float("nan")) for c, s in zip(codes, msgs, strict=True)
+    )
+    return Recording(str(path), frames, meta, warnings)
+
+
+def is_run_file(path: str | Path) -> bool:
+    """Whether ``path`` names an HDF5 run file (by extension)."""
+    return Path(path).suffix.lower() in RUN_SUFFIXES
+
+
+def read_recording(path: str | Path) -> Recording:
+    """A run file or any python-can log, by extension.
+
+    Raises
+    ------
+    RecordingError
+        Naming the file and what is wrong with it.
+    """
+    if is_run_file(path):
+        return read_run(path)
+    from drivers.logs import read_log
+
+    return Recording(str(path), read_log(path))
+
+
+def write_recording(
+    recording: Recording, path: str | Path, streams: RunStreams | None = None
+) -> None:
+    """Write frames as a run file (.h5) or a python-can log (by extension)."""
+    if is_run_file(path):
+        meta = recording.meta
+        with RunWriter(
+            path,
+            source=str(meta.get("source", f"converted from {recording.path}")),
+            config_toml=str(meta.get("config_toml", "")),
+            software=str(meta.get("software", "")),
+        ) as w:
+            w.append(recording.frames)
+            w.warn(recording.warnings)
+            w.close(streams)
+        return
+    from drivers.logs import write_log
+
+    Path(path).unlink(missing_ok=True)
+    write_log(recording.frames, path)

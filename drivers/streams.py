@@ -1,0 +1,408 @@
+"""Per-node sample streams rebuilt from decoded frames.
+
+For every node: the sample index and acceleration of every valid sample,
+the reference edges as sub-sample positions, the node's rate and scale, its
+flags, and the bookkeeping (lost frames, invalid samples, restarts).  The
+rules (``spec/can-protocol.md``):
+
+* ``seq`` is unwrapped; a forward jump is lost frames, whose samples are
+  missing: later samples keep their true index (a gap is never closed by
+  concatenation).  A repeated ``seq`` is a duplicate and is dropped.
+* A node restart starts a new *segment*, with its own sample clock: ``seq``
+  jumps back, or a STATUS arrives after the node was silent for
+  :data:`SILENCE_S`.  Segment ``k``'s indices only compare with segment ``k``'s.
+* The count -32768 is an invalid sample: counted, never a value.
+* A MARK is matched to SAMPLES by ``seq``, whichever arrived first: its
+  ``seq`` is unwrapped against the nearest SAMPLES frame of the same node.
+* Samples are scaled by the node's latest STATUS (the first one for frames
+  that came before it).  No STATUS within the node's first
+  :data:`STATUS_WITHIN_S` of frames is an error in strict mode, a warning
+  otherwise.
+* STATUS flags become warnings, with the time they were seen.
+
+Everything is vectorised per node; nodes are few (1..15).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drivers.protocol import (
+    FRAC_SCALE,
+    INVALID_COUNT,
+    SAMPLES_PER_FRAME,
+    STATUS_FLAG_NAMES,
+    BadFrame,
+    Decoded,
+    Frames,
+    decode,
+)
+from stand.core import Diagnostic
+from stand.errors import NoStatusError
+
+STATUS_WITHIN_S = 1.5
+"""A node's first STATUS must come within this time of its first frame [s]."""
+SILENCE_S = 0.5
+"""A STATUS after this much silence from its node marks a restart [s]."""
+
+_WRAP = 65536
+
+
+@dataclass(frozen=True)
+class NodeStream:
+    """One node's samples and reference edges.
+
+    Attributes
+    ----------
+    node : int
+        Node id (1 = support 1, 2 = support 2).
+    rate_hz : float or None
+        Nominal sample rate from STATUS [Hz] (None: no STATUS seen).
+    scale_um_s2 : float or None
+        Scale from STATUS [µm/s² per count] (the latest one if it changed).
+    index : ndarray of int64
+        Sample index of every valid sample, within its segment.
+    segment : ndarray of int32
+        Segment (node restart count) of every valid sample.
+    accel_m_s2 : ndarray of float64 or None
+        Acceleration of every valid sample [m/s²]; None without STATUS.
+    mark_position : ndarray of float64
+        Reference edges, as sample positions (sub-sample) within their segment.
+    mark_segment : ndarray of int32
+        Segment of every edge.
+    mark_rev : ndarray of int64
+        Unwrapped revolution counter of every edge.
+    frames, samples, invalid_samples, lost_frames, duplicate_frames,
+    status_frames, lost_marks : int
+        Counts: SAMPLES frames kept, samples received (3 per frame, invalid
+        included), invalid samples, frames missing from ``seq`` gaps,
+        repeated frames dropped, STATUS frames, edges missing from ``rev``.
+    flags : tuple of str
+        STATUS flag names seen (``overrange``, ``sensor_fault``, ``no_reference``).
+    first_t_s, last_t_s : float
+        Host time of the node's first and last frame [s].
+    """
+
+    node: int
+    rate_hz: float | None
+    scale_um_s2: float | None
+    index: NDArray[np.int64]
+    segment: NDArray[np.int32]
+    accel_m_s2: NDArray[np.float64] | None
+    counts: NDArray[np.int16]
+    mark_position: NDArray[np.float64]
+    mark_segment: NDArray[np.int32]
+    mark_rev: NDArray[np.int64]
+    frames: int
+    samples: int
+    invalid_samples: int
+    lost_frames: int
+    duplicate_frames: int
+    status_frames: int
+    lost_marks: int
+    segments: int
+    flags: tuple[str, ...]
+    first_t_s: float
+    last_t_s: float
+
+    @property
+    def marks(self) -> int:
+        """Number of reference edges received."""
+        return len(self.mark_position)
+
+    def rpm(self) -> float | None:
+        """Mean shaft speed from the reference edges [rpm] (None: < 2 edges or no rate).
+
+        Counts revolutions with the ``rev`` counter, so lost MARK frames do
+        not bias it; each segment is timed on its own clock.
+        """
+        if self.rate_hz is None or self.rate_hz <= 0:
+            return None
+        revs = 0
+        samples = 0.0
+        for s in np.unique(self.mark_segment).tolist():
+            sel = self.mark_segment == s
+            if np.count_nonzero(sel) < 2:
+                continue
+            p, r = self.mark_position[sel], self.mark_rev[sel]
+            revs += int(r[-1] - r[0])
+            samples += float(p[-1] - p[0])
+        if revs == 0 or samples <= 0:
+            return None
+        return 60.0 * revs * self.rate_hz / samples
+
+
+@dataclass(frozen=True)
+class RunStreams:
+    """All nodes of a run, and what did not fit the protocol."""
+
+    nodes: dict[int, NodeStream]
+    frames: int
+    unknown_frames: int
+    error_frames: int
+    bad: tuple[BadFrame, ...]
+    duration_s: float
+    warnings: tuple[Diagnostic, ...] = field(default=())
+
+    @property
+    def bad_frames(self) -> int:
+        return len(self.bad)
+
+
+def _unwrap_samples(
+    seq: NDArray[np.int64], restart_at: NDArray[np.bool_]
+) -> tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int32], int]:
+    """Keep-mask (duplicates dropped), unwrapped frame numbers, segments, lost frames."""
+    n = len(seq)
+    d = np.empty(n, dtype=np.int64)
+    d[0] = 0
+    d[1:] = (seq[1:] - seq[:-1]) % _WRAP
+    keep = np.ones(n, dtype=bool)
+    keep[1:] = (d[1:] != 0) | restart_at[1:]  # a repeated seq is a duplicate, unless a restart
+    seq, d, restart_at = seq[keep], d[keep], restart_at[keep]
+    start = restart_at | (d >= _WRAP // 2)
+    start[0] = True
+    step = np.where(start, 0, d)
+    seg = (np.cumsum(start) - 1).astype(np.int32)
+    cum = np.cumsum(step)
+    first = np.flatnonzero(start)
+    F = seq[first][seg] + cum - cum[first][seg]
+    lost = int(np.sum(step[step > 0] - 1))
+    return keep, F, seg, lost
+
+
+def _node_warnings(
+    node: int, st_t: NDArray[np.float64], flags: NDArray[np.uint8], t0: float
+) -> tuple[list[Diagnostic], tuple[str, ...]]:
+    out: list[Diagnostic] = []
+    seen: list[str] = []
+    for bit, name in STATUS_FLAG_NAMES.items():
+        on = ((flags >> bit) & 1).astype(bool)
+        if not on.any():
+            continue
+        seen.append(name)
+        starts = np.flatnonzero(on & ~np.concatenate(([False], on[:-1])))
+        ends = np.flatnonzero(on & ~np.concatenate((on[1:], [False])))
+        for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+            when = f"at {st_t[a] - t0:.2f} s"
+            if b > a:
+                when += f" (in {b - a + 1} STATUS frames, until {st_t[b] - t0:.2f} s)"
+            out.append(
+                Diagnostic(
+                    f"status_{name}",
+                    f"node {node}: STATUS reports {name.replace('_', ' ')} {when}",
+                    float(st_t[a] - t0),
+                )
+            )
+    return out, tuple(seen)
+
+
+def _rebuild_node(
+    node: int, dec: Decoded, t_s: NDArray[np.float64], t0: float, strict_status: bool
+) -> tuple[NodeStream, list[Diagnostic]]:
+    warn: list[Diagnostic] = []
+    s_sel = dec.samples.node == node
+    st_sel = dec.status.node == node
+    m_sel = dec.marks.node == node
+    s_frame = dec.samples.frame[s_sel]
+    st_frame = dec.status.frame[st_sel]
+    m_frame = dec.marks.frame[m_sel]
+    all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)))
+    first_t, last_t = float(t_s[all_frames[0]]), float(t_s[all_frames[-1]])
+
+    # --- STATUS: rate and scale, and whether it came in time
+    st_t = t_s[st_frame]
+    rate = dec.status.rate[st_sel].astype(np.float64)
+    scale = dec.status.scale[st_sel].astype(np.float64)
+    if len(st_frame) == 0 or st_t[0] - first_t > STATUS_WITHIN_S:
+        came = (
+            "none came" if len(st_frame) == 0 else f"the first came after {st_t[0] - first_t:.2f} s"
+        )
+        what = (
+            f"node {node}: no STATUS within {STATUS_WITHIN_S} s of its first frame "
+            f"(frame {int(all_frames[0])}, {came}): its samples cannot be scaled"
+        )
+        if strict_status:
+            raise NoStatusError(what, node=node, frame=int(all_frames[0]))
+        warn.append(Diagnostic("no_status", what, float(first_t - t0)))
+    for name, values, unit in (("rate", rate, "Hz"), ("scale", scale, "µm/s² per count")):
+        if len(np.unique(values)) > 1:
+            seen = sorted(set(values.tolist()))
+            message = f"node {node}: STATUS {name} changed during the run: {seen} {unit}"
+            warn.append(Diagnostic(f"{name}_changed", message, float(values[-1])))
+
+    # --- restarts: seq jumps back, or a STATUS after silence
+    pos_in_node = np.searchsorted(all_frames, st_frame)
+    gap_before = np.where(
+        pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
+    )
+    restart_status = st_frame[gap_before > SILENCE_S]
+    seq = dec.samples.seq[s_sel].astype(np.int64)
+    restart_at = np.zeros(len(seq), dtype=bool)
+    hit = np.searchsorted(s_frame, restart_status)
+    restart_at[hit[hit < len(seq)]] = True
+    keep, F, seg, lost = (
+        _unwrap_samples(seq, restart_at)
+        if len(seq)
+        else (np.zeros(0, bool), np.zeros(0, np.int64), np.zeros(0, np.int32), 0)
+    )
+    s_frame_k = s_frame[keep]
+    seq_k = seq[keep]
+    counts = dec.samples.counts[s_sel][keep]
+    duplicates = int(len(seq) - len(seq_k))
+    n_seg = int(seg[-1]) + 1 if len(seg) else 0
+    if n_seg > 1:
+        warn.append(
+            Diagnostic(
+                "node_restart",
+                f"node {node}: restarted {n_seg - 1} time(s); each part is timed on its own",
+                float(n_seg - 1),
+            )
+        )
+    if lost:
+        warn.append(
+            Diagnostic(
+                "lost_frames",
+                f"node {node}: {lost} SAMPLES frames lost "
+                f"({100 * lost / (lost + len(seq_k)):.2g} %): their samples are "
+                "missing, the others keep their index",
+                float(lost),
+            )
+        )
+
+    # --- samples
+    index = (SAMPLES_PER_FRAME * F[:, None] + np.arange(SAMPLES_PER_FRAME)).reshape(-1)
+    seg_s = np.repeat(seg, SAMPLES_PER_FRAME)
+    flat = counts.reshape(-1)
+    valid = flat != INVALID_COUNT
+    accel = None
+    if len(st_frame):
+        k = np.searchsorted(st_frame, s_frame_k) - 1  # latest STATUS before the frame
+        k = np.maximum(k, 0)
+        m_s2_per_count = np.repeat(scale[k] * 1e-6, SAMPLES_PER_FRAME)
+        accel = (flat * m_s2_per_count)[valid]
+
+    # --- marks: unwrap seq against the nearest SAMPLES frame of the node (by arrival)
+    m_pos = np.zeros(0)
+    m_seg = np.zeros(0, np.int32)
+    m_rev = np.zeros(0, np.int64)
+    lost_marks = 0
+    if len(m_frame) and len(s_frame_k):
+        j = np.searchsorted(s_frame_k, m_frame)
+        prev = np.maximum(j - 1, 0)
+        nxt = np.minimum(j, len(s_frame_k) - 1)
+        mseq = dec.marks.seq[m_sel].astype(np.int64)
+
+        def signed(ref: NDArray[np.int64]) -> NDArray[np.int64]:
+            d: NDArray[np.int64] = (mseq - seq_k[ref] + _WRAP // 2) % _WRAP - _WRAP // 2
+            return d
+
+        dp, dn = signed(prev), signed(nxt)
+        use_next = np.abs(dn) < np.abs(dp)
+        ref = np.where(use_next, nxt, prev)
+        Fm = F[ref] + np.where(use_next, dn, dp)
+        pos = SAMPLES_PER_FRAME * Fm + dec.marks.slot[m_sel] + dec.marks.frac[m_sel] / FRAC_SCALE
+        mseg = seg[ref]
+        rev = dec.marks.rev[m_sel].astype(np.int64)
+        order = np.lexsort((pos, mseg))
+        pos, mseg, rev = pos[order], mseg[order], rev[order]
+        uniq = np.ones(len(pos), dtype=bool)
+        uniq[1:] = (pos[1:] != pos[:-1]) | (mseg[1:] != mseg[:-1])
+        pos, mseg, rev = pos[uniq], mseg[uniq], rev[uniq]
+        new_seg = np.ones(len(pos), dtype=bool)
+        new_seg[1:] = mseg[1:] != mseg[:-1]
+        dr = np.zeros(len(rev), np.int64)
+        dr[1:] = (rev[1:] - rev[:-1]) % _WRAP
+        dr[new_seg] = 0
+        lost_marks = int(np.sum(dr[dr > 1] - 1))
+        first = np.flatnonzero(new_seg)
+        cum = np.cumsum(dr)
+        segi = np.cumsum(new_seg) - 1
+        m_rev = rev[first][segi] + cum - cum[first][segi]
+        m_pos, m_seg = pos, mseg.astype(np.int32)
+
+    flag_warn, flag_names = _node_warnings(node, st_t, dec.status.flags[st_sel], t0)
+    warn.extend(flag_warn)
+    stream = NodeStream(
+        node=node,
+        rate_hz=float(rate[0]) if len(rate) else None,
+        scale_um_s2=float(scale[-1]) if len(scale) else None,
+        index=index[valid],
+        segment=seg_s[valid],
+        accel_m_s2=accel,
+        counts=flat[valid],
+        mark_position=m_pos,
+        mark_segment=m_seg,
+        mark_rev=m_rev,
+        frames=len(seq_k),
+        samples=len(flat),
+        invalid_samples=int(np.count_nonzero(~valid)),
+        lost_frames=lost,
+        duplicate_frames=duplicates,
+        status_frames=len(st_frame),
+        lost_marks=lost_marks,
+        segments=n_seg,
+        flags=flag_names,
+        first_t_s=first_t,
+        last_t_s=last_t,
+    )
+    return stream, warn
+
+
+def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
+    """Rebuild every node's stream from a run's frames (arrival order).
+
+    Parameters
+    ----------
+    frames
+        All frames of the run, in the order they arrived.
+    strict_status
+        If True, a node without STATUS in its first :data:`STATUS_WITHIN_S`
+        raises :class:`~stand.errors.NoStatusError`; if False it is a warning
+        (and a node with no STATUS at all has ``accel_m_s2 = None``).
+
+    Returns
+    -------
+    RunStreams
+        Nodes by id, counts of unknown and bad frames, duration, warnings.
+    """
+    dec = decode(frames)
+    t0 = float(frames.t_s[0]) if len(frames) else 0.0
+    present = np.union1d(np.union1d(dec.samples.node, dec.status.node), dec.marks.node)
+    nodes: dict[int, NodeStream] = {}
+    warnings: list[Diagnostic] = []
+    for node in present.tolist():
+        stream, w = _rebuild_node(int(node), dec, frames.t_s, t0, strict_status)
+        nodes[int(node)] = stream
+        warnings.extend(w)
+    if dec.bad:
+        b = dec.bad[0]
+        warnings.append(
+            Diagnostic(
+                "bad_frames",
+                f"{len(dec.bad)} malformed protocol frame(s) ignored; the first: frame {b.frame} "
+                f"(id 0x{b.can_id:03X}): {b.reason}",
+                float(len(dec.bad)),
+            )
+        )
+    if dec.error_frames:
+        warnings.append(
+            Diagnostic(
+                "error_frames",
+                f"{dec.error_frames} CAN error frame(s) on the bus",
+                float(dec.error_frames),
+            )
+        )
+    duration = float(frames.t_s[-1] - frames.t_s[0]) if len(frames) else 0.0
+    return RunStreams(
+        nodes=nodes,
+        frames=len(frames),
+        unknown_frames=dec.unknown_frames,
+        error_frames=dec.error_frames,
+        bad=dec.bad,
+        duration_s=duration,
+        warnings=tuple(warnings),
+    )
