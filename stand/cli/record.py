@@ -39,7 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_bus_arguments(p)
 
 
-def _progress(window: collections.deque[Any], elapsed: float, frames: int) -> str:
+def speed_line(window: collections.deque[Any], elapsed: float, frames: int) -> str:
     from drivers.protocol import Frames
     from drivers.streams import rebuild
 
@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
                 window.popleft()
             if not args.quiet and now >= next_status:
                 next_status += STATUS_EVERY_S
-                print(_progress(window, now - start, reader.frames_received), file=sys.stderr)
+                print(speed_line(window, now - start, reader.frames_received), file=sys.stderr)
     except KeyboardInterrupt:
         interrupted = True
     finally:

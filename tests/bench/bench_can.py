@@ -8,8 +8,9 @@
 2. The live path on python-can's virtual bus: the frames played in real time
    from one thread, received by :class:`drivers.bus.BusReader` and recorded
    by :class:`drivers.recording.RunWriter` in the main loop, with the speed
-   read from the last 2 s every second, as ``stand record`` does.  The CPU time of the receiving thread and of the
-   main loop (not of the player) is read from their thread CPU clocks.
+   read from the last 2 s every second, as ``stand record`` does.  The CPU
+   time of the receiving thread and of the main loop (not of the player) is
+   read from their thread CPU clocks.
 """
 
 from __future__ import annotations
@@ -25,15 +26,15 @@ from pathlib import Path
 import can
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from synth import sine_run  # noqa: E402
+from synth import sine_run
 
-from drivers.bus import BusReader, play  # noqa: E402
-from drivers.logs import read_log, write_log  # noqa: E402
-from drivers.protocol import Frames  # noqa: E402
-from drivers.recording import Recording, RunWriter, read_run, write_recording  # noqa: E402
-from drivers.streams import rebuild  # noqa: E402
-from stand.cli.record import _progress  # noqa: E402
-from stand.errors import BusError  # noqa: E402
+from drivers.bus import BusReader, play
+from drivers.logs import read_log, write_log
+from drivers.protocol import Frames
+from drivers.recording import Recording, RunWriter, read_run, write_recording
+from drivers.streams import rebuild
+from stand.cli.record import speed_line
+from stand.errors import BusError
 
 
 def offline(tmp: Path) -> None:
@@ -58,8 +59,10 @@ def offline(tmp: Path) -> None:
             if t2 - t0 < best[0]:
                 best = (t2 - t0, t1 - t0, t2 - t1)
         total, read, build = best
-        print(f"| {suffix} ({path.stat().st_size / 1e6:.1f} MB) | {read * 1e3:.0f} ms "
-              f"| {build * 1e3:.0f} ms | {total * 1e3:.0f} ms |")
+        print(
+            f"| {suffix} ({path.stat().st_size / 1e6:.1f} MB) | {read * 1e3:.0f} ms "
+            f"| {build * 1e3:.0f} ms | {total * 1e3:.0f} ms |"
+        )
 
 
 def _rss_mb() -> float:
@@ -99,7 +102,7 @@ def live(tmp: Path, seconds: float) -> None:
             window.popleft()
         if now >= next_progress:  # what `stand record` shows each second
             next_progress += 1.0
-            _progress(window, now - wall0, got)
+            speed_line(window, now - wall0, got)
     wall = time.monotonic() - wall0 - reader.silence_timeout_s
     main_cpu = time.thread_time() - main0
     rx_cpu = time.clock_gettime(rx_clock) - rx0
@@ -111,15 +114,19 @@ def live(tmp: Path, seconds: float) -> None:
     rss = _rss_mb()
     kept = len(read_run(tmp / "live.h5").frames)
     rate = len(frames) / seconds
-    print(f"\nlive, virtual bus, {seconds:g} s at {rate:.0f} frames/s: "
-          f"{got} of {len(frames)} received, {kept} recorded\n")
+    print(
+        f"\nlive, virtual bus, {seconds:g} s at {rate:.0f} frames/s: "
+        f"{got} of {len(frames)} received, {kept} recorded\n"
+    )
     print("| thread | CPU time | share of one core |")
     print("|---|---|---|")
     print(f"| receiver (bus.recv) | {rx_cpu:.2f} s | {100 * rx_cpu / wall:.1f} % |")
     print(f"| main loop (blocks, recording) | {main_cpu:.2f} s | {100 * main_cpu / wall:.1f} % |")
     print(f"| together | {rx_cpu + main_cpu:.2f} s | {100 * (rx_cpu + main_cpu) / wall:.1f} % |")
-    print(f"\nlargest block {largest} frames; resident memory {rss0:.0f} MB before, "
-          f"{rss:.0f} MB after (the frames played: {len(frames) * 22 / 1e6:.1f} MB)")
+    print(
+        f"\nlargest block {largest} frames; resident memory {rss0:.0f} MB before, "
+        f"{rss:.0f} MB after (the frames played: {len(frames) * 22 / 1e6:.1f} MB)"
+    )
 
 
 def main() -> None:
