@@ -72,8 +72,17 @@ class Config(BaseModel):
         return StandParameters(**values)
 
 
+_UNION_MEMBERS = {"str", "int", "float", "bool"}
+
+
 def _describe(err: dict[str, Any]) -> tuple[str, str]:
     loc = [str(x) for x in err["loc"]]
+    if loc[0] == "bus" and loc[-1] in _UNION_MEMBERS:  # one error per member of the union
+        key = ".".join(loc[:-1])
+        return (
+            key,
+            f"expected text, a number or true/false (a can.Bus option), got {err['input']!r}",
+        )
     key = ".".join(loc)
     msg = str(err["msg"])
     if err["type"] == "extra_forbidden":
@@ -98,8 +107,9 @@ def config_from_dict(
     except ValidationError as exc:
         # an unknown key is usually a typo, and the cause of a "missing" one: report it first
         errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
-        key, msg = _describe(dict(errors[0]))
-        more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+        described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
+        key, msg = described[0]
+        more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
         raise ConfigError(msg + more, source=source, key=key) from None
     try:
         params = cfg.parameters()

@@ -95,3 +95,41 @@ def test_missing_and_binary_files(tmp_path: Path) -> None:
     f.write_bytes(b"\xff\xfe\x00garbage")
     with pytest.raises(ConfigError, match="not UTF-8"):
         load_config(f)
+
+
+def test_bus_table_goes_through_as_given_and_cli_options_override_it(tmp_path: Path) -> None:
+    from stand.cli import build_parser
+    from stand.cli.common import bus_kwargs
+
+    text = MINIMAL + '\n[bus]\ninterface = "pcan"\nchannel = "PCAN_USBBUS1"\nbitrate = 500000\n'
+    cfg, _ = load_config(write(tmp_path, text))
+    assert cfg.bus == {"interface": "pcan", "channel": "PCAN_USBBUS1", "bitrate": 500000}
+    args = build_parser().parse_args(
+        [
+            "record",
+            "--out",
+            "x.h5",
+            "-b",
+            "1000000",
+            "--bus-option",
+            "receive_own_messages=true",
+            "--bus-option",
+            "app_name=stand",
+        ]
+    )
+    assert bus_kwargs(args, cfg.bus) == {
+        "interface": "pcan",
+        "channel": "PCAN_USBBUS1",
+        "bitrate": 1000000,
+        "receive_own_messages": True,
+        "app_name": "stand",
+    }
+    assert load_config(DEMO)[0].bus is not None
+    assert load_config(write(tmp_path, MINIMAL))[0].bus is None
+
+
+def test_a_bus_value_that_is_not_a_plain_value_is_refused(tmp_path: Path) -> None:
+    with pytest.raises(
+        ConfigError, match=r"\[bus\.channel\]: expected text, a number or true/false"
+    ):
+        load_config(write(tmp_path, MINIMAL + "\n[bus]\nchannel = { x = 1 }\n"))
