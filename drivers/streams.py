@@ -10,7 +10,9 @@ rules (``spec/can-protocol.md``):
   concatenation).  A repeated ``seq`` is a duplicate and is dropped.
 * A node restart starts a new *segment*, with its own sample clock: ``seq``
   jumps back, or a STATUS arrives after the node was silent for
-  :data:`SILENCE_S`.  Segment ``k``'s indices only compare with segment ``k``'s.
+  :data:`SILENCE_S` and ``seq`` does not run on as the time that passed
+  predicts (if it does, the silence was a bus dropout: lost frames).
+  Segment ``k``'s indices only compare with segment ``k``'s.
 * The count -32768 is an invalid sample: counted, never a value.
 * A MARK is matched to SAMPLES by ``seq``, whichever arrived first: its
   ``seq`` is unwrapped against the nearest SAMPLES frame of the same node.
@@ -46,7 +48,10 @@ from stand.errors import NoStatusError
 STATUS_WITHIN_S = 1.5
 """A node's first STATUS must come within this time of its first frame [s]."""
 SILENCE_S = 0.5
-"""A STATUS after this much silence from its node marks a restart [s]."""
+"""A STATUS after this much silence from its node marks a restart [s] ..."""
+DROPOUT_TOLERANCE = 0.1
+"""... unless ``seq`` advanced as the host time that passed predicts (within 10 %
+and 20 frames): that is a bus dropout (lost frames), not a restart."""
 
 _WRAP = 65536
 
@@ -239,11 +244,18 @@ def _rebuild_node(
     gap_before = np.where(
         pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
     )
-    restart_status = st_frame[gap_before > SILENCE_S]
+    after_silence = gap_before > SILENCE_S
     seq = dec.samples.seq[s_sel].astype(np.int64)
     restart_at = np.zeros(len(seq), dtype=bool)
-    hit = np.searchsorted(s_frame, restart_status)
-    restart_at[hit[hit < len(seq)]] = True
+    hit = np.searchsorted(s_frame, st_frame[after_silence])
+    ok = (hit > 0) & (hit < len(seq))  # a SAMPLES frame on either side of the silence
+    hit, st_rate = hit[ok], rate[after_silence][ok]
+    # a bus dropout is silence too, but then seq runs on as the time passed predicts
+    elapsed = t_s[s_frame[hit]] - t_s[s_frame[hit - 1]]
+    expected = elapsed * st_rate / SAMPLES_PER_FRAME
+    advance = (seq[hit] - seq[hit - 1]) % _WRAP
+    continues = np.abs(advance - expected) <= DROPOUT_TOLERANCE * expected + 20
+    restart_at[hit[~continues]] = True
     keep, F, seg, lost = (
         _unwrap_samples(seq, restart_at)
         if len(seq)

@@ -90,6 +90,15 @@ def test_restart_detected_by_status_after_silence_even_if_seq_runs_forward() -> 
     assert s.segments == 2 and s.lost_frames == 0  # not 100 "lost" frames
 
 
+def test_a_bus_dropout_is_lost_frames_not_a_restart() -> None:
+    f = node_frames(1, np.ones(9000), rate_hz=1000, scale_um_s2=10, first_seq=65400)
+    rel = f.t_s - f.t_s[0]
+    s = rebuild(f.take((rel < 2.2) | (rel >= 4.0 - 1e-9))).nodes[1]  # 1.8 s silent, then STATUS
+    assert s.segments == 1
+    assert s.lost_frames == 3000 - s.frames  # seq wrapped inside the dropout, too
+    assert np.all(np.diff(s.index) >= 1) and s.index[-1] - s.index[0] == 8999
+
+
 def test_duplicated_frames_are_dropped() -> None:
     f = node_frames(1, np.arange(30), rate_hz=1000, scale_um_s2=10)
     # frames: STATUS, SAMPLES 0, 1, 2, 3, ...: SAMPLES 3 arrives twice in a row
