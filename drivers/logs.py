@@ -33,7 +33,7 @@ from stand.errors import RecordingError
 CAN_ERR_FLAG = 0x20000000
 CAN_EFF_MASK = 0x1FFFFFFF
 _CANDUMP = re.compile(
-    rb"^[ \t]*\((\d+(?:\.\d*)?)\)[ \t]+(\S+)[ \t]+([0-9A-Fa-f]{1,8})#(#[0-9A-Fa-f])?"
+    rb"^[ \t]*\((-?\d+(?:\.\d*)?)\)[ \t]+(\S+)[ \t]+([0-9A-Fa-f]{1,8})#(#[0-9A-Fa-f])?"
     rb"([Rr]\d*|[0-9A-Fa-f]*)(?:[ \t]+[RrTt])?[ \t]*\r?$",
     re.MULTILINE,
 )

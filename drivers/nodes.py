@@ -44,6 +44,7 @@ def node_frames(
     first_rev: int = 0,
     t0_s: float = 0.0,
     status_flags: ArrayLike | None = None,
+    clock_ppm: float = 0.0,
 ) -> Frames:
     """The frames of one node, in the order it sends them.
 
@@ -68,6 +69,9 @@ def node_frames(
     status_flags
         Flags of each STATUS frame (one per second, the first at start-up);
         default all 0.
+    clock_ppm
+        The node clock's error: it really samples at
+        ``rate_hz * (1 + clock_ppm * 1e-6)`` while STATUS says ``rate_hz``.
 
     Returns
     -------
@@ -79,22 +83,23 @@ def node_frames(
     n_frames = len(flat) // SAMPLES_PER_FRAME
     c = flat[: n_frames * SAMPLES_PER_FRAME].reshape(n_frames, SAMPLES_PER_FRAME)
     k = np.arange(n_frames)
-    t_samples = t0_s + (SAMPLES_PER_FRAME * k + SAMPLES_PER_FRAME - 1) / rate_hz
+    true_rate = rate_hz * (1 + clock_ppm * 1e-6)
+    t_samples = t0_s + (SAMPLES_PER_FRAME * k + SAMPLES_PER_FRAME - 1) / true_rate
     samples = encode_samples(node, first_seq + k, c, t_samples)
 
     e = np.asarray(edges, dtype=np.float64).reshape(-1)
     e = e[(e >= 0) & (e < n_frames * SAMPLES_PER_FRAME)]
     frame, slot, frac = edge_fields(e)
     marks = encode_marks(
-        node, first_seq + frame, slot, frac, first_rev + np.arange(len(e)), t0_s + e / rate_hz
+        node, first_seq + frame, slot, frac, first_rev + np.arange(len(e)), t0_s + e / true_rate
     )
 
-    duration = n_frames * SAMPLES_PER_FRAME / rate_hz
+    duration = n_frames * SAMPLES_PER_FRAME / rate_hz  # in the node's own time
     n_status = int(np.floor(duration / STATUS_PERIOD_S)) + 1
     flags = np.zeros(n_status, np.uint8) if status_flags is None else np.asarray(status_flags)
     flags = np.resize(flags, n_status)
     # just before the sample taken at the same instant, so a STATUS leads its second
-    t_status = t0_s + np.arange(n_status) * STATUS_PERIOD_S - 0.5 / rate_hz
+    t_status = t0_s + (np.arange(n_status) * STATUS_PERIOD_S * rate_hz - 0.5) / true_rate
     status = encode_status(node, round(rate_hz), scale_um_s2, flags, t_status)
     return merge([status, samples, marks])
 

@@ -15,9 +15,10 @@ reported here with the file and the key.
 
 from __future__ import annotations
 
+import json
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
 
@@ -92,6 +93,37 @@ def _describe(err: dict[str, Any]) -> tuple[str, str]:
     return key, msg
 
 
+M = TypeVar("M", bound=BaseModel)
+
+
+def validate(model: type[M], data: dict[str, Any], source: str) -> M:
+    """Validate parsed TOML against a pydantic model; one :class:`ConfigError` if it fails.
+
+    The error names ``source``, the first bad key and what is wrong with it;
+    an unknown key is reported first (it is usually a typo, and the cause of
+    a "missing" one).
+    """
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
+        described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
+        key, msg = described[0]
+        more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
+        raise ConfigError(msg + more, source=source, key=key) from None
+
+
+def parameters_of(cfg: Config, source: str) -> StandParameters:
+    """The core parameters of a validated configuration (physical checks as ConfigError)."""
+    try:
+        return cfg.parameters()
+    except ParameterError as exc:
+        table = "stand" if exc.key in STAND_KEYS else "rotor"
+        raise ConfigError(
+            str(exc).split(": ", 1)[1], source=source, key=f"{table}.{exc.key}"
+        ) from None
+
+
 def config_from_dict(
     data: dict[str, Any], source: str = "<config>"
 ) -> tuple[Config, StandParameters]:
@@ -102,23 +134,36 @@ def config_from_dict(
     ConfigError
         Naming ``source``, the first bad key and what is wrong with it.
     """
-    try:
-        cfg = Config.model_validate(data)
-    except ValidationError as exc:
-        # an unknown key is usually a typo, and the cause of a "missing" one: report it first
-        errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
-        described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
-        key, msg = described[0]
-        more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
-        raise ConfigError(msg + more, source=source, key=key) from None
-    try:
-        params = cfg.parameters()
-    except ParameterError as exc:
-        table = "stand" if exc.key in STAND_KEYS else "rotor"
-        raise ConfigError(
-            str(exc).split(": ", 1)[1], source=source, key=f"{table}.{exc.key}"
-        ) from None
-    return cfg, params
+    cfg = validate(Config, data, source)
+    return cfg, parameters_of(cfg, source)
+
+
+def to_toml(tables: dict[str, dict[str, Any]]) -> str:
+    """TOML text of flat tables of numbers, booleans and strings (what a config holds).
+
+    >>> print(to_toml({"run": {"rpm": 900.0, "name": "x"}}), end="")
+    [run]
+    rpm = 900.0
+    name = "x"
+    """
+    lines: list[str] = []
+    for name, table in tables.items():
+        lines.append(f"[{name}]")
+        for key, value in table.items():
+            if isinstance(value, bool):
+                text = "true" if value else "false"
+            elif isinstance(value, str):
+                text = json.dumps(value)
+            else:
+                text = repr(value)
+            lines.append(f"{key} = {text}")
+        lines.append("")
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def config_toml(cfg: Config) -> str:
+    """The configuration as TOML text (stored in run files)."""
+    return to_toml({k: v for k, v in cfg.model_dump().items() if v is not None})
 
 
 def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:

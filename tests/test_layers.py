@@ -23,6 +23,7 @@ FORBIDDEN_IN_CORE = (
     "matplotlib",
     "rich",
     "cantools",
+    "stand.sim",
 )
 
 
@@ -77,3 +78,15 @@ def test_decoding_loads_neither_python_can_nor_h5py() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+SIM = sorted((ROOT / "stand" / "sim").glob("*.py"))
+
+
+@pytest.mark.parametrize("path", SIM, ids=lambda p: p.name)
+def test_the_simulator_sits_below_the_cli(path: Path) -> None:
+    """stand.sim uses the core, the config and the drivers; its physics uses the core only."""
+    mods = imported_modules(path)
+    assert not {m for m in mods if m.startswith("stand.cli")}
+    if path.name in ("physics.py", "scene.py"):
+        assert not {m for m in mods if m.split(".")[0] in ("drivers", "can", "h5py")}

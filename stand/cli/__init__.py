@@ -32,9 +32,16 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _subcommands() -> dict[str, ModuleType]:
-    from stand.cli import convert, forward, inspect, record
+    from stand.cli import convert, forward, inspect, record, scenes, simulate
 
-    return {"forward": forward, "inspect": inspect, "record": record, "convert": convert}
+    return {
+        "forward": forward,
+        "simulate": simulate,
+        "scenes": scenes,
+        "record": record,
+        "inspect": inspect,
+        "convert": convert,
+    }
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -18,12 +18,20 @@ with ``M`` the symmetric mass matrix, ``K = diag(C1, C2)``,
 The ``alpha`` term (angular acceleration) is the tangential inertia of the
 unbalance mass; at constant speed it vanishes and ``F_i`` is the seed's
 force term.
+
+A nonlinear support (dry friction, a clearance) adds a force ``S(x, x')``
+on the supports' side: ``M x'' + H x' + K x = Q(t) + S(x, x')``.  Its
+discontinuities are smoothed as seed 003 does, ``sign(v) ~ (2/pi)
+arctan(beta v)``, so one ODE system covers every regime
+(:func:`smooth_sign`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -138,6 +146,34 @@ class SpeedProfile:
         return float(max(self.omega_rad_s))
 
 
+class Speed(Protocol):
+    """A shaft speed law: what :func:`integrate` needs (``SpeedProfile`` is one)."""
+
+    def omega(self, t: ArrayLike) -> FloatArray: ...  # [rad/s]
+
+    def alpha(self, t: ArrayLike) -> FloatArray: ...  # [rad/s^2]
+
+    def theta(self, t: ArrayLike) -> FloatArray: ...  # [rad]
+
+    @property
+    def max_omega_rad_s(self) -> float: ...
+
+
+SupportForce = Callable[[FloatArray, FloatArray], FloatArray]
+"""``S(x, v)``: extra force on the supports [N], shape (2, n), from displacements and
+velocities of shape (2, n)."""
+
+
+def smooth_sign(x: ArrayLike, beta: float) -> FloatArray:
+    """``(2/pi) arctan(beta x)``: seed 003's smooth stand-in for ``sign(x)``.
+
+    >>> [round(float(s), 6) for s in smooth_sign([-1.0, 0.0, 1e-6, 1.0], 1e6)]
+    [-0.999999, 0.0, 0.5, 0.999999]
+    """
+    result: FloatArray = (2.0 / math.pi) * np.arctan(beta * np.asarray(x, dtype=float))
+    return result
+
+
 @dataclass(frozen=True)
 class TransientResult:
     """Time history of the supports.
@@ -175,11 +211,12 @@ def steady_state_initial(
 
 def integrate(
     p: StandParameters,
-    speed: SpeedProfile,
+    speed: Speed,
     U_kg_m: ArrayLike,
     t_eval_s: ArrayLike,
     *,
     y0: ArrayLike | None = None,
+    support_force: SupportForce | None = None,
     method: str = "DOP853",
     rtol: float = 1e-9,
     atol_scale: float | None = None,
@@ -199,6 +236,9 @@ def integrate(
         Output times [s], increasing, from 0.
     y0
         Initial ``[x1, x2, v1, v2]`` [m, m/s]; default at rest.
+    support_force
+        Nonlinear force on the supports ``S(x, v)`` [N] (friction,
+        clearance); default none.
     method
         Any :func:`~scipy.integrate.solve_ivp` method (``"Radau"`` or
         ``"LSODA"`` for stiff cases).
@@ -245,6 +285,8 @@ def integrate(
         e = U[:, None] * np.exp(1j * speed.theta(t))
         F = speed.omega(t) ** 2 * e.real + speed.alpha(t) * e.imag
         Q = lever @ F
+        if support_force is not None:
+            Q = Q + support_force(x, v)
         result: FloatArray = Minv @ (Q - H[:, None] * v - K[:, None] * x)
         return result
 

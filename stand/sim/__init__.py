@@ -1,0 +1,12 @@
+"""The simulated stand: scenes, their physics, and the frames their nodes send.
+
+A scene (:mod:`stand.sim.scene`) describes one run; :func:`stand.sim.emit.simulate`
+computes it from the stand model (:mod:`stand.sim.physics`) and emits
+protocol-v1 frames through :mod:`drivers.nodes`.  This package sits between
+the core and the CLI: it may import the core, the config and the drivers.
+"""
+
+from stand.sim.emit import Simulation, simulate
+from stand.sim.scene import Scene, load_scene, shipped_scenes
+
+__all__ = ["Scene", "Simulation", "load_scene", "shipped_scenes", "simulate"]

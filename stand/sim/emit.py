@@ -1,0 +1,271 @@
+"""A scene, simulated: node samples and edges, then protocol-v1 frames.
+
+:func:`simulate` runs the scene's physics (:mod:`stand.sim.physics`), then
+the sensor side of each node (gain and delay, 2x/3x and a neighbour's
+vibration, noise, clipping, quantisation, invalid samples, its clock), then
+what the bus does (lost frames, bursts, a dropout).  An effect the scene
+does not name is never computed, and each effect draws from its own random
+stream (``numpy.random.default_rng([seed, effect, node])``), so naming one
+effect changes no byte that another effect produced.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from drivers.nodes import STATUS_PERIOD_S, merge, node_frames
+from drivers.protocol import Frames
+from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
+from stand.core.model import FloatArray, StandParameters
+from stand.sim.physics import SceneSpeed, closed_form, edge_times, integrated, support_force
+from stand.sim.scene import Scene, per_node, unbalance_kg_m
+
+FULL_SCALE = 32767
+"""Largest count a node sends; -32768 is reserved for invalid samples."""
+NO_REFERENCE_S = 2.0
+"""STATUS flags "no reference edge" after this long without one [s]."""
+_STREAM = {
+    name: i for i, name in enumerate(("noise", "edge_jitter", "lost_frames", "invalid", "bursts"))
+}
+
+
+def _rng(scene: Scene, effect: str, node: int = 0) -> np.random.Generator:
+    return np.random.default_rng([scene.run.seed, _STREAM[effect], node])
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """A simulated run.
+
+    Attributes
+    ----------
+    frames : Frames
+        What the nodes put on the bus, in arrival order (host time from 0).
+    physics : str
+        ``"closed_form"`` or ``"integrate"``.
+    nfev : int
+        Right-hand-side evaluations of the time integration (0 if none).
+    wall_s : float
+        Compute time [s].
+    truth : dict
+        For checking: per node ``t_s`` (sample times, physics time) and
+        ``accel_m_s2`` (the measured acceleration before noise and
+        quantisation); ``edges_s`` (edge times); ``A_m_s2`` (steady 1x
+        phasors at the scene's speed, sensor gain and delay included).
+    """
+
+    frames: Frames
+    physics: str
+    nfev: int
+    wall_s: float
+    truth: dict[str, object] = field(default_factory=dict)
+
+
+def scene_speed(scene: Scene) -> tuple[SceneSpeed, float]:
+    """The speed law and the recording's start in physics time [s]."""
+    e = scene.effects
+    ramp = e.run_up.ramp_s if e.run_up else 0.0
+    hold = scene.run.settle_s if scene.needs_integration and not e.run_up else 0.0
+    t_start = hold  # a run-up is recorded from standstill
+    sp = e.speed
+    speed = SceneSpeed(
+        omega0_rad_s=float(rpm_to_rad_s(scene.run.rpm)),
+        end_s=t_start + scene.run.seconds,
+        ramp_s=ramp,
+        hold_s=hold,
+        ripple=sp.ripple_pct / 100 if sp else 0.0,
+        ripple_hz=sp.ripple_hz if sp else 1.0,
+        drift_per_s=sp.drift_pct_per_s / 100 if sp else 0.0,
+    )
+    return speed, t_start
+
+
+def _sensor_side(
+    scene: Scene, node: int, t: FloatArray, a: FloatArray, theta: FloatArray
+) -> FloatArray:
+    """Harmonics and a neighbour's vibration (they are at the support too)."""
+    e = scene.effects
+    if e.harmonics:
+        h = e.harmonics
+        for k, amp, ph in ((2, h.x2_m_s2, h.x2_phase_deg), (3, h.x3_m_s2, h.x3_phase_deg)):
+            A = per_node(amp)[node] * np.exp(1j * math.radians(per_node(ph)[node]))
+            if A != 0:
+                a = a + (A * np.exp(1j * k * theta)).real
+    if e.neighbour:
+        nb = e.neighbour
+        w = float(rpm_to_rad_s(nb.rpm))
+        a = a + per_node(nb.amplitude_m_s2)[node] * np.cos(
+            w * t + math.radians(per_node(nb.phase_deg)[node])
+        )
+    return a
+
+
+def simulate(scene: Scene, p: StandParameters) -> Simulation:
+    """Simulate the scene: its frames, and the truth they were made from."""
+    start = time.perf_counter()
+    e = scene.effects
+    rate = scene.nodes.rate_hz
+    speed, t_start = scene_speed(scene)
+    t_end = t_start + scene.run.seconds
+    q_r, phi = unbalance_kg_m(scene)
+    U = unbalance_from_polar(q_r, phi)
+    ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
+    offset = per_node(e.clock.offset_s) if e.clock else [0.0, 0.0]
+    gain = per_node(e.sensor.gain) if e.sensor else [1.0, 1.0]
+    delay = per_node(e.sensor.delay_s) if e.sensor else [0.0, 0.0]
+
+    # --- when each node samples (physics time), and what the sensor sees then
+    times = []
+    for i in range(2):
+        true_rate = rate * (1 + ppm[i] * 1e-6)
+        n = math.floor((scene.run.seconds - offset[i]) * true_rate)
+        times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
+    seen = [t - d for t, d in zip(times, delay, strict=True)]  # a group delay: earlier motion
+    nfev = 0
+    if scene.needs_integration:
+        force = None
+        if e.nonlinear:
+            w0 = speed.omega0_rad_s
+            v_ss = np.abs(forward(p, w0, U)) / w0
+            fr = per_node(e.friction.force_n) if e.friction else None
+            fb = None
+            if e.friction:
+                fb = (
+                    [e.friction.beta_s_m] * 2
+                    if e.friction.beta_s_m
+                    else [100.0 / max(v, 1e-12) for v in v_ss]
+                )
+            gap = per_node(e.clearance.gap_m) if e.clearance else None
+            gb = None
+            if e.clearance and gap is not None:
+                gb = (
+                    [e.clearance.beta_per_m] * 2
+                    if e.clearance.beta_per_m
+                    else [100.0 / max(g, 1e-12) for g in gap]
+                )
+            force = support_force(p, fr, fb, gap, gb)
+        both = np.concatenate(seen)
+        a_both, nfev = integrated(
+            p, speed, U, both, force=force, rtol=scene.run.rtol, from_steady=e.run_up is None
+        )
+        a_phys = [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]]
+    else:
+        a_phys = [closed_form(p, speed, U, s)[:, i] for i, s in enumerate(seen)]
+
+    edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
+    if e.edge_jitter:
+        edges = edges + _rng(scene, "edge_jitter").normal(0.0, e.edge_jitter.rms_s, len(edges))
+
+    blocks: list[Frames] = []
+    truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
+    w0 = speed.omega0_rad_s
+    A_true = forward(p, w0, U) * np.array(gain) * np.exp(-1j * w0 * np.array(delay))
+    truth["A_m_s2"] = A_true
+    scale = scene.nodes.scale_um_s2 * 1e-6
+    for i in range(2):
+        node = i + 1
+        a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed.theta(seen[i]))
+        truth[f"node{node}"] = {"t_s": times[i], "accel_m_s2": a}
+        if e.noise:
+            rms = (
+                e.noise.rms_m_s2
+                if e.noise.rms_m_s2 is not None
+                else (
+                    e.noise.density_m_s2_rthz * math.sqrt(rate / 2)  # type: ignore[operator]
+                )
+            )
+            a = a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
+        clipped = np.zeros(len(a), bool)
+        if e.clipping:
+            r = e.clipping.range_m_s2
+            clipped = np.abs(a) > r
+            a = np.clip(a, -r, r)
+        counts = np.rint(a / scale)
+        clipped |= np.abs(counts) > FULL_SCALE
+        counts = np.clip(counts, -FULL_SCALE, FULL_SCALE).astype(np.int16)
+        invalid = np.zeros(len(a), bool)
+        if e.invalid:
+            invalid = _rng(scene, "invalid", node).random(len(a)) < e.invalid.probability
+            counts[invalid] = -32768
+        true_rate = rate * (1 + ppm[i] * 1e-6)
+        positions = (edges - times[i][0]) * true_rate if len(times[i]) else edges[:0]
+        flags = _status_flags(len(a), rate, clipped, invalid, positions)
+        blocks.append(
+            _lost(
+                scene,
+                node,
+                node_frames(
+                    node,
+                    counts,
+                    rate_hz=rate,
+                    scale_um_s2=scene.nodes.scale_um_s2,
+                    edges=positions,
+                    first_seq=scene.nodes.first_seq,
+                    t0_s=offset[i],
+                    status_flags=flags,
+                    clock_ppm=ppm[i],
+                ),
+            )
+        )
+    frames = merge(blocks)
+    if len(frames):  # host time starts at the first frame (the start-up STATUS)
+        frames = Frames(
+            frames.t_s - frames.t_s[0], frames.can_id, frames.dlc, frames.data, frames.flags
+        )
+    if e.dropout:
+        rel = frames.t_s
+        frames = frames.take(
+            ~((rel >= e.dropout.at_s) & (rel < e.dropout.at_s + e.dropout.seconds))
+        )
+    return Simulation(
+        frames=frames,
+        physics="integrate" if scene.needs_integration else "closed_form",
+        nfev=nfev,
+        wall_s=time.perf_counter() - start,
+        truth=truth,
+    )
+
+
+def _status_flags(
+    n: int,
+    rate: int,
+    clipped: NDArray[np.bool_],
+    invalid: NDArray[np.bool_],
+    edges: FloatArray,
+) -> NDArray[np.uint8]:
+    """Flags of each STATUS (start-up, then each second): what happened in the second before."""
+    per_status = round(STATUS_PERIOD_S * rate)  # samples between two STATUS frames
+    n_status = n // per_status + 1
+    reported_by = np.arange(n) // per_status + 1  # STATUS k reports the second before it
+    flags = np.zeros(n_status, np.uint8)
+    for bit, happened in ((1, clipped), (2, invalid)):
+        k_hit = np.unique(reported_by[happened])
+        flags[k_hit[k_hit < n_status]] |= bit
+    k = np.arange(n_status)
+    t_status = k * per_status  # sample position of STATUS k
+    last_edge = np.searchsorted(edges, t_status, side="right") - 1
+    since = np.where(last_edge >= 0, t_status - edges[np.maximum(last_edge, 0)], t_status)
+    flags[(k > 0) & (since > NO_REFERENCE_S * rate)] |= 4
+    return flags
+
+
+def _lost(scene: Scene, node: int, frames: Frames) -> Frames:
+    """Frames lost on the bus: single ones and bursts."""
+    lf = scene.effects.lost_frames
+    if lf is None:
+        return frames
+    keep = np.ones(len(frames), bool)
+    if lf.probability > 0:
+        keep &= _rng(scene, "lost_frames", node).random(len(frames)) >= lf.probability
+    if lf.bursts_per_s > 0 and len(frames):
+        rng = _rng(scene, "bursts", node)
+        duration = float(frames.t_s[-1] - frames.t_s[0])
+        n = rng.poisson(lf.bursts_per_s * duration)
+        for s in rng.integers(0, len(frames), n).tolist():
+            keep[s : s + lf.burst_frames] = False
+    return frames.take(keep)

@@ -1,0 +1,197 @@
+"""The physics of a scene: shaft speed, support accelerations, reference edges.
+
+Pure numerics on top of :mod:`stand.core` (no I/O, no frames).  Two paths:
+
+* **closed form** when every effect named is linear and steady: the support
+  acceleration is ``Re(A(w(t)) e^{i theta(t)})`` with ``A`` from
+  :func:`stand.core.forward`.  Speed ripple and drift are taken
+  quasi-steadily (``A`` follows the momentary speed); that is exact for a
+  constant speed and good while the speed changes slowly against the
+  supports' settling time.
+* **time integration** (:func:`stand.core.transient.integrate`) when the
+  scene calls for a run-up from standstill or a nonlinear support (dry
+  friction, clearance), or asks for it (``physics = "integrate"``).
+
+Time ``t`` is the physics' own; the recording covers
+``[t_start, t_start + seconds]`` (``t_start`` is a settling time on the
+integration path without run-up, else 0).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from stand.core import forward
+from stand.core.model import FloatArray, StandParameters
+from stand.core.transient import SupportForce, integrate, smooth_sign
+
+
+@dataclass(frozen=True)
+class SceneSpeed:
+    """Shaft speed: linear ramp from standstill, a hold, then ripple and drift.
+
+    ``w(t) = w0 t / ramp_s`` for ``t < ramp_s``; ``w0`` until
+    ``ramp_s + hold_s``; then ``w0 (1 + ripple sin(2 pi f tau) + drift tau)``
+    with ``tau`` the time since.  ``theta`` is its exact integral from
+    ``theta0_rad``.  Implements :class:`stand.core.transient.Speed`.
+    """
+
+    omega0_rad_s: float
+    end_s: float
+    ramp_s: float = 0.0
+    hold_s: float = 0.0
+    ripple: float = 0.0
+    ripple_hz: float = 1.0
+    drift_per_s: float = 0.0
+    theta0_rad: float = 0.0
+
+    @property
+    def _t1(self) -> float:
+        return self.ramp_s + self.hold_s
+
+    def omega(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        tau = np.maximum(t - self._t1, 0.0)
+        steady = self.omega0_rad_s * (
+            1 + self.ripple * np.sin(2 * math.pi * self.ripple_hz * tau) + self.drift_per_s * tau
+        )
+        if self.ramp_s > 0:
+            ramp = self.omega0_rad_s * np.clip(t, 0.0, None) / self.ramp_s
+            steady = np.where(t < self.ramp_s, ramp, steady)
+        result: FloatArray = steady
+        return result
+
+    def alpha(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        tau = t - self._t1
+        f = 2 * math.pi * self.ripple_hz
+        steady = self.omega0_rad_s * (self.ripple * f * np.cos(f * tau) + self.drift_per_s)
+        result: FloatArray = np.where(tau >= 0, steady, 0.0)
+        if self.ramp_s > 0:
+            result = np.where(t < self.ramp_s, self.omega0_rad_s / self.ramp_s, result)
+        return result
+
+    def theta(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        w0 = self.omega0_rad_s
+        f = 2 * math.pi * self.ripple_hz
+        tau = np.maximum(t - self._t1, 0.0)
+        at_t1 = self.theta0_rad + w0 * (0.5 * self.ramp_s + self.hold_s)
+        steady = at_t1 + w0 * (
+            tau + self.ripple * (1 - np.cos(f * tau)) / f + 0.5 * self.drift_per_s * tau**2
+        )
+        hold = self.theta0_rad + w0 * (0.5 * self.ramp_s + (t - self.ramp_s))
+        result: FloatArray = np.where(t < self._t1, hold, steady)
+        if self.ramp_s > 0:
+            ramp = self.theta0_rad + 0.5 * w0 * np.clip(t, 0.0, None) ** 2 / self.ramp_s
+            result = np.where(t < self.ramp_s, ramp, result)
+        return result
+
+    @property
+    def max_omega_rad_s(self) -> float:
+        tau = max(self.end_s - self._t1, 0.0)
+        return self.omega0_rad_s * (1 + self.ripple + max(self.drift_per_s * tau, 0.0))
+
+
+def edge_times(speed: SceneSpeed, gamma_rad: float, t0_s: float, t1_s: float) -> FloatArray:
+    """Times in ``[t0_s, t1_s]`` when the mark passes the reference sensor.
+
+    The mark is at ``theta`` from the accelerometer axis and the sensor at
+    ``gamma``: an edge is ``theta(t) = gamma + 2 pi k``.  Found by
+    interpolation on a fine grid, then polished by Newton steps (to ~1e-12 s).
+    """
+    n = max(2000, int(40 * speed.max_omega_rad_s * (t1_s - t0_s) / (2 * math.pi)))
+    tg = np.linspace(t0_s, t1_s, n)
+    th = speed.theta(tg)
+    k = np.arange(
+        math.ceil((th[0] - gamma_rad) / (2 * math.pi)),
+        math.floor((th[-1] - gamma_rad) / (2 * math.pi)) + 1,
+    )
+    target = gamma_rad + 2 * math.pi * k
+    t = np.interp(target, th, tg)
+    for _ in range(4):
+        w = speed.omega(t)
+        step = np.where(w > 1e-12, (speed.theta(t) - target) / np.maximum(w, 1e-12), 0.0)
+        t = np.clip(t - step, t0_s, t1_s)
+    result: FloatArray = t
+    return result
+
+
+def closed_form(
+    p: StandParameters, speed: SceneSpeed, U_kg_m: np.ndarray, t_s: FloatArray
+) -> FloatArray:
+    """Support accelerations ``Re(A(w(t)) e^{i theta(t)})`` [m/s^2], shape (n, 2)."""
+    w = speed.omega(t_s)
+    if speed.ripple == 0 and speed.drift_per_s == 0:  # one speed: one forward
+        A = np.broadcast_to(forward(p, float(w[0]), U_kg_m), (len(t_s), 2))
+    else:
+        A = forward(p, w, U_kg_m)
+    result: FloatArray = (A * np.exp(1j * speed.theta(t_s))[:, None]).real
+    return result
+
+
+def support_force(
+    p: StandParameters,
+    friction_n: list[float] | None,
+    friction_beta_s_m: list[float] | None,
+    gap_m: list[float] | None,
+    gap_beta_per_m: list[float] | None,
+) -> SupportForce:
+    """The nonlinear support force: dry friction and clearance, smoothed (seed 003).
+
+    Friction: ``-F_i (2/pi) arctan(beta v_i)``.  Clearance: the spring acts on
+    the dead-band displacement ``dz(x) = (x - g)(1 + s(x - g))/2 + (x + g)(1 - s(x + g))/2``
+    (``s`` the smooth sign) instead of ``x``, i.e. the force ``C_i (x - dz(x))``
+    is added back.
+    """
+    K = np.array([p.C1, p.C2])[:, None]
+
+    def force(x: FloatArray, v: FloatArray) -> FloatArray:
+        S = np.zeros_like(x)
+        if friction_n is not None and friction_beta_s_m is not None:
+            for i in range(2):
+                S[i] -= friction_n[i] * smooth_sign(v[i], friction_beta_s_m[i])
+        if gap_m is not None and gap_beta_per_m is not None:
+            for i in range(2):
+                g, beta = gap_m[i], gap_beta_per_m[i]
+                dz = 0.5 * (x[i] - g) * (1 + smooth_sign(x[i] - g, beta)) + 0.5 * (x[i] + g) * (
+                    1 - smooth_sign(x[i] + g, beta)
+                )
+                S[i] += K[i, 0] * (x[i] - dz)
+        return S
+
+    return force
+
+
+def integrated(
+    p: StandParameters,
+    speed: SceneSpeed,
+    U_kg_m: np.ndarray,
+    t_s: FloatArray,
+    *,
+    force: SupportForce | None,
+    rtol: float,
+    from_steady: bool,
+) -> tuple[FloatArray, int]:
+    """Support accelerations by time integration at times ``t_s`` (any order), and ``nfev``.
+
+    ``from_steady`` starts on the linear steady orbit (no run-up), else at rest.
+    """
+    from stand.core.transient import steady_state_initial
+
+    t_unique, back = np.unique(np.maximum(t_s, 0.0), return_inverse=True)  # solve_ivp: increasing
+    method = "LSODA" if force is not None else "DOP853"
+    y0 = (
+        steady_state_initial(p, speed.omega0_rad_s, U_kg_m, speed.theta0_rad)
+        if from_steady
+        else None
+    )
+    res = integrate(
+        p, speed, U_kg_m, t_unique, y0=y0, method=method, rtol=rtol, support_force=force
+    )
+    a: FloatArray = res.a_m_s2[back]
+    return a, res.nfev

@@ -1,0 +1,314 @@
+"""Scenes: one simulated run, as a TOML file validated by pydantic.
+
+A scene holds a configuration (``[stand]``, ``[rotor]``, optional ``[bus]``:
+the same tables as a config file, so the config that solves the recording is
+the scene's own) and::
+
+    [run]        rpm, seconds, seed = 0, physics = "auto"
+    [unbalance]  plane1 = { g_mm, angle_deg }, plane2 = { ... }   (the seed's phi)
+    [nodes]      rate_hz = 4000, scale_um_s2 = 100, first_seq = 0
+    [effects.*]  each optional; an effect not named costs nothing
+
+Per-node values (gains, delays, clock errors ...) are one number for both
+nodes or a list ``[node1, node2]``.  Units are in the key names.  Every
+table refuses unknown keys.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, model_validator
+
+from stand.config import (
+    Config,
+    RotorTable,
+    StandTable,
+    parameters_of,
+    read_toml,
+    validate,
+)
+from stand.core.model import StandParameters
+from stand.errors import ConfigError
+
+_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+NODES = 2
+
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Probability = Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False)]
+PerNode = FiniteFloat | list[FiniteFloat]
+"""One value for every node, or ``[node1, node2]``."""
+
+
+def per_node(value: float | list[float]) -> list[float]:
+    """The value of each node."""
+    if isinstance(value, list):
+        return [float(v) for v in value]
+    return [float(value)] * NODES
+
+
+class _Table(BaseModel):
+    model_config = _STRICT
+
+    @model_validator(mode="after")
+    def _two_nodes(self) -> _Table:
+        for name, value in self:
+            if isinstance(value, list) and len(value) != NODES:
+                raise ValueError(
+                    f"{name}: expected one value or {NODES} (one per node), got {len(value)}"
+                )
+        return self
+
+
+class RunTable(_Table):
+    """``[run]``: speed, length, random seed, physics path."""
+
+    rpm: Positive
+    seconds: Positive
+    seed: int = 0
+    physics: Literal["auto", "closed_form", "integrate"] = "auto"
+    rtol: Positive = 1e-8
+    """Relative tolerance of the time integration (when it runs)."""
+    settle_s: NonNegative = 2.0
+    """Time integrated (and not recorded) before the run starts, on the
+    integration path without run-up, for the nonlinear supports to settle [s]."""
+
+
+class PlaneUnbalance(_Table):
+    g_mm: NonNegative
+    angle_deg: FiniteFloat
+
+
+class UnbalanceTable(_Table):
+    """``[unbalance]``: ``U_i = q_i R_i`` [g mm] at the seed's angle ``phi_i`` [deg]."""
+
+    plane1: PlaneUnbalance
+    plane2: PlaneUnbalance
+
+
+class NodesTable(_Table):
+    """``[nodes]``: the simulated sensor nodes."""
+
+    rate_hz: Annotated[int, Field(gt=0, lt=65536)] = 4000
+    scale_um_s2: Annotated[int, Field(gt=0, lt=65536)] = 100
+    first_seq: Annotated[int, Field(ge=0, lt=65536)] = 0
+
+
+class Noise(_Table):
+    """White sensor noise: a density or an rms, not both."""
+
+    density_m_s2_rthz: NonNegative | None = None
+    rms_m_s2: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _one(self) -> Noise:
+        if (self.density_m_s2_rthz is None) == (self.rms_m_s2 is None):
+            raise ValueError("give density_m_s2_rthz or rms_m_s2 (one of them)")
+        return self
+
+
+class Clock(_Table):
+    """Node clock error [ppm] and start offset [s] (when the node's sample 0 is taken)."""
+
+    ppm: PerNode = 0.0
+    offset_s: PerNode = 0.0
+
+
+class SpeedEffect(_Table):
+    """Speed ripple (a sine, in % of the speed) and a slow drift (% per second)."""
+
+    ripple_pct: NonNegative = 0.0
+    ripple_hz: Positive = 1.0
+    drift_pct_per_s: FiniteFloat = 0.0
+
+
+class RunUp(_Table):
+    """Start from standstill, reach ``[run] rpm`` linearly in ``ramp_s`` (a transient)."""
+
+    ramp_s: Positive
+
+
+class Sensor(_Table):
+    """Sensor gain and group delay [s]: the phase lag grows with speed, ``w * delay``."""
+
+    gain: PerNode = 1.0
+    delay_s: PerNode = 0.0
+
+
+class EdgeJitter(_Table):
+    """Timing jitter of the reference edge (Gaussian, rms) [s]."""
+
+    rms_s: NonNegative
+
+
+class LostFrames(_Table):
+    """Frames lost on the bus: single (probability per frame) and in bursts."""
+
+    probability: Probability = 0.0
+    bursts_per_s: NonNegative = 0.0
+    burst_frames: Annotated[int, Field(ge=1)] = 10
+
+
+class Invalid(_Table):
+    """Invalid samples (count -32768), each with this probability."""
+
+    probability: Probability
+
+
+class Clipping(_Table):
+    """The sensor saturates at +-``range_m_s2``; STATUS reports overrange."""
+
+    range_m_s2: Positive
+
+
+class Harmonics(_Table):
+    """2x and 3x components (misalignment): ``Re(H e^{i k theta})`` per node."""
+
+    x2_m_s2: PerNode = 0.0
+    x2_phase_deg: PerNode = 0.0
+    x3_m_s2: PerNode = 0.0
+    x3_phase_deg: PerNode = 0.0
+
+
+class Neighbour(_Table):
+    """A neighbouring machine's vibration at a fixed (non-synchronous) frequency."""
+
+    rpm: Positive
+    amplitude_m_s2: PerNode
+    phase_deg: PerNode = 0.0
+
+
+class Friction(_Table):
+    """Dry friction in the supports: ``-F (2/pi) arctan(beta v)`` [N]."""
+
+    force_n: PerNode
+    beta_s_m: Positive | None = None
+    """Smoothing [s/m]; default 100 / (the support's steady velocity amplitude)."""
+
+
+class Clearance(_Table):
+    """A clearance (dead band) of ``gap_m`` in each support's spring, smoothed."""
+
+    gap_m: PerNode
+    beta_per_m: Positive | None = None
+    """Smoothing [1/m]; default 100 / gap."""
+
+
+class Dropout(_Table):
+    """The bus carries nothing from ``at_s`` for ``seconds``."""
+
+    at_s: NonNegative
+    seconds: Positive
+
+
+class Effects(_Table):
+    """``[effects.*]``: each absent unless named."""
+
+    noise: Noise | None = None
+    clock: Clock | None = None
+    speed: SpeedEffect | None = None
+    run_up: RunUp | None = None
+    sensor: Sensor | None = None
+    edge_jitter: EdgeJitter | None = None
+    lost_frames: LostFrames | None = None
+    invalid: Invalid | None = None
+    clipping: Clipping | None = None
+    harmonics: Harmonics | None = None
+    neighbour: Neighbour | None = None
+    friction: Friction | None = None
+    clearance: Clearance | None = None
+    dropout: Dropout | None = None
+
+    def named(self) -> list[str]:
+        """The effects the scene names, in table order."""
+        return [name for name, value in self if value is not None]
+
+    @property
+    def nonlinear(self) -> bool:
+        return self.friction is not None or self.clearance is not None
+
+
+class Scene(BaseModel):
+    """A whole scene file."""
+
+    model_config = _STRICT
+
+    description: str = ""
+    stand: StandTable
+    rotor: RotorTable
+    bus: dict[str, str | int | float | bool] | None = None
+    run: RunTable
+    unbalance: UnbalanceTable
+    nodes: NodesTable = NodesTable()
+    effects: Effects = Effects()
+
+    def config(self) -> Config:
+        """The configuration part (what solves the recording)."""
+        return Config(stand=self.stand, rotor=self.rotor, bus=self.bus)
+
+    @property
+    def needs_integration(self) -> bool:
+        """Whether the physics path is time integration."""
+        if self.run.physics != "auto":
+            return self.run.physics == "integrate"
+        return self.effects.run_up is not None or self.effects.nonlinear
+
+
+def scenes_dir() -> Path:
+    """Where the shipped scenes are."""
+    return Path(str(resources.files("stand") / "data" / "scenes"))
+
+
+def shipped_scenes() -> dict[str, Path]:
+    """The shipped scenes by name."""
+    return {p.stem: p for p in sorted(scenes_dir().glob("*.toml"))}
+
+
+def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
+    """A scene by shipped name (``demo``) or path; return it, its parameters, its source.
+
+    Raises
+    ------
+    ConfigError
+        Unknown name, unreadable file, or a bad value (naming file and key).
+    """
+    text = str(name_or_path)
+    shipped = shipped_scenes()
+    if text in shipped:
+        path = shipped[text]
+    elif Path(text).exists() or text.endswith(".toml"):
+        path = Path(text)
+    else:
+        raise ConfigError(
+            f"no such scene: expected a file or one of {', '.join(shipped)}", source=text
+        )
+    _, data = read_toml(path)
+    scene = validate(Scene, data, str(path))
+    if scene.run.physics == "closed_form" and (scene.effects.run_up or scene.effects.nonlinear):
+        raise ConfigError(
+            'physics = "closed_form" cannot simulate a run-up or a nonlinear support',
+            source=str(path),
+            key="run.physics",
+        )
+    params = parameters_of(scene.config(), str(path))
+    return scene, params, str(path)
+
+
+def unbalance_kg_m(scene: Scene) -> tuple[list[float], list[float]]:
+    """``(q_i R_i [kg m], phi_i [deg])`` of both planes."""
+    u = scene.unbalance
+    return [u.plane1.g_mm * 1e-6, u.plane2.g_mm * 1e-6], [u.plane1.angle_deg, u.plane2.angle_deg]
+
+
+def describe(scene: Scene) -> dict[str, Any]:
+    """A short account of a scene (for ``stand scenes``)."""
+    return {
+        "description": scene.description,
+        "rpm": scene.run.rpm,
+        "seconds": scene.run.seconds,
+        "effects": scene.effects.named(),
+        "physics": "integrate" if scene.needs_integration else "closed_form",
+    }
