@@ -10,11 +10,20 @@ from typing import Any
 import numpy as np
 import pytest
 from fit import fit
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from strategies import log_uniform, stands, unbalances
 
 from drivers.protocol import SAMPLES_BASE, decode
 from drivers.streams import rebuild
 from stand.config import validate
-from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
+from stand.core import (
+    StandParameters,
+    forward,
+    rpm_to_rad_s,
+    unbalance_from_polar,
+    unbalance_to_polar,
+)
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate
 from stand.sim.emit import Simulation
@@ -332,3 +341,38 @@ def test_shipped_scenes_run_and_give_their_phasors_back(name: str) -> None:
         want = sim.truth["A_m_s2"][i - 1]  # type: ignore[index]
         assert abs(got - want) < 2e-3 * abs(want), (name, i)
     assert len(decode(sim.frames).samples.frame) == sum(n.frames for n in r.nodes.values())
+
+
+@settings(max_examples=100, deadline=None)
+@given(stands(), log_uniform(60.0, 30000.0), st.data())
+def test_any_stand_from_grams_to_tonnes_reaches_the_frames_within_half_a_count(
+    p: StandParameters, rpm: float, data: st.DataObject
+) -> None:
+    """Scene -> physics -> counts -> frames -> decoded streams, against the closed form.
+
+    The tolerance is half a count (rounding) plus 1e-9 of the amplitude for the
+    arithmetic between (theta = w t at t ~ 1e4 samples, cos of it: ~1e-12 rad).
+    """
+    U = data.draw(unbalances(p))
+    w = float(rpm_to_rad_s(rpm))
+    A = np.asarray(forward(p, w, U))
+    peak = float(np.max(np.abs(A)))
+    scale_um = math.ceil(peak / 30000 * 1e6)
+    assume(1 <= scale_um < 65536 and peak > 1e-3)  # what 16-bit nodes can represent
+    q, phi = unbalance_to_polar(U)
+    values = {k: getattr(p, k) for k in ("M1", "M2", "C1", "C2", "H1", "H2")}
+    data_ = copy.deepcopy(BASE)
+    data_["stand"].update(values)
+    data_["rotor"] = {k: getattr(p, k) for k in ("M3", "J3", "a", "b", "c", "d", "R1", "R2")}
+    data_["run"] = {"rpm": rpm, "seconds": max(0.25, 3 * 60 / rpm)}
+    data_["unbalance"] = {
+        f"plane{i + 1}": {"g_mm": float(q[i]) * 1e6, "angle_deg": float(phi[i])} for i in range(2)
+    }
+    data_["nodes"]["scale_um_s2"] = scale_um
+    sc = validate(Scene, data_, "<hypothesis>")
+    r = rebuild(simulate(sc, p).frames)
+    for i in (1, 2):
+        s = r.nodes[i]
+        exact = (A[i - 1] * np.exp(1j * w * s.index / 4000.0)).real
+        err = np.max(np.abs(s.accel_m_s2 - exact))  # type: ignore[operator]
+        assert err <= 0.5 * scale_um * 1e-6 * (1 + 1e-9) + 1e-9 * peak
