@@ -13,7 +13,7 @@ import pytest
 from reference import seed_forward
 from strategies import DEMO
 
-from stand.cli import main
+from stand.cli import _subcommands, main
 from stand.core import rpm_to_rad_s, unbalance_from_polar
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -131,3 +131,11 @@ def test_the_installed_console_script() -> None:
         check=False,
     )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "Traceback" not in bad.stderr
+
+
+@pytest.mark.parametrize("command", [None, *sorted(_subcommands())])
+def test_every_help_page_renders(command: str | None, capsys: pytest.CaptureFixture[str]) -> None:
+    argv = ["--help"] if command is None else [command, "--help"]
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 0 and "usage: stand" in capsys.readouterr().out

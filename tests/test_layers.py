@@ -90,3 +90,9 @@ def test_the_simulator_sits_below_the_cli(path: Path) -> None:
     assert not {m for m in mods if m.startswith("stand.cli")}
     if path.name in ("physics.py", "scene.py"):
         assert not {m for m in mods if m.split(".")[0] in ("drivers", "can", "h5py")}
+
+
+def test_the_measuring_path_sits_below_the_cli() -> None:
+    assert not {
+        m for m in imported_modules(ROOT / "stand" / "measure.py") if m.startswith("stand.cli")
+    }

@@ -32,10 +32,21 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _subcommands() -> dict[str, ModuleType]:
-    from stand.cli import convert, forward, inspect, record, scenes, simulate
+    from stand.cli import (
+        convert,
+        forward,
+        inspect,
+        measure,
+        record,
+        scenes,
+        simulate,
+        solve,
+    )
 
     return {
         "forward": forward,
+        "solve": solve,
+        "measure": measure,
         "simulate": simulate,
         "scenes": scenes,
         "record": record,
@@ -56,10 +67,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"stand {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name, module in _subcommands().items():
-        doc = (module.__doc__ or "").strip().splitlines()[0]
+        doc = (module.__doc__ or "").strip().splitlines()[0].replace("%", "%%")  # argparse
         p = sub.add_parser(name, help=doc, description=doc, parents=[common])
         module.add_arguments(p)
-        p.set_defaults(run=module.run)
+        p.set_defaults(handler_=module.run)  # not `run`: a subcommand may take a RUN
     return parser
 
 
@@ -70,7 +81,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(args_list)
-        run: Callable[[argparse.Namespace], int] | None = getattr(args, "run", None)
+        run: Callable[[argparse.Namespace], int] | None = getattr(args, "handler_", None)
         if run is None:
             parser.print_help(sys.stderr)
             return EXIT_BAD_INPUT

@@ -96,3 +96,15 @@ def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> 
             raise UsageError(f"--bus-option: expected KEY=VALUE, got {item!r}")
         kwargs[key.strip()] = _option_value(value.strip())
     return kwargs
+
+
+def add_live_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of every command that reads a live bus."""
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=2.0,
+        metavar="S",
+        help="end after S seconds without any frame (default 2)",
+    )
+    p.add_argument("--quiet", action="store_true", help="no progress lines")

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from stand import __version__
-from stand.cli.common import UsageError, add_bus_arguments, bus_kwargs
+from stand.cli.common import UsageError, add_bus_arguments, add_live_arguments, bus_kwargs
 from stand.core import Diagnostic
 from stand.errors import BusError, BusTimeoutError
 
@@ -27,14 +27,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="stand configuration (its [bus] table, and it is stored in the run)",
     )
     p.add_argument("--seconds", type=float, help="stop after this long [s] (default: Ctrl-C)")
-    p.add_argument(
-        "--timeout",
-        type=float,
-        default=2.0,
-        metavar="S",
-        help="end the run after S seconds without any frame (default 2)",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_live_arguments(p)
     p.add_argument("--json", action="store_true", help="print the run's summary as JSON")
     add_bus_arguments(p)
 

@@ -1,0 +1,212 @@
+"""Measure live until the unbalance is precise enough (or a time limit), recording the run."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import sys
+import threading
+import time
+from typing import Any
+
+from stand import __version__
+from stand.cli.common import (
+    UsageError,
+    add_bus_arguments,
+    add_live_arguments,
+    bus_kwargs,
+    print_warnings,
+)
+from stand.cli.solve import add_measure_arguments, print_result, result
+from stand.errors import BusError
+
+DEFAULT_TARGET_PCT = 5.0
+CHECK_EVERY_S = 1.0
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    src = p.add_mutually_exclusive_group()
+    src.add_argument(
+        "--scene",
+        metavar="SCENE",
+        help="measure the simulated stand: a shipped scene or a scene file, "
+        "played in real time on a private virtual bus",
+    )
+    p.add_argument("--config", metavar="CFG", help="stand configuration with its [bus] table")
+    tgt = p.add_mutually_exclusive_group()
+    tgt.add_argument(
+        "--target-pct",
+        type=float,
+        help=f"stop when each plane's 95 %% interval is below this %% of its "
+        f"unbalance (default {DEFAULT_TARGET_PCT:g})",
+    )
+    tgt.add_argument(
+        "--target-g-mm",
+        type=float,
+        help="stop when each plane's 95 %% interval is below this [g mm]",
+    )
+    p.add_argument(
+        "--max-seconds",
+        type=float,
+        default=60.0,
+        help="stop after this long in any case (default 60)",
+    )
+    p.add_argument(
+        "--out", metavar="RUN.h5", help="run file to record into (default run-YYYYmmdd-HHMMSS.h5)"
+    )
+    add_live_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_measure_arguments(p)
+    add_bus_arguments(p)
+
+
+def _targets_kg_m(args: argparse.Namespace, U: Any) -> list[float]:
+    if args.target_g_mm is not None:
+        return [args.target_g_mm * 1e-6] * 2
+    pct = DEFAULT_TARGET_PCT if args.target_pct is None else args.target_pct
+    return [pct / 100 * abs(u) for u in U]
+
+
+def _source(args: argparse.Namespace) -> tuple[Any, Any, dict[str, Any], Any]:
+    """Config, parameters, bus options and (for a scene) the frames to play."""
+    from stand.config import load_config
+
+    if args.scene:
+        from stand.sim import load_scene, simulate
+
+        scene, params, _ = load_scene(args.scene)
+        frames = simulate(scene, params).frames
+        channel = f"stand-measure-{os.getpid()}-{time.monotonic_ns()}"
+        return scene.config(), params, {"interface": "virtual", "channel": channel}, frames
+    if not args.config:
+        raise UsageError("stand measure: give --config CFG (with its [bus] table) or --scene")
+    cfg, params = load_config(args.config)
+    return cfg, params, bus_kwargs(args, cfg.bus), None
+
+
+def run(args: argparse.Namespace) -> int:
+    from drivers.bus import BusReader, describe_bus, open_bus, play
+    from drivers.protocol import Frames
+    from drivers.recording import RunWriter
+    from drivers.streams import rebuild
+    from stand.config import config_toml
+    from stand.measure import MeasurementError, measure
+
+    for name in ("target_pct", "target_g_mm", "max_seconds"):
+        value = getattr(args, name)
+        if value is not None and not value > 0:
+            raise UsageError(f"stand measure: --{name.replace('_', '-')} must be > 0, got {value}")
+    cfg, params, kwargs, scene_frames = _source(args)
+    out_path = args.out or f"run-{dt.datetime.now():%Y%m%d-%H%M%S}.h5"
+    where = describe_bus(kwargs)
+    writer = RunWriter(
+        out_path,
+        source=json.dumps(kwargs, default=str),
+        config_toml=config_toml(cfg),
+        software=f"stand {__version__}",
+    )
+    bus = open_bus(kwargs)
+    player = None
+    stop_player = threading.Event()
+    if scene_frames is not None:
+        tx = open_bus(kwargs)
+        player = threading.Thread(
+            target=lambda: (play(tx, scene_frames, stop=stop_player), tx.shutdown()), daemon=True
+        )
+    reader = BusReader(bus, channel_info=where, silence_timeout_s=args.timeout)
+    if player is not None:
+        player.start()
+    gamma = cfg.stand.reference_angle_deg
+    blocks: list[Frames] = []
+    stopped_by = "time limit"
+    last: Any = None
+    start = time.monotonic()
+    next_check = start + CHECK_EVERY_S
+    if not args.quiet:
+        print(f"measuring on {where}, recording into {out_path} (Ctrl-C stops)", file=sys.stderr)
+    try:
+        while time.monotonic() - start < args.max_seconds:
+            try:
+                block = reader.read_block(0.1)
+            except BusError as exc:
+                stopped_by = "frames stopped" if reader.frames_received else "no frames"
+                if not args.quiet or not reader.frames_received:
+                    print(f"stand: {exc}", file=sys.stderr)
+                break
+            writer.append(block)
+            blocks.append(block)
+            if time.monotonic() < next_check:
+                continue
+            next_check += CHECK_EVERY_S
+            elapsed = time.monotonic() - start
+            try:
+                m = measure(
+                    rebuild(Frames.concat(blocks), strict_status=False),
+                    params,
+                    reference_angle_deg=gamma,
+                    taper=args.taper,
+                    gate=not args.no_gate,
+                )
+            except (MeasurementError, BusError, ValueError) as exc:
+                if not args.quiet:
+                    print(f"  {elapsed:5.1f} s  waiting: {exc}", file=sys.stderr)
+                continue
+            last = m
+            targets = _targets_kg_m(args, m.solution.U_kg_m)
+            short = any(w.code == "short_window" for w in m.warnings)
+            if not args.quiet:
+                planes = "  ".join(
+                    f"plane {i + 1}: {abs(m.solution.U_kg_m[i]) * 1e6:.1f} "
+                    f"+- {m.radius95_kg_m[i] * 1e6:.1f} (target {targets[i] * 1e6:.1f}) g mm"
+                    for i in range(2)
+                )
+                print(f"  {elapsed:5.1f} s  {m.rpm:7.1f} rpm  {planes}", file=sys.stderr)
+            if not short and all(m.radius95_kg_m[i] <= targets[i] for i in range(2)):
+                stopped_by = "precision"
+                break
+    except KeyboardInterrupt:
+        stopped_by = "interrupted"
+    finally:
+        stop_player.set()
+        reader.close()
+        bus.shutdown()
+        frames = Frames.concat(blocks)
+        writer.append(Frames.empty())
+        streams = rebuild(frames, strict_status=False) if len(frames) else None
+        writer.close(streams)
+    elapsed = time.monotonic() - start
+    if streams is None:
+        raise BusError("nothing received: no result; no run recorded", channel=where)
+    try:
+        final = measure(
+            rebuild(frames),
+            params,
+            reference_angle_deg=gamma,
+            taper=args.taper,
+            gate=not args.no_gate,
+        )
+    except MeasurementError:
+        if last is None:
+            raise
+        final = last
+    warnings = [*streams.warnings, *final.warnings]
+    out = result(final, warnings)
+    targets = _targets_kg_m(args, final.solution.U_kg_m)
+    out.update(
+        {
+            "stopped_by": stopped_by,
+            "elapsed_s": round(elapsed, 3),
+            "targets_g_mm": [round(t * 1e6, 3) for t in targets],
+            "run_file": out_path,
+        }
+    )
+    if args.json:
+        json.dump(out, sys.stdout)
+        print()
+    else:
+        print_result(out)
+        print(f"stopped by: {stopped_by} after {elapsed:.1f} s; recorded in {out_path}")
+        print_warnings(warnings)
+    return 0

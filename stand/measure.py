@@ -1,0 +1,256 @@
+"""From per-node streams to the unbalance, with a 95 % interval: the one measuring path.
+
+Every path that computes unbalance (offline ``stand solve``, the live
+measurement, the simulated stand) goes through :func:`measure`:
+
+1. **gate** (:func:`steady_window`): the part of the run where the speed is
+   steady and the supports have settled;
+2. **1x phasor per support** (:func:`stand.core.dsp.fit_1x`) over that
+   window, with its covariance;
+3. **inverse** (:func:`stand.core.solve_unbalance`), the covariance
+   propagated to each plane's unbalance, and each plane's 95 % radius.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from drivers.streams import NodeStream, RunStreams
+from stand.core import Diagnostic, StandParameters, solve_unbalance
+from stand.core.dsp import Phasor, fit_1x, radius_factor, shaft_angle
+from stand.core.inverse import UnbalanceSolution
+from stand.errors import StandError
+
+SPEED_TOLERANCE = 0.03
+"""A revolution is at steady speed within 3 % of the steady part's median."""
+BLOCK_REVS = 8
+"""Revolutions per block when checking that the supports have settled."""
+SETTLED = 0.02
+"""A block agrees with the settled response within 2 % (or 4 standard errors).  A speed
+ripple moves the 1x amplitude quasi-steadily by about its own size; a run-up's transient
+decays through 2 % within a few damping times, and what is left averages out."""
+MIN_REVS = 30
+"""A steady, settled window shorter than this many revolutions draws a warning."""
+
+
+class MeasurementError(StandError, ValueError):
+    """The data cannot give an unbalance (a node missing, no reference edges ...)."""
+
+
+@dataclass(frozen=True)
+class Window:
+    """The gated part of one node's run, in its own sample positions."""
+
+    start: float
+    end: float
+    revolutions: int
+    settled_from: float
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """The outcome of one measurement.
+
+    Attributes
+    ----------
+    supports : list of Phasor
+        Node 1 then node 2.
+    solution : UnbalanceSolution
+        Unbalances, covariance, conditioning, diagnostics.
+    radius95_kg_m : ndarray, shape (2,)
+        Radius of each plane's 95 % circle around its unbalance [kg m].
+    radius_m : tuple of float
+        Correction radii R1, R2 [m].
+    rpm : float
+        Mean speed over the window [rpm].
+    windows : list of Window
+    warnings : list of Diagnostic
+    """
+
+    supports: list[Phasor]
+    solution: UnbalanceSolution
+    radius95_kg_m: np.ndarray
+    radius_m: tuple[float, float]
+    rpm: float
+    windows: list[Window]
+    warnings: list[Diagnostic] = field(default_factory=list)
+
+
+def _segment(s: NodeStream) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The node's longest clock segment: sample index, accel, edge positions and revs."""
+    if s.accel_m_s2 is None:
+        raise MeasurementError(f"node {s.node}: no STATUS, its samples cannot be scaled")
+    if len(s.mark_segment) == 0:
+        raise MeasurementError(
+            f"node {s.node}: no reference edges: is the reference sensor "
+            "wired and the mark passing it?"
+        )
+    seg = int(np.bincount(s.mark_segment).argmax())
+    m = s.mark_segment == seg
+    keep = s.segment == seg
+    return s.index[keep], s.accel_m_s2[keep], s.mark_position[m], s.mark_rev[m]
+
+
+def _std(ph: Phasor) -> float:
+    """Standard error of the phasor along its worst axis [m/s^2]."""
+    return math.sqrt(float(np.max(np.linalg.eigvalsh(ph.cov_m2_s4))))
+
+
+def steady_window(
+    theta: np.ndarray,
+    omega: np.ndarray,
+    accel: np.ndarray,
+    at: np.ndarray,
+    pos: np.ndarray,
+    rev: np.ndarray,
+) -> tuple[tuple[int, int], list[str]]:
+    """The longest run of steady-speed revolutions, from where the supports have settled.
+
+    Parameters are one node's samples between its first and last edge: shaft
+    angle, speed, acceleration and sample position ``at``; and its edges.
+    Returns the edges ``(first, last)`` that bound the window.
+
+    Speed steady: each revolution within :data:`SPEED_TOLERANCE` of the
+    median.  Settled: blocks of :data:`BLOCK_REVS` revolutions are demodulated
+    on their own; the window starts at the first block from which every
+    block's 1x agrees with the last half's to within 4 of its standard errors
+    (or :data:`SETTLED`).
+    """
+    notes: list[str] = []
+    if len(pos) < 3:
+        raise MeasurementError(f"only {len(pos)} reference edges: need at least 3")
+    period = np.diff(pos) / np.maximum(np.diff(rev), 1)  # samples per revolution
+    speed = 1.0 / period
+    steady = np.abs(speed / np.median(speed) - 1) < SPEED_TOLERANCE
+    best: tuple[int, int] = (0, 0)
+    start: int | None = None
+    for k, ok in enumerate([*steady.tolist(), False]):  # revolution k: edges k .. k+1
+        if ok and start is None:
+            start = k
+        elif not ok and start is not None:
+            if k - start > best[1] - best[0]:
+                best = (start, k)
+            start = None
+    a, b = best  # revolutions a .. b-1, edges a .. b
+    if b - a < 2:
+        raise MeasurementError("the speed is never steady for two revolutions in a row")
+    if a > 0 or b < len(steady):
+        notes.append(f"speed steady over revolutions {a}..{b} of {len(steady)}")
+    settled = a
+    n_blocks = (b - a) // BLOCK_REVS
+    if n_blocks >= 4:
+        # whole revolutions per block: demodulation is the least-squares 1x, and cumulative
+        # sums give every block at once
+        z = np.concatenate(([0], np.cumsum(accel * np.exp(-1j * theta))))
+        s1 = np.concatenate(([0.0], np.cumsum(accel)))
+        s2 = np.concatenate(([0.0], np.cumsum(accel * accel)))
+        edges = a + BLOCK_REVS * np.arange(n_blocks + 1)
+        cut = np.searchsorted(at, pos[edges])
+        n = np.diff(cut).astype(float)
+        A_blocks = 2 * np.diff(z[cut]) / np.maximum(n, 1)
+        # residual power per block (what is not 1x or mean: noise, plus 2x, 3x: conservative)
+        resid = (
+            np.diff(s2[cut])
+            - n * np.abs(A_blocks) ** 2 / 2
+            - np.diff(s1[cut]) ** 2 / np.maximum(n, 1)
+        )
+        std = np.sqrt(2 * np.maximum(resid, 0) / np.maximum(n, 1) ** 2)
+        i_half, i_end = np.searchsorted(at, [pos[a + (b - a) // 2], pos[b]])
+        A_tail = 2 * (z[i_end] - z[i_half]) / max(i_end - i_half, 1)
+        ok = np.abs(A_blocks - A_tail) <= np.maximum(4 * std, SETTLED * abs(A_tail))
+        first_good = n_blocks
+        for k in range(n_blocks - 1, -1, -1):
+            if not ok[k]:
+                break
+            first_good = k
+        settled = a + first_good * BLOCK_REVS
+        if first_good > 0:
+            notes.append(f"supports settled after {first_good * BLOCK_REVS} revolutions")
+    return (settled, b), notes
+
+
+def measure(
+    streams: RunStreams,
+    p: StandParameters,
+    *,
+    reference_angle_deg: float = 0.0,
+    taper: bool = False,
+    gate: bool = True,
+) -> Measurement:
+    """The unbalance of both planes from a run's streams (nodes 1 and 2).
+
+    Raises
+    ------
+    MeasurementError
+        A node is missing, unscaled, or without reference edges.
+    """
+    warnings: list[Diagnostic] = []
+    supports: list[Phasor] = []
+    windows: list[Window] = []
+    gamma = math.radians(reference_angle_deg)
+    for node in (1, 2):
+        s = streams.nodes.get(node)
+        if s is None:
+            raise MeasurementError(
+                f"node {node} sent nothing: need nodes 1 and 2 (one per "
+                f"support), got {sorted(streams.nodes) or 'none'}"
+            )
+        index, accel, pos, rev = _segment(s)
+        assert s.rate_hz is not None
+        inside, th, w = shaft_angle(index, pos, rev, gamma)  # once, for the gate and the fit
+        at, acc = index[inside], accel[inside]
+        e0, e1 = 0, len(pos) - 1
+        if gate:
+            (e0, e1), notes = steady_window(th, w, acc, at, pos, rev)
+            for note in notes:
+                warnings.append(Diagnostic("gate", f"node {node}: {note}", 0.0))
+        window = Window(
+            start=float(pos[e0]),
+            end=float(pos[e1]),
+            revolutions=int(rev[e1] - rev[e0]),
+            settled_from=float(pos[e0]),
+        )
+        if window.revolutions < MIN_REVS:
+            warnings.append(
+                Diagnostic(
+                    "short_window",
+                    f"node {node}: only {window.revolutions} steady, settled revolutions "
+                    f"(want {MIN_REVS} or more): measure longer",
+                    float(window.revolutions),
+                )
+            )
+        i0, i1 = np.searchsorted(at, [pos[e0], pos[e1]], side="left")
+        i1 = int(np.searchsorted(at, pos[e1], side="right"))
+        ph = fit_1x(th[i0:i1], acc[i0:i1], w[i0:i1], rate_hz=s.rate_hz, taper=taper)
+        supports.append(ph)
+        windows.append(window)
+    omega = 0.5 * (supports[0].omega_ref_rad_s + supports[1].omega_ref_rad_s)
+    A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
+    cov = np.zeros((4, 4))
+    cov[:2, :2] = supports[0].cov_m2_s4
+    cov[2:, 2:] = supports[1].cov_m2_s4
+    sol = solve_unbalance(p, omega, A, cov)
+    dof = min(ph.noise_dof for ph in supports)
+    cov_U = np.asarray(sol.cov_U).real if sol.cov_U is not None else np.zeros((4, 4))
+    radius = np.array(
+        [
+            radius_factor(dof)
+            * math.sqrt(
+                float(np.max(np.linalg.eigvalsh(cov_U[2 * i : 2 * i + 2, 2 * i : 2 * i + 2])))
+            )
+            for i in range(2)
+        ]
+    )
+    warnings.extend(sol.diagnostics)
+    return Measurement(
+        supports=supports,
+        solution=sol,
+        radius95_kg_m=radius,
+        radius_m=(p.R1, p.R2),
+        rpm=omega * 60 / (2 * math.pi),
+        windows=windows,
+        warnings=warnings,
+    )
