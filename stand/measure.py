@@ -14,7 +14,7 @@ measurement, the simulated stand) goes through :func:`measure`:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -32,6 +32,9 @@ SETTLED = 0.02
 """A block agrees with the settled response within 2 % (or 4 standard errors).  A speed
 ripple moves the 1x amplitude quasi-steadily by about its own size; a run-up's transient
 decays through 2 % within a few damping times, and what is left averages out."""
+SCATTER_LIMIT = 4.0
+"""Blocks scattering over 4 times the variance their noise explains (2 in rms) mean
+something moves the 1x reading: a neighbour within the 1x bin, unsteady conditions."""
 MIN_REVS = 30
 """A steady, settled window shorter than this many revolutions draws a warning."""
 
@@ -172,6 +175,28 @@ def steady_window(
     return (settled, b), notes
 
 
+def block_scatter(
+    theta: np.ndarray, accel: np.ndarray, at: np.ndarray, pos: np.ndarray, noise: float
+) -> float:
+    """How much blocks of whole revolutions scatter, against what the noise explains.
+
+    The window is cut at every :data:`BLOCK_REVS`-th edge; each block's 1x is
+    demodulated.  Returns the scatter of the block values around their mean
+    over its expectation from ``noise`` (about 1 when only noise moves them;
+    0 when there are fewer than 3 blocks, which cannot tell).
+    """
+    n_blocks = (len(pos) - 1) // BLOCK_REVS
+    if n_blocks < 3 or noise <= 0:
+        return 0.0
+    z = np.concatenate(([0], np.cumsum(accel * np.exp(-1j * theta))))
+    cut = np.searchsorted(at, pos[::BLOCK_REVS][: n_blocks + 1])
+    n = np.diff(cut).astype(float)
+    A = 2 * np.diff(z[cut]) / np.maximum(n, 1)
+    mean = np.sum(A * n) / np.sum(n)
+    expected = 4 * noise**2 / np.maximum(n, 1)  # E|A_b - A|^2 from noise: 2 sigma^2/n per part
+    return float(np.sum(np.abs(A - mean) ** 2 / expected) / (n_blocks - 1))
+
+
 def measure(
     streams: RunStreams,
     p: StandParameters,
@@ -225,6 +250,19 @@ def measure(
         i0, i1 = np.searchsorted(at, [pos[e0], pos[e1]], side="left")
         i1 = int(np.searchsorted(at, pos[e1], side="right"))
         ph = fit_1x(th[i0:i1], acc[i0:i1], w[i0:i1], rate_hz=s.rate_hz, taper=taper)
+        ratio = block_scatter(th[i0:i1], acc[i0:i1], at[i0:i1], pos[e0 : e1 + 1], ph.noise_m_s2)
+        if ratio > SCATTER_LIMIT:
+            warnings.append(
+                Diagnostic(
+                    "unsteady_1x",
+                    f"node {node}: the 1x reading wanders between blocks of {BLOCK_REVS} "
+                    f"revolutions {math.sqrt(ratio):.1f} times more than the noise explains: a "
+                    "vibration close to 1x (a neighbouring machine beating with it) or unsteady "
+                    "conditions; the interval is widened to match; measure longer, or --taper",
+                    ratio,
+                )
+            )
+            ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
         supports.append(ph)
         windows.append(window)
     omega = 0.5 * (supports[0].omega_ref_rad_s + supports[1].omega_ref_rad_s)
