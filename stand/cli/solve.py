@@ -78,6 +78,7 @@ def result(m: Any, warnings: list[Any]) -> dict[str, Any]:
                 "revolutions": round(ph.revolutions, 2),
                 "samples": ph.samples,
                 "noise_m_s2": round(ph.noise_m_s2, 6),
+                "noise_cost": round(ph.noise_cost, 4),
             }
         )
     return {
@@ -105,6 +106,9 @@ def print_result(out: dict[str, Any]) -> None:
             f"  {s['node']}  {s['amplitude_m_s2']:17.5f} {s['phase_deg']:12.2f} "
             f"{s['uncertainty_m_s2']:9.5f} {s['revolutions']:10.1f}"
         )
+    cost = out["supports"][0]["noise_cost"]
+    if cost > 1.0:
+        print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
 
 
 def run(args: argparse.Namespace) -> int:
