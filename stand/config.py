@@ -6,6 +6,8 @@ Tables (SI units, the seed's symbols)::
     [rotor]   M3 J3 a b c d R1 R2
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
+    [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
+    [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -18,9 +20,17 @@ from __future__ import annotations
 import json
 import tomllib
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
-from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    FiniteFloat,
+    NonNegativeFloat,
+    NonNegativeInt,
+    PositiveFloat,
+    ValidationError,
+)
 
 from stand.core.model import STAND_KEYS, ParameterError, StandParameters
 from stand.errors import ConfigError
@@ -57,6 +67,32 @@ class RotorTable(BaseModel):
     R2: FiniteFloat
 
 
+class ToleranceTable(BaseModel):
+    """``[tolerance]``: ISO 21940-11 balance quality grade and the maximum service speed."""
+
+    model_config = _STRICT
+
+    grade_mm_s: PositiveFloat
+    """G, e.g. 6.3 for G 6.3 [mm/s]."""
+    max_speed_rpm: PositiveFloat
+
+
+class CorrectionTable(BaseModel):
+    """``[correction]``: how the rotor is corrected."""
+
+    model_config = _STRICT
+
+    mode: Literal["remove", "add"] = "remove"
+    positions: NonNegativeInt = 0
+    """0: any angle; N: only at N equally spaced positions (holes, blades)."""
+    position0_deg: FiniteFloat = 0.0
+    """Angle of position 0 from the reference mark, in the sense of phi [deg]."""
+    weights_g: list[PositiveFloat] = []
+    """Available weights [g] (each correction is rounded to the nearest) ..."""
+    weight_step_g: NonNegativeFloat = 0.0
+    """... or weights in multiples of this [g]; 0 and [] mean any mass."""
+
+
 class Config(BaseModel):
     """A whole configuration file."""
 
@@ -65,6 +101,8 @@ class Config(BaseModel):
     stand: StandTable
     rotor: RotorTable
     bus: dict[str, str | int | float | bool] | None = None
+    tolerance: ToleranceTable | None = None
+    correction: CorrectionTable = CorrectionTable()
 
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""

@@ -128,10 +128,131 @@ def run(args: argparse.Namespace) -> int:
     )
     warnings = [*streams.warnings, *m.warnings]
     out = result(m, warnings)
+    out.update(corrections(m, cfg, params))
     if args.json:
         json.dump(out, sys.stdout)
         print()
     else:
         print_result(out)
+        print_corrections(out)
         print_warnings(warnings)
     return 0
+
+
+def corrections(m: Any, cfg: Any, params: Any) -> dict[str, Any]:
+    """Corrections, static and couple parts, and the ISO 21940-11 tolerance, for the result."""
+    import math
+
+    from stand.core import unbalance_to_polar
+    from stand.core.balance import (
+        correction,
+        permissible_unbalance,
+        plane_tolerances,
+        static_couple,
+    )
+
+    c = cfg.correction
+    out: dict[str, Any] = {"correction_mode": c.mode, "corrections": []}
+    for i, U in enumerate(m.solution.U_kg_m):
+        R = m.radius_m[i]
+        corr = correction(
+            complex(U),
+            R,
+            remove=c.mode == "remove",
+            positions=c.positions,
+            position0_deg=c.position0_deg,
+            steps_kg=[w * 1e-3 for w in c.weights_g],
+            step_kg=c.weight_step_g * 1e-3,
+        )
+        out["corrections"].append(
+            {
+                "plane": i + 1,
+                "action": c.mode,
+                "weights": [
+                    {
+                        "mass_g": round(w.mass_kg * 1e3, 4),
+                        "angle_deg": round(w.angle_deg, 3),
+                        "position": w.position,
+                        "radius_mm": round(R * 1e3, 3),
+                    }
+                    for w in corr.weights
+                ],
+                "residual_g_mm": round(abs(corr.residual_kg_m) * 1e6, 3),
+            }
+        )
+    static, couple = static_couple(params, m.solution.U_kg_m)
+    (qs, qc), (ps, pc) = unbalance_to_polar([static, couple])
+    out["static"] = {"unbalance_g_mm": round(float(qs) * 1e6, 3), "angle_deg": round(float(ps), 3)}
+    out["couple"] = {"unbalance_g_mm": round(float(qc) * 1e6, 3), "angle_deg": round(float(pc), 3)}
+    t = cfg.tolerance
+    if t is not None:
+        U_per = permissible_unbalance(
+            params.M3, t.grade_mm_s * 1e-3, t.max_speed_rpm * 2 * math.pi / 60
+        )
+        per = plane_tolerances(params, U_per)
+        planes = []
+        for i in range(2):
+            u, r = abs(m.solution.U_kg_m[i]), float(m.radius95_kg_m[i])
+            planes.append(
+                {
+                    "plane": i + 1,
+                    "permissible_g_mm": round(per[i] * 1e6, 3),
+                    "residual_g_mm": round(u * 1e6, 3),
+                    "pass": bool(u <= per[i]),
+                    "margin_g_mm": round((per[i] - u) * 1e6, 3),
+                    "pass_with_uncertainty": bool(u + r <= per[i]),
+                }
+            )
+        out["tolerance"] = {
+            "standard": "ISO 21940-11",
+            "grade_mm_s": t.grade_mm_s,
+            "max_speed_rpm": t.max_speed_rpm,
+            "permissible_g_mm": round(U_per * 1e6, 3),
+            "planes": planes,
+        }
+    return out
+
+
+def print_corrections(out: dict[str, Any]) -> None:
+    """The corrections and the tolerance, for the operator."""
+    verb = "remove material" if out["correction_mode"] == "remove" else "add weights"
+    print(
+        f"correction ({verb}; angles from the reference mark, counted against the "
+        "direction of rotation):"
+    )
+    for c in out["corrections"]:
+        what = (
+            " + ".join(
+                f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg"
+                + ("" if w["position"] is None else f" (position {w['position']})")
+                for w in c["weights"]
+            )
+            or "nothing"
+        )
+        left = (
+            f"; rounding leaves {c['residual_g_mm']:.1f} g mm" if c["residual_g_mm"] > 0.05 else ""
+        )
+        print(
+            f"  plane {c['plane']}: {c['action']} {what} at radius "
+            f"{c['weights'][0]['radius_mm'] if c['weights'] else 0:g} mm{left}"
+        )
+    s, cp = out["static"], out["couple"]
+    print(
+        f"  static part {s['unbalance_g_mm']:.1f} g mm at {s['angle_deg']:.1f} deg; couple part "
+        f"+-{cp['unbalance_g_mm']:.1f} g mm at {cp['angle_deg']:.1f} deg (plane 1 / plane 2)"
+    )
+    t = out.get("tolerance")
+    if t is None:
+        print("tolerance: none set (add a [tolerance] table: grade_mm_s, max_speed_rpm)")
+        return
+    print(
+        f"tolerance {t['standard']} G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
+        f"U_per {t['permissible_g_mm']:.1f} g mm"
+    )
+    for p in t["planes"]:
+        verdict = "pass" if p["pass"] else "FAIL"
+        how = f"margin {p['margin_g_mm']:.1f}" if p["pass"] else f"over by {-p['margin_g_mm']:.1f}"
+        print(
+            f"  plane {p['plane']}: {p['residual_g_mm']:.1f} g mm against "
+            f"{p['permissible_g_mm']:.1f} permissible: {verdict} ({how} g mm)"
+        )

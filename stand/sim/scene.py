@@ -24,8 +24,10 @@ from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, model_validator
 
 from stand.config import (
     Config,
+    CorrectionTable,
     RotorTable,
     StandTable,
+    ToleranceTable,
     parameters_of,
     read_toml,
     validate,
@@ -240,6 +242,8 @@ class Scene(BaseModel):
     stand: StandTable
     rotor: RotorTable
     bus: dict[str, str | int | float | bool] | None = None
+    tolerance: ToleranceTable | None = None
+    correction: CorrectionTable = CorrectionTable()
     run: RunTable
     unbalance: UnbalanceTable
     nodes: NodesTable = NodesTable()
@@ -247,7 +251,13 @@ class Scene(BaseModel):
 
     def config(self) -> Config:
         """The configuration part (what solves the recording)."""
-        return Config(stand=self.stand, rotor=self.rotor, bus=self.bus)
+        return Config(
+            stand=self.stand,
+            rotor=self.rotor,
+            bus=self.bus,
+            tolerance=self.tolerance,
+            correction=self.correction,
+        )
 
     @property
     def needs_integration(self) -> bool:

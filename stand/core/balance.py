@@ -1,0 +1,202 @@
+"""Tolerances (ISO 21940-11) and corrections: from unbalances to what the operator does.
+
+Pure numerics: arrays in, arrays out, SI units (kg m, m, rad/s), no I/O.
+
+**Tolerance.**  The permissible residual unbalance of a rigid rotor of mass
+``m`` with balance quality grade ``G`` at the maximum service speed
+``Omega`` is ``U_per = G m / Omega`` (G in m/s: ISO writes
+``1000 G m / Omega`` in g mm with G in mm/s).  ISO 21940-11 sets it in the
+bearing planes (here the supports), split by the lever rule about the
+centre of mass, each share held between 30 % and 70 % of ``U_per``.  The
+correction planes are not the bearing planes, so each correction plane's
+share is converted: an unbalance ``U_i`` at ``x_i`` (from support 1, span
+``L``) loads support 1 with ``U_i (L - x_i) / L`` and support 2 with
+``U_i x_i / L``.  The correction-plane tolerances keep the bearing-plane
+split and are the largest for which, whatever the phases, both bearing-plane
+loads stay within theirs.  A plane outside its support (``a < 0``) loads
+that support by more than itself, so its tolerance comes out stricter.
+
+**Corrections.**  Removing ``q_i`` at the angle ``phi_i`` (the seed's angle,
+from the reference mark against the direction of rotation), or adding it at
+``phi_i + 180 deg``, cancels ``U_i``.  A rotor that takes weights only at N
+fixed positions gets the correction split onto the two positions either
+side; weights may be rounded to the steps available, and what the rounding
+leaves is reported.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from stand.core.model import StandParameters
+
+SHARE_MIN, SHARE_MAX = 0.3, 0.7
+"""ISO 21940-11's limits on a bearing plane's share of ``U_per``."""
+
+
+def permissible_unbalance(mass_kg: float, grade_m_s: float, omega_rad_s: float) -> float:
+    """``U_per = G m / Omega`` [kg m] (G in m/s: G 6.3 is 6.3e-3 m/s).
+
+    >>> round(permissible_unbalance(60.0, 6.3e-3, 1500 * 2 * math.pi / 60) * 1e6, 1)  # g mm
+    2406.4
+    """
+    return grade_m_s * mass_kg / omega_rad_s
+
+
+def bearing_shares(p: StandParameters, U_per_kg_m: float) -> tuple[float, float]:
+    """``U_per`` split onto supports 1 and 2 by the lever rule, held within 30 .. 70 % [kg m]."""
+    L = p.L
+    share1 = min(max((p.c + p.d) / L, SHARE_MIN), SHARE_MAX)
+    return share1 * U_per_kg_m, (1.0 - share1) * U_per_kg_m
+
+
+def plane_tolerances(p: StandParameters, U_per_kg_m: float) -> tuple[float, float]:
+    """Permissible residual unbalance in correction planes 1 and 2 [kg m].
+
+    The bearing-plane shares, carried to the correction planes: the largest
+    ``k`` with tolerances ``k (s1, s2)`` such that ``|T| k s <= s``
+    (``T`` the static transfer from correction to bearing planes,
+    worst-case phases).  Planes at the supports get the bearing shares.
+
+    >>> import dataclasses
+    >>> from stand.core.model import StandParameters
+    >>> at_supports = StandParameters(M1=1, M2=1, C1=1e4, C2=1e4, M3=10, J3=1, a=0.0, b=0.5,
+    ...                               c=0.5, d=0.0, R1=0.1, R2=0.1)
+    >>> [round(u, 6) for u in plane_tolerances(at_supports, 1.0)]
+    [0.5, 0.5]
+    """
+    s = np.array(bearing_shares(p, U_per_kg_m))
+    L = p.L
+    x = np.array([p.a, p.a + p.b + p.c])  # correction planes, from support 1
+    T = np.array([(L - x) / L, x / L])  # rows: support 1, 2; columns: plane 1, 2
+    load = np.abs(T) @ s  # worst-case bearing loads for tolerances equal to the shares
+    k = float(np.min(s / load))
+    return float(k * s[0]), float(k * s[1])
+
+
+@dataclass(frozen=True)
+class Weight:
+    """One weight (or one removal): mass [kg] at an angle [deg, the seed's sense]."""
+
+    mass_kg: float
+    angle_deg: float
+    position: int | None = None
+
+
+@dataclass(frozen=True)
+class Correction:
+    """What to do in one plane.
+
+    Attributes
+    ----------
+    weights : tuple of Weight
+        One (free angle) or two (fixed positions) weights; to remove or to add.
+    remove : bool
+        True: remove at ``angle_deg``; False: add.
+    residual_kg_m : complex
+        Unbalance left by rounding to positions and steps [kg m] (0 if exact).
+    """
+
+    weights: tuple[Weight, ...]
+    remove: bool
+    residual_kg_m: complex
+
+
+def _wrap(deg: float) -> float:
+    return float(np.mod(deg, 360.0))
+
+
+def correction(
+    U_kg_m: complex,
+    R_m: float,
+    *,
+    remove: bool = True,
+    positions: int = 0,
+    position0_deg: float = 0.0,
+    steps_kg: ArrayLike = (),
+    step_kg: float = 0.0,
+) -> Correction:
+    """The correction of one plane's unbalance ``U = q R e^{-i phi}``.
+
+    Parameters
+    ----------
+    U_kg_m
+        The plane's unbalance [kg m], the seed's convention.
+    R_m
+        Correction radius [m].
+    remove
+        Remove material at ``phi`` (True) or add at ``phi + 180`` (False).
+    positions
+        0 for any angle, else N equally spaced positions (holes, blades).
+    position0_deg
+        Angle of position 0 (same sense and zero as ``phi``) [deg].
+    steps_kg
+        Available weights [kg]: each weight is rounded to the nearest; empty
+        for continuous masses.
+    step_kg
+        Or: weights come in multiples of this [kg] (0: continuous).
+    """
+    q = abs(U_kg_m) / R_m
+    phi = _wrap(-math.degrees(np.angle(U_kg_m)))
+    at = phi if remove else _wrap(phi + 180.0)
+    weights: list[Weight] = []
+    if positions <= 0:
+        weights.append(Weight(q, at))
+    elif positions <= 2:
+        # one axis only: the best is the projection onto the position facing the correction;
+        # the perpendicular part stays as a residual
+        pitch = 360.0 / positions
+        best = max(
+            range(positions), key=lambda j: math.cos(math.radians(at - position0_deg - j * pitch))
+        )
+        m = q * math.cos(math.radians(at - position0_deg - best * pitch))
+        if m > 0:
+            weights.append(Weight(m, _wrap(position0_deg + best * pitch), best))
+    else:
+        pitch = 360.0 / positions
+        rel = _wrap(at - position0_deg)
+        k = int(rel // pitch) % positions
+        t = math.radians(rel - k * pitch)
+        span = math.radians(pitch)
+        # m_k e^{i a_k} + m_k1 e^{i a_k1} = q e^{i at}  (angles a_k, a_k + pitch < 180 deg apart)
+        m_k = q * math.sin(span - t) / math.sin(span)
+        m_k1 = q * math.sin(t) / math.sin(span)
+        for j, m in ((k, m_k), ((k + 1) % positions, m_k1)):
+            if m > 1e-15 * max(q, 1e-300):
+                weights.append(Weight(m, _wrap(position0_deg + j * pitch), j))
+    steps = np.sort(np.asarray(steps_kg, dtype=float))
+    if steps.size:
+        rounded = []
+        for w in weights:
+            choice = np.concatenate(([0.0], steps))
+            rounded.append(
+                Weight(
+                    float(choice[np.argmin(np.abs(choice - w.mass_kg))]), w.angle_deg, w.position
+                )
+            )
+        weights = [w for w in rounded if w.mass_kg > 0]
+    elif step_kg > 0:
+        weights = [
+            Weight(round(w.mass_kg / step_kg) * step_kg, w.angle_deg, w.position) for w in weights
+        ]
+        weights = [w for w in weights if w.mass_kg > 0]
+    # what the weights do, in the seed's sense (an angle counted against rotation: e^{-i angle})
+    sign = 1.0 if remove else -1.0  # removing at phi cancels U; adding at phi+180 too
+    done = sum(sign * w.mass_kg * R_m * np.exp(-1j * math.radians(w.angle_deg)) for w in weights)
+    return Correction(tuple(weights), remove, complex(U_kg_m - done))
+
+
+def static_couple(p: StandParameters, U_kg_m: ArrayLike) -> tuple[complex, complex]:
+    """The static part ``U1 + U2`` and the couple part ``(U1 - U2) / 2`` [kg m].
+
+    The couple part is a pair, ``+(U1 - U2)/2`` in plane 1 and ``-(U1 - U2)/2``
+    in plane 2, ``b + c`` apart: its moment is ``|U1 - U2| (b + c) / 2``
+    [kg m^2].  Static plus couple give back ``U1`` and ``U2`` when the static
+    part is shared equally between the planes.
+    """
+    U = np.asarray(U_kg_m, dtype=complex)
+    return complex(U[0] + U[1]), complex((U[0] - U[1]) / 2)
