@@ -33,6 +33,7 @@ class _Parser(argparse.ArgumentParser):
 
 def _subcommands() -> dict[str, ModuleType]:
     from stand.cli import (
+        balance,
         convert,
         forward,
         inspect,
@@ -44,6 +45,7 @@ def _subcommands() -> dict[str, ModuleType]:
     )
 
     return {
+        "balance": balance,
         "forward": forward,
         "solve": solve,
         "measure": measure,

@@ -9,6 +9,8 @@ import os
 import sys
 import threading
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from stand import __version__
@@ -19,7 +21,13 @@ from stand.cli.common import (
     bus_kwargs,
     print_warnings,
 )
-from stand.cli.solve import add_measure_arguments, print_result, result
+from stand.cli.solve import (
+    add_measure_arguments,
+    corrections,
+    print_corrections,
+    print_result,
+    result,
+)
 from stand.errors import BusError
 
 DEFAULT_TARGET_PCT = 5.0
@@ -62,14 +70,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_bus_arguments(p)
 
 
-def _targets_kg_m(args: argparse.Namespace, U: Any) -> list[float]:
-    if args.target_g_mm is not None:
-        return [args.target_g_mm * 1e-6] * 2
-    pct = DEFAULT_TARGET_PCT if args.target_pct is None else args.target_pct
-    return [pct / 100 * abs(u) for u in U]
-
-
-def _source(args: argparse.Namespace) -> tuple[Any, Any, dict[str, Any], Any]:
+def _source(args: argparse.Namespace, command: str) -> tuple[Any, Any, dict[str, Any], Any]:
     """Config, parameters, bus options and (for a scene) the frames to play."""
     from stand.config import load_config
 
@@ -81,12 +82,33 @@ def _source(args: argparse.Namespace) -> tuple[Any, Any, dict[str, Any], Any]:
         channel = f"stand-measure-{os.getpid()}-{time.monotonic_ns()}"
         return scene.config(), params, {"interface": "virtual", "channel": channel}, frames
     if not args.config:
-        raise UsageError("stand measure: give --config CFG (with its [bus] table) or --scene")
+        raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params = load_config(args.config)
     return cfg, params, bus_kwargs(args, cfg.bus), None
 
 
-def run(args: argparse.Namespace) -> int:
+@dataclass
+class Live:
+    """A live measurement's outcome."""
+
+    cfg: Any
+    params: Any
+    final: Any
+    warnings: list[Any]
+    stopped_by: str
+    elapsed_s: float
+    run_file: str
+
+
+def live(
+    args: argparse.Namespace,
+    command: str,
+    targets: Callable[[Any, Any, Any], list[float]],
+) -> Live:
+    """Measure live (or a scene in real time) until ``targets(cfg, params, U)`` are met.
+
+    Records the run; shows the progress; returns the final measurement.
+    """
     from drivers.bus import BusReader, describe_bus, open_bus, play
     from drivers.protocol import Frames
     from drivers.recording import RunWriter
@@ -97,8 +119,9 @@ def run(args: argparse.Namespace) -> int:
     for name in ("target_pct", "target_g_mm", "max_seconds"):
         value = getattr(args, name)
         if value is not None and not value > 0:
-            raise UsageError(f"stand measure: --{name.replace('_', '-')} must be > 0, got {value}")
-    cfg, params, kwargs, scene_frames = _source(args)
+            flag = "--" + name.replace("_", "-")
+            raise UsageError(f"stand {command}: {flag} must be > 0, got {value}")
+    cfg, params, kwargs, scene_frames = _source(args, command)
     out_path = args.out or f"run-{dt.datetime.now():%Y%m%d-%H%M%S}.h5"
     where = describe_bus(kwargs)
     writer = RunWriter(
@@ -154,16 +177,16 @@ def run(args: argparse.Namespace) -> int:
                     print(f"  {elapsed:5.1f} s  waiting: {exc}", file=sys.stderr)
                 continue
             last = m
-            targets = _targets_kg_m(args, m.solution.U_kg_m)
+            goal = targets(cfg, params, m.solution.U_kg_m)
             short = any(w.code == "short_window" for w in m.warnings)
             if not args.quiet:
                 planes = "  ".join(
                     f"plane {i + 1}: {abs(m.solution.U_kg_m[i]) * 1e6:.1f} "
-                    f"+- {m.radius95_kg_m[i] * 1e6:.1f} (target {targets[i] * 1e6:.1f}) g mm"
+                    f"+- {m.radius95_kg_m[i] * 1e6:.1f} (target {goal[i] * 1e6:.1f}) g mm"
                     for i in range(2)
                 )
                 print(f"  {elapsed:5.1f} s  {m.rpm:7.1f} rpm  {planes}", file=sys.stderr)
-            if not short and all(m.radius95_kg_m[i] <= targets[i] for i in range(2)):
+            if not short and all(m.radius95_kg_m[i] <= goal[i] for i in range(2)):
                 stopped_by = "precision"
                 break
     except KeyboardInterrupt:
@@ -191,22 +214,58 @@ def run(args: argparse.Namespace) -> int:
         if last is None:
             raise
         final = last
-    warnings = [*streams.warnings, *final.warnings]
-    out = result(final, warnings)
-    targets = _targets_kg_m(args, final.solution.U_kg_m)
+    return Live(
+        cfg, params, final, [*streams.warnings, *final.warnings], stopped_by, elapsed, out_path
+    )
+
+
+def relative_targets(args: argparse.Namespace, U: Any) -> list[float] | None:
+    """The targets given on the command line [kg m], if any."""
+    if args.target_g_mm is not None:
+        return [args.target_g_mm * 1e-6] * 2
+    if args.target_pct is not None:
+        return [args.target_pct / 100 * abs(u) for u in U]
+    return None
+
+
+def run(args: argparse.Namespace) -> int:
+    lv = live(
+        args,
+        "measure",
+        lambda cfg, params, U: (
+            relative_targets(args, U) or [DEFAULT_TARGET_PCT / 100 * abs(u) for u in U]
+        ),
+    )
+    emit(
+        args,
+        lv,
+        relative_targets(args, lv.final.solution.U_kg_m)
+        or [DEFAULT_TARGET_PCT / 100 * abs(u) for u in lv.final.solution.U_kg_m],
+    )
+    return 0
+
+
+def emit(
+    args: argparse.Namespace, lv: Live, targets: list[float], extra: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Print the result of a live measurement (and return it)."""
+    out = result(lv.final, lv.warnings)
+    out.update(corrections(lv.final, lv.cfg, lv.params))
     out.update(
         {
-            "stopped_by": stopped_by,
-            "elapsed_s": round(elapsed, 3),
+            "stopped_by": lv.stopped_by,
+            "elapsed_s": round(lv.elapsed_s, 3),
             "targets_g_mm": [round(t * 1e6, 3) for t in targets],
-            "run_file": out_path,
+            "run_file": lv.run_file,
         }
     )
+    out.update(extra or {})
     if args.json:
         json.dump(out, sys.stdout)
         print()
     else:
         print_result(out)
-        print(f"stopped by: {stopped_by} after {elapsed:.1f} s; recorded in {out_path}")
-        print_warnings(warnings)
-    return 0
+        print_corrections(out)
+        print(f"stopped by: {lv.stopped_by} after {lv.elapsed_s:.1f} s; recorded in {lv.run_file}")
+        print_warnings(lv.warnings)
+    return out

@@ -1,0 +1,75 @@
+"""`stand balance`: the operator's command, on the simulated stand."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from stand.cli import main
+from stand.sim import shipped_scenes
+
+
+def _balance(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict:
+    capsys.readouterr()
+    assert main(["balance", *argv, "--json", "--quiet"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_balance_demo_gives_the_correction_and_the_verdict(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = _balance(["--scene", "demo", "--out", str(tmp_path / "r.h5")], capsys)
+    c1, c2 = out["corrections"]
+    (w1,) = c1["weights"]
+    (w2,) = c2["weights"]
+    # remove 5000 g mm / 90 mm = 55.56 g at 30 deg, 3000 / 80 = 37.5 g at 200 deg
+    assert w1["mass_g"] == pytest.approx(55.56, rel=0.005) and w1["angle_deg"] == pytest.approx(
+        30.0, abs=0.3
+    )
+    assert w2["mass_g"] == pytest.approx(37.5, rel=0.005) and w2["angle_deg"] == pytest.approx(
+        200.0, abs=0.3
+    )
+    t = out["tolerance"]
+    assert t["permissible_g_mm"] == pytest.approx(
+        1000 * 6.3 * 60 / (1500 * 3.14159265 / 30), rel=1e-6
+    )
+    assert [p["pass"] for p in t["planes"]] == [False, False]
+    # precision target: 10 % of each plane's tolerance
+    want = [0.1 * p["permissible_g_mm"] for p in t["planes"]]
+    assert out["targets_g_mm"] == pytest.approx(want, abs=1e-3)  # both rounded to 1e-3
+    assert out["stopped_by"] == "precision"
+
+
+def test_check_after_a_correction_gives_the_reduction_ratio(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    before = tmp_path / "before.h5"
+    assert main(["simulate", "demo", "--out", str(before)]) == 0
+    text = Path(str(shipped_scenes()["demo"])).read_text()
+    after_scene = tmp_path / "after.toml"
+    after_scene.write_text(
+        text.replace("g_mm = 5000.0, angle_deg = 30.0", "g_mm = 200.0, angle_deg = 40.0").replace(
+            "g_mm = 3000.0, angle_deg = 200.0", "g_mm = 150.0, angle_deg = 190.0"
+        )
+    )
+    out = _balance(
+        [
+            "--scene",
+            str(after_scene),
+            "--out",
+            str(tmp_path / "after.h5"),
+            "--check",
+            str(before),
+            "--max-seconds",
+            "4",
+        ],
+        capsys,
+    )
+    p1, p2 = out["check"]["planes"]
+    assert p1["before_g_mm"] == pytest.approx(5000, abs=15)
+    assert p1["after_g_mm"] == pytest.approx(200, abs=15)
+    assert p1["urr"] == pytest.approx(1 - 200 / 5000, abs=0.004)
+    assert p2["urr"] == pytest.approx(1 - 150 / 3000, abs=0.005)
+    assert [p["pass"] for p in out["tolerance"]["planes"]] == [True, True]
