@@ -173,7 +173,17 @@ def read_log(path: str | Path) -> Frames:
 
     try:
         with can.LogReader(path) as reader:
-            return frames_from_messages(reader)
+            frames = frames_from_messages(reader)
+            size = getattr(reader, "file_size", None)  # BLF: the header says how long it is
+            if isinstance(size, int) and size > path.stat().st_size:
+                raise RecordingError(
+                    f"truncated: the BLF header says {size} bytes, the file has "
+                    f"{path.stat().st_size} ({len(frames)} frames readable)",
+                    path=str(path),
+                )
+            return frames
+    except RecordingError:
+        raise
     except ValueError as exc:
         if "unknown" in str(exc).lower() or "no read support" in str(exc).lower():
             raise RecordingError(

@@ -156,7 +156,10 @@ class Frames:
         return len(self.t_s)
 
     def take(self, index: ArrayLike) -> Frames:
-        """The frames at ``index`` (an integer array, a boolean mask or a slice)."""
+        """The frames at ``index`` (an integer array, a boolean mask or a slice).
+
+        A slice gives views of these arrays (numpy's rule); the others copy.
+        """
         i = index if isinstance(index, slice) else np.asarray(index)
         return Frames(self.t_s[i], self.can_id[i], self.dlc[i], self.data[i], self.flags[i])
 

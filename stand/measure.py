@@ -86,6 +86,14 @@ def _segment(s: NodeStream) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
     """The node's longest clock segment: sample index, accel, edge positions and revs."""
     if s.accel_m_s2 is None:
         raise MeasurementError(f"node {s.node}: no STATUS, its samples cannot be scaled")
+    if len(s.accel_m_s2) == 0:
+        raise MeasurementError(
+            f"node {s.node}: all {s.samples} samples are invalid (count -32768: sensor fault "
+            "or overrange)"
+            if s.samples
+            else f"node {s.node}: no samples, only "
+            f"{s.status_frames} STATUS and {s.marks} MARK frames"
+        )
     if len(s.mark_segment) == 0:
         raise MeasurementError(
             f"node {s.node}: no reference edges: is the reference sensor "
@@ -229,7 +237,10 @@ def measure(
         at, acc = index[inside], accel[inside]
         e0, e1 = 0, len(pos) - 1
         if gate:
-            (e0, e1), notes = steady_window(th, w, acc, at, pos, rev)
+            try:
+                (e0, e1), notes = steady_window(th, w, acc, at, pos, rev)
+            except MeasurementError as exc:
+                raise MeasurementError(f"node {node}: {exc}") from None
             for note in notes:
                 warnings.append(Diagnostic("gate", f"node {node}: {note}", 0.0))
         window = Window(

@@ -8,19 +8,27 @@ import sys
 import tomllib
 from typing import Any
 
-from stand.cli.common import print_warnings
+from stand.cli.common import UsageError
 from stand.errors import ConfigError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("run", metavar="RUN", help="run file (.h5) or python-can log")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="run files (.h5) or python-can logs")
     p.add_argument(
         "--config",
         metavar="CFG",
         help="stand configuration (default: the one stored in the run file)",
     )
     add_measure_arguments(p)
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--json", action="store_true", help="print one JSON object (one run)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="N",
+        help="solve several runs in N processes (default 1)",
+    )
+    p.add_argument("--summary", metavar="FILE", help="write a summary of all runs: .csv or .json")
 
 
 def add_measure_arguments(p: argparse.ArgumentParser) -> None:
@@ -111,31 +119,43 @@ def print_result(out: dict[str, Any]) -> None:
         print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
 
 
-def run(args: argparse.Namespace) -> int:
+def solve_one(
+    path: str, config: str | None, taper: bool = False, gate: bool = True
+) -> dict[str, Any]:
+    """The whole result of one run (raises :class:`StandError` on bad input)."""
     from drivers.recording import read_recording
     from drivers.streams import rebuild
     from stand.measure import measure
 
-    rec = read_recording(args.run)
-    cfg, params = config_for(rec, args.config)
+    rec = read_recording(path)
+    cfg, params = config_for(rec, config)
     streams = rebuild(rec.frames)
     m = measure(
-        streams,
-        params,
-        reference_angle_deg=cfg.stand.reference_angle_deg,
-        taper=args.taper,
-        gate=not args.no_gate,
+        streams, params, reference_angle_deg=cfg.stand.reference_angle_deg, taper=taper, gate=gate
     )
-    warnings = [*streams.warnings, *m.warnings]
-    out = result(m, warnings)
+    out = result(m, [*streams.warnings, *m.warnings])
     out.update(corrections(m, cfg, params))
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.jobs < 1:
+        raise UsageError(f"stand solve: --jobs must be >= 1, got {args.jobs}")
+    if args.summary and not args.summary.lower().endswith((".csv", ".json")):
+        raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
+    if len(args.runs) > 1 or args.summary:
+        from stand.cli.solve_batch import run_batch
+
+        return run_batch(args)
+    out = solve_one(args.runs[0], args.config, args.taper, not args.no_gate)
     if args.json:
         json.dump(out, sys.stdout)
         print()
     else:
         print_result(out)
         print_corrections(out)
-        print_warnings(warnings)
+        for w in out["warnings"]:
+            print(f"warning: {w}", file=sys.stderr)
     return 0
 
 
