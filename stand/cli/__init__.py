@@ -39,6 +39,7 @@ def _subcommands() -> dict[str, ModuleType]:
         inspect,
         measure,
         record,
+        report,
         scenes,
         simulate,
         solve,
@@ -54,6 +55,7 @@ def _subcommands() -> dict[str, ModuleType]:
         "record": record,
         "inspect": inspect,
         "convert": convert,
+        "report": report,
     }
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from typing import Any
 
 from stand.cli import measure as measure_cmd
@@ -14,6 +15,11 @@ TOLERANCE_SHARE = 0.10
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     measure_cmd.add_arguments(p)
+    p.add_argument(
+        "--report",
+        metavar="REPORT.html",
+        help="where to write the report (default: beside the run file)",
+    )
     p.add_argument(
         "--check",
         metavar="PREVIOUS_RUN",
@@ -64,8 +70,15 @@ def run(args: argparse.Namespace) -> int:
     lv = measure_cmd.live(args, "balance", lambda cfg, params, U: targets(args, cfg, params, U))
     goal = targets(args, lv.cfg, lv.params, lv.final.solution.U_kg_m)
     extra = check(args.check, lv.cfg, lv.params, lv.final) if args.check else None
+    from stand.cli.report import write_report
+
+    report = args.report or str(Path(lv.run_file).with_suffix(".html"))
+    write_report(lv.run_file, report)
+    extra = {**(extra or {}), "report": report}
     out = measure_cmd.emit(args, lv, goal, extra)
-    if extra and not args.json:
+    if not args.json:
+        print(f"report: {report}")
+    if args.check and not args.json:
         print(f"check against the run before the correction ({args.check}):")
         for p in out["check"]["planes"]:
             urr = "-" if p["urr"] is None else f"{100 * p['urr']:.1f} %"

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import multiprocessing
+import os
 import sys
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from pathlib import Path
@@ -79,7 +81,11 @@ def run_batch(args: argparse.Namespace) -> int:
                 results[path] = _worker(path, args.config, args.taper, gate)
                 progress.advance(task)
         else:
-            with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            # fresh interpreters with one BLAS thread each: N processes, not N x cores threads
+            for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+                os.environ.setdefault(var, "1")
+            context = multiprocessing.get_context("spawn")
+            with ProcessPoolExecutor(max_workers=args.jobs, mp_context=context) as pool:
                 futures: dict[Future[dict[str, Any]], str] = {
                     pool.submit(_worker, path, args.config, args.taper, gate): path for path in runs
                 }

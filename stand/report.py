@@ -1,0 +1,239 @@
+"""The balancing report: one self-contained HTML file, figures embedded as PNG.
+
+What an operator needs on one page: the verdict per plane, the correction
+(mass, angle, remove or add) on a polar plot against the tolerance circles,
+the support amplitudes and phases, the spectrum around 1x, the speed over
+the run, the settings and the warnings.  matplotlib is imported here only.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from typing import Any
+
+import numpy as np
+
+from drivers.streams import RunStreams
+
+
+def _png(fig: Any) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=96, bbox_inches="tight")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+
+
+def _polar(out: dict[str, Any]) -> str:
+    """Unbalance per plane, its 95 % circle, and the plane's tolerance circle."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9, 4.4))
+    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    for ax, plane, corr in zip(axes, out["planes"], out["corrections"], strict=True):
+        i = plane["plane"]
+        ax.set_theta_zero_location("N")  # the reference mark at the top
+        ax.set_theta_direction(-1)  # phi counted against the direction of rotation
+        u, phi = plane["unbalance_g_mm"], math.radians(plane["angle_deg"])
+        r95 = plane["uncertainty_g_mm"]
+        ring = np.linspace(0, 2 * math.pi, 200)
+        rmax = u * 1.25
+        if i in tol:
+            per = tol[i]["permissible_g_mm"]
+            ax.fill(ring, np.full_like(ring, per), color="tab:green", alpha=0.15)
+            ax.plot(
+                ring,
+                np.full_like(ring, per),
+                color="tab:green",
+                lw=1.5,
+                label=f"tolerance {per:.0f} g mm",
+            )
+            rmax = max(rmax, per * 1.25)
+        ax.plot([phi], [u], "o", color="tab:red", ms=8, label=f"unbalance {u:.0f} g mm")
+        # the 95 % circle around the unbalance, drawn in the plane (not in polar coordinates)
+        z = u * np.exp(1j * phi) + r95 * np.exp(1j * ring)
+        ax.plot(np.angle(z), np.abs(z), color="tab:red", lw=1)
+        for k, w in enumerate(corr["weights"]):
+            a = math.radians(w["angle_deg"])
+            ax.plot(
+                [a, a],
+                [0, rmax * 0.95],
+                color="tab:blue",
+                lw=2.5,
+                label=f"{corr['action']} {w['mass_g']:.1f} g at {w['angle_deg']:.1f}°"
+                if k < 3
+                else None,
+            )
+        ax.set_rmax(rmax * 1.1)
+        ax.set_title(f"plane {i}", pad=18)
+        ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
+    return _png(fig)
+
+
+def _spectrum_and_speed(streams: RunStreams, rpm: float) -> tuple[str, str]:
+    import matplotlib.pyplot as plt
+
+    f1 = rpm / 60
+    fig, ax = plt.subplots(figsize=(9, 3.2))
+    for n, s in sorted(streams.nodes.items()):
+        if s.accel_m_s2 is None or s.rate_hz is None or len(s.index) < 64:
+            continue
+        seg = s.segment == 0
+        idx = s.index[seg]
+        a = np.zeros(int(idx[-1] - idx[0]) + 1)
+        a[idx - idx[0]] = s.accel_m_s2[seg]  # lost samples as zeros: a spectrum is a view
+        win = np.hanning(len(a))
+        spec = 2 * np.abs(np.fft.rfft(a * win)) / np.sum(win)
+        f = np.fft.rfftfreq(len(a), 1 / s.rate_hz)
+        band = f <= 4 * f1
+        ax.semilogy(f[band], spec[band], lw=1, label=f"support {n}")
+    for k in (1, 2, 3):
+        ax.axvline(k * f1, color="grey", ls=":", lw=1)
+        ax.text(k * f1, ax.get_ylim()[1], f"{k}x", ha="center", va="bottom", fontsize=8)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("amplitude [m/s²]")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    spectrum = _png(fig)
+
+    fig, ax = plt.subplots(figsize=(9, 2.6))
+    for n, s in sorted(streams.nodes.items()):
+        m = s.mark_segment == 0
+        pos, rev = s.mark_position[m], s.mark_rev[m]
+        if len(pos) < 2 or s.rate_hz is None:
+            continue
+        t = (pos[1:] + pos[:-1]) / 2 / s.rate_hz
+        ax.plot(t, 60 * s.rate_hz * np.diff(rev) / np.diff(pos), lw=1, label=f"node {n}")
+    ax.set_xlabel("time [s] (node clock)")
+    ax.set_ylabel("speed [rpm]")
+    ax.ticklabel_format(axis="y", useOffset=False, style="plain")
+    lo, hi = ax.get_ylim()
+    mid = 0.5 * (lo + hi)
+    half = max(0.5 * (hi - lo), 0.01 * mid)  # a steady speed shows as steady: at least +-1 %
+    ax.set_ylim(mid - half, mid + half)
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return spectrum, _png(fig)
+
+
+_CSS = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 960px; color: #222; }
+h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
+table { border-collapse: collapse; margin: 0.5em 0; }
+td, th { border: 1px solid #ccc; padding: 4px 10px; text-align: right; }
+th { background: #f2f2f2; } td.l, th.l { text-align: left; }
+.pass { background: #1b7f3a; color: white; padding: 2px 10px; border-radius: 4px; }
+.fail { background: #b3261e; color: white; padding: 2px 10px; border-radius: 4px; }
+.big { font-size: 1.25em; } .muted { color: #666; font-size: 0.9em; }
+.warn { background: #fff4ce; border-left: 4px solid #e0a800; padding: 4px 10px; margin: 4px 0; }
+img { max-width: 100%; }
+"""
+
+
+def _verdict(out: dict[str, Any]) -> str:
+    t = out.get("tolerance")
+    if t is None:
+        return '<p class="big">No tolerance set: correct as shown below.</p>'
+    ok = all(p["pass"] for p in t["planes"])
+    if ok:
+        return (
+            '<p class="big"><span class="pass">IN TOLERANCE</span> both planes within '
+            f"ISO 21940-11 G {t['grade_mm_s']:g}: no correction needed.</p>"
+        )
+    bad = ", ".join(str(p["plane"]) for p in t["planes"] if not p["pass"])
+    return (
+        '<p class="big"><span class="fail">OUT OF TOLERANCE</span> plane(s) '
+        + bad
+        + ": make the correction below, then run again with --check.</p>"
+    )
+
+
+def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], config_text: str) -> str:
+    """The report as one HTML document (figures embedded)."""
+    e = html.escape
+    rows = []
+    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    for plane, corr in zip(out["planes"], out["corrections"], strict=True):
+        i = plane["plane"]
+        what = (
+            " + ".join(
+                f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f}°"
+                + ("" if w["position"] is None else f" (position {w['position']})")
+                for w in corr["weights"]
+            )
+            or "nothing"
+        )
+        if i in tol:
+            t = tol[i]
+            verdict = (
+                '<span class="pass">PASS</span>' if t["pass"] else '<span class="fail">FAIL</span>'
+            )
+            margin = (
+                f"margin {t['margin_g_mm']:.0f} g mm"
+                if t["pass"]
+                else f"over by {-t['margin_g_mm']:.0f} g mm"
+            )
+            tol_cell = (
+                f"{t['permissible_g_mm']:.0f} g mm: {verdict} <span class=muted>{margin}</span>"
+            )
+        else:
+            tol_cell = "<span class=muted>no [tolerance] set</span>"
+        rows.append(
+            f"<tr><td>{i}</td><td>{plane['unbalance_g_mm']:.1f} ± {plane['uncertainty_g_mm']:.1f}"
+            f"</td><td>{plane['angle_deg']:.1f}°</td><td class=l big><b>{e(corr['action'])} "
+            f"{e(what)}</b> at radius {plane['radius_mm']:g} mm</td>"
+            f"<td class=l>{tol_cell}</td></tr>"
+        )
+    supports = "".join(
+        f"<tr><td>{s['node']}</td><td>{s['amplitude_m_s2']:.4f} ± {s['uncertainty_m_s2']:.4f}</td>"
+        f"<td>{s['phase_deg']:.2f}°</td><td>{s['revolutions']:.0f}</td>"
+        f"<td>{s['noise_m_s2']:.4f}</td></tr>"
+        for s in out["supports"]
+    )
+    warnings = (
+        "".join(f'<div class="warn">{e(w)}</div>' for w in out["warnings"])
+        or "<p class=muted>none</p>"
+    )
+    spectrum, speed = _spectrum_and_speed(streams, out["rpm"])
+    st, cp = out["static"], out["couple"]
+    t = out.get("tolerance")
+    tol_line = (
+        f"ISO 21940-11, G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
+        f"U<sub>per</sub> = {t['permissible_g_mm']:.0f} g mm"
+        if t
+        else "no tolerance set"
+    )
+    run_meta = "".join(
+        f"<tr><th class=l>{e(str(k))}</th><td class=l>{e(str(v))}</td></tr>"
+        for k, v in meta.items()
+    )
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>Balancing report</title>
+<style>{_CSS}</style></head><body>
+<h1>Balancing report</h1>
+{_verdict(out)}
+<p class=muted>{e(str(meta.get("run file", "")))} · {out["rpm"]:.1f} rpm ·
+{e(str(meta.get("start time", "")))}</p>
+<h2>Correction</h2>
+<p class=muted>Angles from the reference mark, counted <b>against the direction of rotation</b>
+(the seed's φ). To remove: at φ; to add: at φ + 180°.</p>
+<table><tr><th>plane</th><th>unbalance [g mm] (95 %)</th><th>angle φ</th>
+<th class=l>correction</th><th class=l>tolerance</th></tr>{"".join(rows)}</table>
+<p>Static part {st["unbalance_g_mm"]:.0f} g mm at {st["angle_deg"]:.1f}°; couple part
+±{cp["unbalance_g_mm"]:.0f} g mm at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
+{tol_line}.</p>
+<img alt="corrections against the tolerance circles" src="{_polar(out)}">
+<h2>Supports (1x)</h2>
+<table><tr><th>node</th><th>amplitude [m/s²] (95 %)</th><th>phase</th><th>revolutions</th>
+<th>noise at 1x [m/s²]</th></tr>{supports}</table>
+<h2>Spectrum around 1x</h2><img alt="spectrum" src="{spectrum}">
+<h2>Speed over the run</h2><img alt="speed" src="{speed}">
+<h2>Warnings</h2>{warnings}
+<h2>Settings</h2><table>{run_meta}</table>
+<pre>{e(config_text)}</pre>
+</body></html>
+"""
