@@ -185,7 +185,11 @@ def live(
                     f"+- {m.radius95_kg_m[i] * 1e6:.1f} (target {goal[i] * 1e6:.1f}) g mm"
                     for i in range(2)
                 )
-                print(f"  {elapsed:5.1f} s  {m.rpm:7.1f} rpm  {planes}", file=sys.stderr)
+                amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
+                print(
+                    f"  {elapsed:5.1f} s  {m.rpm:7.1f} rpm  1x {amps} m/s2  {planes}",
+                    file=sys.stderr,
+                )
             if not short and all(m.radius95_kg_m[i] <= goal[i] for i in range(2)):
                 stopped_by = "precision"
                 break
