@@ -73,3 +73,45 @@ def test_check_after_a_correction_gives_the_reduction_ratio(
     assert p1["urr"] == pytest.approx(1 - 200 / 5000, abs=0.004)
     assert p2["urr"] == pytest.approx(1 - 150 / 3000, abs=0.005)
     assert [p["pass"] for p in out["tolerance"]["planes"]] == [True, True]
+
+
+def test_ctrl_c_stops_cleanly_keeps_the_recording_and_still_answers(tmp_path: Path) -> None:
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from drivers.recording import read_run
+
+    run = tmp_path / "r.h5"
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "stand.cli",
+            "balance",
+            "--scene",
+            "demo",
+            "--out",
+            str(run),
+            "--target-g-mm",
+            "0.001",
+            "--json",
+            "--quiet",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 20
+    while not run.exists() and time.monotonic() < deadline:  # recording has begun
+        time.sleep(0.05)
+    time.sleep(2.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    res = json.loads(out)
+    assert res["stopped_by"] == "interrupted"
+    rec = read_run(run)
+    assert rec.meta["complete"] and len(rec.frames) > 5000  # about 2.5 s of frames kept
+    assert res["planes"][0]["unbalance_g_mm"] == pytest.approx(5000, abs=50)
