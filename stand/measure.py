@@ -32,6 +32,10 @@ SETTLED = 0.02
 """A block agrees with the settled response within 2 % (or 4 standard errors).  A speed
 ripple moves the 1x amplitude quasi-steadily by about its own size; a run-up's transient
 decays through 2 % within a few damping times, and what is left averages out."""
+HARMONIC_WARN = 0.10
+"""3x above 10 % of 1x draws a warning: linear supports make almost none."""
+SCATTER_FLOOR = 1e-3
+"""Block scatter under 0.1 % of the 1x reading is never flagged."""
 SCATTER_LIMIT = 4.0
 """Blocks scattering over 4 times the variance their noise explains (2 in rms) mean
 something moves the 1x reading: a neighbour within the 1x bin, unsteady conditions."""
@@ -105,6 +109,43 @@ def _segment(s: NodeStream) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
     return s.index[keep], s.accel_m_s2[keep], s.mark_position[m], s.mark_rev[m]
 
 
+def block_fits(
+    theta: np.ndarray, accel: np.ndarray, at: np.ndarray, edges: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares 1x of every block between consecutive ``edges`` (sample positions).
+
+    Each block is fitted on ``cos theta, sin theta, 1`` over the samples it
+    has (lost ones simply absent), all blocks at once from cumulative sums.
+
+    Returns
+    -------
+    A : ndarray of complex
+        The blocks' 1x phasors.
+    n : ndarray
+        Samples per block.
+    var : ndarray
+        Residual variance per sample in each block (noise, plus 2x and 3x:
+        conservative).
+    """
+    c, s = np.cos(theta), np.sin(theta)
+    cols = [c * c, s * s, c * s, c, s, accel * c, accel * s, accel, accel * accel]
+    cum = np.vstack([np.zeros(len(cols)), np.cumsum(np.column_stack(cols), axis=0)])
+    cut = np.searchsorted(at, edges)
+    S = np.diff(cum[cut], axis=0)  # (blocks, 9)
+    n = np.diff(cut).astype(float)
+    cc, ss, cs, c1, s1, ac, as_, a1, aa = S.T
+    M = np.stack(
+        [np.stack([cc, cs, c1], -1), np.stack([cs, ss, s1], -1), np.stack([c1, s1, n], -1)], -2
+    )  # (blocks, 3, 3)
+    rhs = np.stack([ac, as_, a1], -1)
+    ok = n >= 8
+    coef = np.zeros((len(n), 3))
+    coef[ok] = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
+    resid = aa - np.einsum("bi,bi->b", coef, rhs)  # sum r^2 = sum a^2 - coef . X^T a
+    var = np.where(ok, np.maximum(resid, 0) / np.maximum(n - 3, 1), np.inf)
+    return coef[:, 0] - 1j * coef[:, 1], n, var
+
+
 def _std(ph: Phasor) -> float:
     """Standard error of the phasor along its worst axis [m/s^2]."""
     return math.sqrt(float(np.max(np.linalg.eigvalsh(ph.cov_m2_s4))))
@@ -125,10 +166,11 @@ def steady_window(
     Returns the edges ``(first, last)`` that bound the window.
 
     Speed steady: each revolution within :data:`SPEED_TOLERANCE` of the
-    median.  Settled: blocks of :data:`BLOCK_REVS` revolutions are demodulated
-    on their own; the window starts at the first block from which every
-    block's 1x agrees with the last half's to within 4 of its standard errors
-    (or :data:`SETTLED`).
+    median.  Settled: blocks of :data:`BLOCK_REVS` revolutions are fitted on
+    their own; the window starts at the first block from which every block's
+    1x agrees with the last half's to within 4 of its standard errors, or
+    :data:`SETTLED`, or 3 times the scatter of the last half's blocks (a beat
+    with a neighbour near 1x is not a transient).
     """
     notes: list[str] = []
     if len(pos) < 3:
@@ -153,25 +195,17 @@ def steady_window(
     settled = a
     n_blocks = (b - a) // BLOCK_REVS
     if n_blocks >= 4:
-        # whole revolutions per block: demodulation is the least-squares 1x, and cumulative
-        # sums give every block at once
-        z = np.concatenate(([0], np.cumsum(accel * np.exp(-1j * theta))))
-        s1 = np.concatenate(([0.0], np.cumsum(accel)))
-        s2 = np.concatenate(([0.0], np.cumsum(accel * accel)))
-        edges = a + BLOCK_REVS * np.arange(n_blocks + 1)
-        cut = np.searchsorted(at, pos[edges])
-        n = np.diff(cut).astype(float)
-        A_blocks = 2 * np.diff(z[cut]) / np.maximum(n, 1)
-        # residual power per block (what is not 1x or mean: noise, plus 2x, 3x: conservative)
-        resid = (
-            np.diff(s2[cut])
-            - n * np.abs(A_blocks) ** 2 / 2
-            - np.diff(s1[cut]) ** 2 / np.maximum(n, 1)
+        edges = pos[a + BLOCK_REVS * np.arange(n_blocks + 1)]
+        A_blocks, n, var = block_fits(theta, accel, at, edges)
+        std = np.sqrt(2 * var / np.maximum(n, 1))  # per component of each block's 1x
+        tail = slice(n_blocks // 2, n_blocks)
+        A_tail = np.sum(A_blocks[tail] * n[tail]) / np.sum(n[tail])
+        # a decaying transient leaves a tight tail; a beat (a neighbour near 1x) does not:
+        # blocks are unsettled only if they stand out from the tail's own scatter
+        spread = float(np.sqrt(np.mean(np.abs(A_blocks[tail] - A_tail) ** 2)))
+        ok = np.abs(A_blocks - A_tail) <= np.maximum.reduce(
+            [4 * std, np.full(n_blocks, SETTLED * abs(A_tail)), np.full(n_blocks, 3 * spread)]
         )
-        std = np.sqrt(2 * np.maximum(resid, 0) / np.maximum(n, 1) ** 2)
-        i_half, i_end = np.searchsorted(at, [pos[a + (b - a) // 2], pos[b]])
-        A_tail = 2 * (z[i_end] - z[i_half]) / max(i_end - i_half, 1)
-        ok = np.abs(A_blocks - A_tail) <= np.maximum(4 * std, SETTLED * abs(A_tail))
         first_good = n_blocks
         for k in range(n_blocks - 1, -1, -1):
             if not ok[k]:
@@ -189,20 +223,20 @@ def block_scatter(
     """How much blocks of whole revolutions scatter, against what the noise explains.
 
     The window is cut at every :data:`BLOCK_REVS`-th edge; each block's 1x is
-    demodulated.  Returns the scatter of the block values around their mean
+    fitted (:func:`block_fits`).  Returns the scatter of the block values around their mean
     over its expectation from ``noise`` (about 1 when only noise moves them;
     0 when there are fewer than 3 blocks, which cannot tell).
     """
     n_blocks = (len(pos) - 1) // BLOCK_REVS
     if n_blocks < 3 or noise <= 0:
         return 0.0
-    z = np.concatenate(([0], np.cumsum(accel * np.exp(-1j * theta))))
-    cut = np.searchsorted(at, pos[::BLOCK_REVS][: n_blocks + 1])
-    n = np.diff(cut).astype(float)
-    A = 2 * np.diff(z[cut]) / np.maximum(n, 1)
+    A, n, _ = block_fits(theta, accel, at, pos[::BLOCK_REVS][: n_blocks + 1])
     mean = np.sum(A * n) / np.sum(n)
+    dev2 = np.abs(A - mean) ** 2
+    if np.sqrt(np.mean(dev2)) < SCATTER_FLOOR * abs(mean):
+        return 0.0  # immaterial, however many standard errors it is
     expected = 4 * noise**2 / np.maximum(n, 1)  # E|A_b - A|^2 from noise: 2 sigma^2/n per part
-    return float(np.sum(np.abs(A - mean) ** 2 / expected) / (n_blocks - 1))
+    return float(np.sum(dev2 / expected) / (n_blocks - 1))
 
 
 def measure(
@@ -274,6 +308,17 @@ def measure(
                 )
             )
             ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
+        odd = abs(ph.harmonics_m_s2.get(3, 0j)) / max(abs(ph.A_m_s2), 1e-300)
+        if odd > HARMONIC_WARN:
+            warnings.append(
+                Diagnostic(
+                    "strong_3x",
+                    f"node {node}: 3x is {100 * odd:.0f} % of 1x: the supports may not be linear "
+                    "(dry friction, a clearance) or the drive is misaligned; the model assumes "
+                    "linear supports, so the result may be off",
+                    odd,
+                )
+            )
         supports.append(ph)
         windows.append(window)
     omega = 0.5 * (supports[0].omega_ref_rad_s + supports[1].omega_ref_rad_s)

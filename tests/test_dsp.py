@@ -167,3 +167,25 @@ def test_a_neighbour_inside_the_1x_bin_is_flagged_and_the_interval_widened() -> 
         m = measure(rebuild(simulate(sc, p).frames), p, gate=False)
         assert any(w.code == "unsteady_1x" for w in m.warnings) == flagged
         assert np.all(np.abs(m.solution.U_kg_m - U) <= m.radius95_kg_m)
+
+
+def test_a_beat_is_not_mistaken_for_settling_and_lost_frames_raise_no_flag() -> None:
+    U = unbalance_from_polar([5e-3, 3e-3], [30.0, 200.0])
+    beat = scene(
+        {"noise": {"density_m_s2_rthz": 0.002}, "neighbour": {"rpm": 880.0, "amplitude_m_s2": 0.3}},
+        run={"seconds": 8.0},
+    )
+    p = beat.config().parameters()
+    m = measure(rebuild(simulate(beat, p).frames), p)
+    assert min(w.revolutions for w in m.windows) >= 110  # the whole steady run, 119 revs
+    assert np.all(np.abs(m.solution.U_kg_m - U) <= m.radius95_kg_m)
+    lossy = scene(
+        {
+            "noise": {"density_m_s2_rthz": 0.002},
+            "lost_frames": {"probability": 0.02, "bursts_per_s": 0.5},
+        },
+        run={"seconds": 8.0},
+    )
+    m = measure(rebuild(simulate(lossy, p).frames), p)
+    assert not any(w.code == "unsteady_1x" for w in m.warnings)
+    assert np.all(np.abs(m.solution.U_kg_m - U) <= m.radius95_kg_m)
