@@ -127,13 +127,23 @@ def block_fits(
         Residual variance per sample in each block (noise, plus 2x and 3x:
         conservative).
     """
-    c, s = np.cos(theta), np.sin(theta)
-    cols = [c * c, s * s, c * s, c, s, accel * c, accel * s, accel, accel * accel]
-    cum = np.vstack([np.zeros(len(cols)), np.cumsum(np.column_stack(cols), axis=0)])
     cut = np.searchsorted(at, edges)
-    S = np.diff(cum[cut], axis=0)  # (blocks, 9)
+    lo, hi = int(cut[0]), int(cut[-1])
+    th, a = theta[lo:hi], accel[lo:hi]
+    c, s = np.cos(th), np.sin(th)
+    starts = cut[:-1] - lo
     n = np.diff(cut).astype(float)
-    cc, ss, cs, c1, s1, ac, as_, a1, aa = S.T
+
+    def sums(x: np.ndarray) -> np.ndarray:  # per block, in one pass
+        out = np.add.reduceat(x, starts) if len(x) else np.zeros(len(starts))
+        return np.where(n > 0, out, 0.0)
+
+    ac, as_ = a * c, a * s
+    cc, cs = sums(c * c), sums(c * s)
+    ss = n - cc
+    c1, s1, a1 = sums(c), sums(s), sums(a)
+    aa = sums(a * a)
+    ac, as_ = sums(ac), sums(as_)
     M = np.stack(
         [np.stack([cc, cs, c1], -1), np.stack([cs, ss, s1], -1), np.stack([c1, s1, n], -1)], -2
     )  # (blocks, 3, 3)
