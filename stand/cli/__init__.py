@@ -36,6 +36,7 @@ def _subcommands() -> dict[str, ModuleType]:
         balance,
         convert,
         forward,
+        influence,
         inspect,
         measure,
         record,
@@ -48,6 +49,7 @@ def _subcommands() -> dict[str, ModuleType]:
     return {
         "balance": balance,
         "forward": forward,
+        "influence": influence,
         "solve": solve,
         "measure": measure,
         "simulate": simulate,
