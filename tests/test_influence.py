@@ -158,3 +158,19 @@ def test_recorded_runs_give_the_scene_s_unbalance_back_as_masses_to_add(
     )
     again = json.loads(capsys.readouterr().out)
     assert again["planes"] == out["planes"]
+
+
+def test_advise_recommends_speeds_above_the_modes(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["advise", "--config", str(ROOT / "examples" / "demo-stand.toml"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    f1, f2 = out["natural_frequencies_hz"]
+    assert f1 == pytest.approx(5.6469, abs=1e-4) and f2 == pytest.approx(7.7993, abs=1e-4)
+    low, high = out["recommended_rpm"]
+    assert low > 1.25 * f2 * 60 and high == 1500.0  # above the modes, up to the service speed
+    rows = out["speeds"]
+    ok = [r for r in rows if low <= r["rpm"] <= high]
+    assert ok and all(r["unbalance_shift_pct_for_5pct_C"] < 1.0 for r in ok)
+    assert all(not r["near_resonance"] for r in ok)
+    # the noise gain falls as the speed rises above the modes
+    gains = [r["noise_gain_g_mm_per_m_s2"] for r in rows if r["ratio_to_top_mode"] > 1.5]
+    assert gains == sorted(gains, reverse=True)

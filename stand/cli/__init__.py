@@ -33,6 +33,7 @@ class _Parser(argparse.ArgumentParser):
 
 def _subcommands() -> dict[str, ModuleType]:
     from stand.cli import (
+        advise,
         balance,
         convert,
         forward,
@@ -48,6 +49,7 @@ def _subcommands() -> dict[str, ModuleType]:
 
     return {
         "balance": balance,
+        "advise": advise,
         "forward": forward,
         "influence": influence,
         "solve": solve,

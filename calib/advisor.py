@@ -1,0 +1,125 @@
+"""The balancing speed advisor: where on the speed axis the stand measures well, and why.
+
+A soft-bearing stand should run well above the natural frequencies of
+stand + rotor.  There the supports' response is ruled by the masses, so the
+answer hardly depends on the stiffnesses C1, C2 (which are the least well
+known parameters).  Near a natural frequency the response, and every error
+in C, M or the speed, blows up.  Far below it the stand is stiff: ``||G||``
+grows as ``C / w^4``, so reading noise costs much unbalance.  For a grid of
+speeds the advisor computes:
+
+* the noise gain ``||G||`` (g mm of unbalance per m/s^2 of reading error);
+* the sensitivity: how far the computed unbalance moves when C1 and C2 are
+  off by 5 % (the worst of the four sign combinations, in % of ``|U|``),
+  for a unit static unbalance in each plane;
+
+and recommends the range from the lowest speed where that sensitivity stays
+under 1 % (and no natural frequency lies within a factor 1.25) to the
+maximum service speed (the rotor is treated as rigid: do not balance above
+it).
+
+Pure numerics on :mod:`stand.core`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from stand.core import StandParameters, forward, natural_frequencies, solve_unbalance
+from stand.core.inverse import RESONANCE_BAND
+
+C_ERROR = 0.05
+"""The stiffness error the sensitivity is quoted for (5 %)."""
+SENSITIVITY_OK = 0.01
+"""A speed is recommended when a 5 % stiffness error moves the unbalance by under 1 %."""
+
+
+@dataclass(frozen=True)
+class SpeedRow:
+    rpm: float
+    ratio_to_top_mode: float
+    noise_gain_g_mm_per_m_s2: float
+    sensitivity_to_C: float  # fraction of |U| moved by a 5 % error in C1, C2
+    near_resonance: bool
+
+
+@dataclass(frozen=True)
+class Advice:
+    natural_frequencies_hz: tuple[float, float]
+    rows: tuple[SpeedRow, ...]
+    recommended_rpm: tuple[float, float] | None
+    reasons: tuple[str, ...]
+
+
+def _sensitivity(p: StandParameters, w: float) -> float:
+    U = np.array([1e-3, 1e-3j], dtype=complex)  # two different planes, 90 deg apart
+    A = forward(p, w, U)
+    worst = 0.0
+    for s1 in (-1, 1):
+        for s2 in (-1, 1):
+            q = dataclasses.replace(p, C1=p.C1 * (1 + s1 * C_ERROR), C2=p.C2 * (1 + s2 * C_ERROR))
+            got = solve_unbalance(q, w, A, max_split_condition=math.inf).U_kg_m
+            worst = max(worst, float(np.max(np.abs(got - U) / np.abs(U))))
+    return worst
+
+
+def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int = 40) -> Advice:
+    """The advice for a stand + rotor; speeds from 1.1x the lowest mode to 8x the highest."""
+    wn = natural_frequencies(p)
+    top = float(np.max(wn))
+    hi = max_speed_rpm * 2 * math.pi / 60 if max_speed_rpm else 8 * top
+    grid = np.geomspace(1.1 * float(np.min(wn)), max(hi, 1.2 * top), points)
+    rows = []
+    for w in grid:
+        near = bool(np.any((w / wn > 1 / RESONANCE_BAND) & (w / wn < RESONANCE_BAND)))
+        try:
+            sol = solve_unbalance(p, float(w), np.zeros(2, complex), max_split_condition=math.inf)
+            gain = sol.noise_gain * 1e6
+            sens = _sensitivity(p, float(w))
+        except (ValueError, ArithmeticError):  # exactly at an undamped mode
+            gain, sens = math.inf, math.inf
+        rows.append(SpeedRow(float(w) * 60 / (2 * math.pi), float(w) / top, gain, sens, near))
+    good = [
+        r
+        for r in rows
+        if r.sensitivity_to_C < SENSITIVITY_OK and not r.near_resonance and r.ratio_to_top_mode > 1
+    ]
+    reasons = [
+        f"natural frequencies of stand + rotor: {wn[0] / (2 * math.pi):.2f} Hz "
+        f"({wn[0] * 30 / math.pi:.0f} rpm) and {wn[1] / (2 * math.pi):.2f} Hz "
+        f"({wn[1] * 30 / math.pi:.0f} rpm): keep clear of both by a factor "
+        f"{RESONANCE_BAND:g}, and run above them (soft-bearing)",
+    ]
+    recommended = None
+    if good:
+        low = good[0].rpm
+        high = max_speed_rpm if max_speed_rpm else rows[-1].rpm
+        if high > low:
+            recommended = (low, high)
+            reasons.append(
+                f"from {low:.0f} rpm ({good[0].ratio_to_top_mode:.2f}x the highest mode) a "
+                f"{100 * C_ERROR:.0f} % error in C1, C2 moves the unbalance by under "
+                f"{100 * SENSITIVITY_OK:.0f} % ({100 * good[0].sensitivity_to_C:.2f} %), and "
+                f"1 m/s^2 of reading error costs {good[0].noise_gain_g_mm_per_m_s2:.0f} g mm"
+            )
+        if max_speed_rpm:
+            reasons.append(
+                f"up to the rotor's maximum service speed, {max_speed_rpm:.0f} rpm: "
+                "the rotor is treated as rigid, do not balance above it"
+            )
+    if recommended is None:
+        reasons.append(
+            "no speed up to the maximum service speed keeps a 5 % stiffness error "
+            "under 1 %: the stand is too stiff for this rotor, or its C1, C2 must be "
+            "identified (stand calibrate) before model-based balancing"
+        )
+    return Advice(
+        (float(wn[0]) / (2 * math.pi), float(wn[1]) / (2 * math.pi)),
+        tuple(rows),
+        recommended,
+        tuple(reasons),
+    )
