@@ -152,6 +152,27 @@ def _verdict(out: dict[str, Any]) -> str:
     )
 
 
+def _uncertainty(out: dict[str, Any]) -> str:
+    pu = out.get("parameter_uncertainty")
+    if pu is None:
+        return ""
+    t = pu["tolerances"]
+    rows = "".join(
+        f"<tr><td>{p['plane']}</td><td>±{p['radius95_monte_carlo_g_mm']:.1f}</td>"
+        f"<td>±{p['radius95_linear_g_mm']:.1f}</td><td>±{p['combined_g_mm']:.1f}</td>"
+        f"<td class=l>{', '.join(f'{k} {100 * s:.0f} %' for k, s in p['largest_shares'])}</td></tr>"
+        for p in pu["planes"]
+    )
+    return (
+        f"<h2>Parameter tolerances</h2><p class=muted>Uniform within C ±{t['C_pct']:g} %, "
+        f"M and J3 ±{t['M_pct']:g} %, lengths ±{t['length_mm']:g} mm, sensor gains "
+        f"±{t['gain_pct']:g} %; {pu['draws']} Monte Carlo draws.</p>"
+        "<table><tr><th>plane</th><th>95 % [g mm], Monte Carlo</th><th>linearised</th>"
+        "<th>with the measurement</th><th class=l>largest shares</th></tr>"
+        f"{rows}</table>"
+    )
+
+
 def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], config_text: str) -> str:
     """The report as one HTML document (figures embedded)."""
     e = html.escape
@@ -227,6 +248,7 @@ def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], confi
 ±{cp["unbalance_g_mm"]:.0f} g mm at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
 {tol_line}.</p>
 <img alt="corrections against the tolerance circles" src="{_polar(out)}">
+{_uncertainty(out)}
 <h2>Supports (1x)</h2>
 <table><tr><th>node</th><th>amplitude [m/s²] (95 %)</th><th>phase</th><th>revolutions</th>
 <th>noise at 1x [m/s²]</th></tr>{supports}</table>

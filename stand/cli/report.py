@@ -18,13 +18,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="CFG",
         help="stand configuration (default: the one stored in the run file)",
     )
+    from stand.cli.solve import add_uncertainty_arguments
+
+    add_uncertainty_arguments(p)
 
 
-def write_report(run_path: str, out_path: str, config: str | None = None) -> dict[str, Any]:
+def write_report(
+    run_path: str, out_path: str, config: str | None = None, tolerances: Any = None
+) -> dict[str, Any]:
     """Solve the run and write its report (atomically: all or nothing); return the result."""
     from drivers.recording import read_recording
     from drivers.streams import rebuild
-    from stand.cli.solve import config_for, corrections, result
+    from stand.cli.solve import config_for, corrections, result, uncertainty
     from stand.config import config_toml
     from stand.measure import measure
     from stand.report import render
@@ -35,6 +40,8 @@ def write_report(run_path: str, out_path: str, config: str | None = None) -> dic
     m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
     out = result(m, [*streams.warnings, *m.warnings])
     out.update(corrections(m, cfg, params))
+    if tolerances is not None and tolerances.uncertainty:
+        out.update(uncertainty(m, params, tolerances))
     meta = {
         "run file": run_path,
         "start time": rec.meta.get("start_time", ""),
@@ -58,6 +65,6 @@ def write_report(run_path: str, out_path: str, config: str | None = None) -> dic
 
 
 def run(args: argparse.Namespace) -> int:
-    write_report(args.run, args.out, args.config)
+    write_report(args.run, args.out, args.config, args)
     print(f"wrote {args.out}")
     return 0

@@ -29,6 +29,82 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="solve several runs in N processes (default 1)",
     )
     p.add_argument("--summary", metavar="FILE", help="write a summary of all runs: .csv or .json")
+    add_uncertainty_arguments(p)
+
+
+def add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("parameter tolerances (--uncertainty)")
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="add the spread the parameter tolerances cause (linearised and Monte Carlo)",
+    )
+    g.add_argument("--tol-c", type=float, default=5.0, metavar="PCT", help="C1, C2 (default 5)")
+    g.add_argument(
+        "--tol-m", type=float, default=2.0, metavar="PCT", help="M1, M2, M3, J3 (default 2)"
+    )
+    g.add_argument(
+        "--tol-length-mm", type=float, default=1.0, metavar="MM", help="a, b, c, d (default 1)"
+    )
+    g.add_argument(
+        "--tol-gain",
+        type=float,
+        default=1.0,
+        metavar="PCT",
+        help="sensor sensitivities (default 1)",
+    )
+    g.add_argument("--draws", type=int, default=1000, help="Monte Carlo draws (default 1000)")
+
+
+def uncertainty(m: Any, params: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """The parameter-tolerance part of the result."""
+    import math
+
+    import numpy as np
+
+    from calib.tolerance import Tolerances, parameter_uncertainty
+
+    for name in ("tol_c", "tol_m", "tol_length_mm", "tol_gain"):
+        if getattr(args, name) < 0:
+            flag = "--" + name.replace("_", "-")
+            raise UsageError(f"stand solve: {flag} must be >= 0, got {getattr(args, name)}")
+    if args.draws < 10:
+        raise UsageError(f"stand solve: --draws must be >= 10, got {args.draws}")
+    tol = Tolerances(
+        C_rel=args.tol_c / 100,
+        M_rel=args.tol_m / 100,
+        length_m=args.tol_length_mm / 1000,
+        gain_rel=args.tol_gain / 100,
+    )
+    omega = m.rpm * 2 * math.pi / 60
+    A = np.array([ph.A_m_s2 for ph in m.supports])
+    r = parameter_uncertainty(params, omega, A, tol, draws=args.draws)
+    planes = []
+    for i in range(2):
+        top = sorted(r.shares.items(), key=lambda kv: -kv[1][i])[:3]
+        lin, mc = float(r.radius95_linear[i]), float(r.radius95_monte_carlo[i])
+        planes.append(
+            {
+                "plane": i + 1,
+                "radius95_linear_g_mm": round(lin * 1e6, 3),
+                "radius95_monte_carlo_g_mm": round(mc * 1e6, 3),
+                "combined_g_mm": round(math.hypot(mc, float(m.radius95_kg_m[i])) * 1e6, 3),
+                "largest_shares": [[k, round(v[i], 4)] for k, v in top],
+            }
+        )
+    return {
+        "parameter_uncertainty": {
+            "tolerances": {
+                "C_pct": args.tol_c,
+                "M_pct": args.tol_m,
+                "length_mm": args.tol_length_mm,
+                "gain_pct": args.tol_gain,
+                "distribution": "uniform within +-tolerance",
+            },
+            "draws": r.draws,
+            "planes": planes,
+        }
+    }
 
 
 def add_measure_arguments(p: argparse.ArgumentParser) -> None:
@@ -120,7 +196,11 @@ def print_result(out: dict[str, Any]) -> None:
 
 
 def solve_one(
-    path: str, config: str | None, taper: bool = False, gate: bool = True
+    path: str,
+    config: str | None,
+    taper: bool = False,
+    gate: bool = True,
+    tolerances: argparse.Namespace | None = None,
 ) -> dict[str, Any]:
     """The whole result of one run (raises :class:`StandError` on bad input)."""
     from drivers.recording import read_recording
@@ -135,6 +215,8 @@ def solve_one(
     )
     out = result(m, [*streams.warnings, *m.warnings])
     out.update(corrections(m, cfg, params))
+    if tolerances is not None and tolerances.uncertainty:
+        out.update(uncertainty(m, params, tolerances))
     return out
 
 
@@ -147,13 +229,14 @@ def run(args: argparse.Namespace) -> int:
         from stand.cli.solve_batch import run_batch
 
         return run_batch(args)
-    out = solve_one(args.runs[0], args.config, args.taper, not args.no_gate)
+    out = solve_one(args.runs[0], args.config, args.taper, not args.no_gate, args)
     if args.json:
         json.dump(out, sys.stdout)
         print()
     else:
         print_result(out)
         print_corrections(out)
+        print_uncertainty(out)
         for w in out["warnings"]:
             print(f"warning: {w}", file=sys.stderr)
     return 0
@@ -275,4 +358,23 @@ def print_corrections(out: dict[str, Any]) -> None:
         print(
             f"  plane {p['plane']}: {p['residual_g_mm']:.1f} g mm against "
             f"{p['permissible_g_mm']:.1f} permissible: {verdict} ({how} g mm)"
+        )
+
+
+def print_uncertainty(out: dict[str, Any]) -> None:
+    """The parameter-tolerance spread, if computed."""
+    pu = out.get("parameter_uncertainty")
+    if pu is None:
+        return
+    t = pu["tolerances"]
+    print(
+        f"parameter tolerances (uniform): C +-{t['C_pct']:g} %, M and J3 +-{t['M_pct']:g} %, "
+        f"lengths +-{t['length_mm']:g} mm, sensor gains +-{t['gain_pct']:g} %"
+    )
+    for p in pu["planes"]:
+        top = ", ".join(f"{k} {100 * s:.0f} %" for k, s in p["largest_shares"])
+        print(
+            f"  plane {p['plane']}: 95 % +-{p['radius95_monte_carlo_g_mm']:.1f} g mm "
+            f"(Monte Carlo, {pu['draws']} draws; linearised {p['radius95_linear_g_mm']:.1f}); "
+            f"with the measurement +-{p['combined_g_mm']:.1f}; most from {top}"
         )
