@@ -36,6 +36,7 @@ def _subcommands() -> dict[str, ModuleType]:
         advise,
         balance,
         convert,
+        evaluate,
         forward,
         influence,
         inspect,
@@ -50,6 +51,7 @@ def _subcommands() -> dict[str, ModuleType]:
     return {
         "balance": balance,
         "advise": advise,
+        "evaluate": evaluate,
         "forward": forward,
         "influence": influence,
         "solve": solve,
