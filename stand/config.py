@@ -8,6 +8,7 @@ Tables (SI units, the seed's symbols)::
               channel, bitrate and any option of the python-can interface
     [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
     [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g
+    [sensors]     (optional) gain, delay_s per node (from stand calibrate)
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -20,11 +21,12 @@ from __future__ import annotations
 import json
 import tomllib
 from pathlib import Path
-from typing import Any, Literal, TypeVar
+from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import (
     BaseModel,
     ConfigDict,
+    Field,
     FiniteFloat,
     NonNegativeFloat,
     NonNegativeInt,
@@ -93,6 +95,15 @@ class CorrectionTable(BaseModel):
     """... or weights in multiples of this [g]; 0 and [] mean any mass."""
 
 
+class SensorsTable(BaseModel):
+    """``[sensors]``: each node's calibrated sensitivity (1 = as STATUS says) and delay [s]."""
+
+    model_config = _STRICT
+
+    gain: Annotated[list[PositiveFloat], Field(min_length=2, max_length=2)] = [1.0, 1.0]
+    delay_s: Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)] = [0.0, 0.0]
+
+
 class Config(BaseModel):
     """A whole configuration file."""
 
@@ -103,6 +114,15 @@ class Config(BaseModel):
     bus: dict[str, str | int | float | bool] | None = None
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
+    sensors: SensorsTable = SensorsTable()
+
+    def measure_options(self) -> dict[str, Any]:
+        """What :func:`stand.measure.measure` needs from the configuration."""
+        return {
+            "reference_angle_deg": self.stand.reference_angle_deg,
+            "sensor_gain": tuple(self.sensors.gain),
+            "sensor_delay_s": tuple(self.sensors.delay_s),
+        }
 
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""

@@ -256,6 +256,8 @@ def measure(
     reference_angle_deg: float = 0.0,
     taper: bool = False,
     gate: bool = True,
+    sensor_gain: tuple[float, float] = (1.0, 1.0),
+    sensor_delay_s: tuple[float, float] = (0.0, 0.0),
 ) -> Measurement:
     """The unbalance of both planes from a run's streams (nodes 1 and 2).
 
@@ -305,6 +307,12 @@ def measure(
         i0, i1 = np.searchsorted(at, [pos[e0], pos[e1]], side="left")
         i1 = int(np.searchsorted(at, pos[e1], side="right"))
         ph = fit_1x(th[i0:i1], acc[i0:i1], w[i0:i1], rate_hz=s.rate_hz, taper=taper)
+        k = node - 1
+        if sensor_gain[k] != 1.0 or sensor_delay_s[k] != 0.0:
+            # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
+            turn = sensor_gain[k] * np.exp(-1j * ph.omega_ref_rad_s * sensor_delay_s[k])
+            R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
+            ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
         ratio = block_scatter(th[i0:i1], acc[i0:i1], at[i0:i1], pos[e0 : e1 + 1], ph.noise_m_s2)
         if ratio > SCATTER_LIMIT:
             warnings.append(

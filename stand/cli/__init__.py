@@ -35,6 +35,7 @@ def _subcommands() -> dict[str, ModuleType]:
     from stand.cli import (
         advise,
         balance,
+        calibrate,
         convert,
         evaluate,
         forward,
@@ -51,6 +52,7 @@ def _subcommands() -> dict[str, ModuleType]:
     return {
         "balance": balance,
         "advise": advise,
+        "calibrate": calibrate,
         "evaluate": evaluate,
         "forward": forward,
         "influence": influence,

@@ -51,7 +51,7 @@ def check(previous: str, cfg: Any, params: Any, after: Any) -> dict[str, Any]:
     from stand.measure import measure
 
     rec = read_recording(previous)
-    before = measure(rebuild(rec.frames), params, reference_angle_deg=cfg.stand.reference_angle_deg)
+    before = measure(rebuild(rec.frames), params, **cfg.measure_options())
     planes = []
     for i in range(2):
         ub, ua = abs(before.solution.U_kg_m[i]), abs(after.solution.U_kg_m[i])

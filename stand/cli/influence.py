@@ -86,7 +86,7 @@ def _readings(entry: RunEntry, k: int, source: str, config: str | None) -> list[
     path = Path(source).parent / str(entry.file)
     rec = read_recording(path)
     cfg, params = config_for(rec, config)
-    m = measure(rebuild(rec.frames), params, reference_angle_deg=cfg.stand.reference_angle_deg)
+    m = measure(rebuild(rec.frames), params, **cfg.measure_options())
     # conj: our phasors follow U = q R e^{-i phi}; conjugated, a trial at the seed's angle
     # phi acts as e^{+i phi}, so trial and correction angles are the seed's phi
     return [complex(ph.A_m_s2).conjugate() for ph in m.supports]

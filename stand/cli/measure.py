@@ -141,7 +141,6 @@ def live(
     reader = BusReader(bus, channel_info=where, silence_timeout_s=args.timeout)
     if player is not None:
         player.start()
-    gamma = cfg.stand.reference_angle_deg
     blocks: list[Frames] = []
     stopped_by = "time limit"
     last: Any = None
@@ -168,7 +167,7 @@ def live(
                 m = measure(
                     rebuild(Frames.concat(blocks), strict_status=False),
                     params,
-                    reference_angle_deg=gamma,
+                    **cfg.measure_options(),
                     taper=args.taper,
                     gate=not args.no_gate,
                 )
@@ -210,7 +209,7 @@ def live(
         final = measure(
             rebuild(frames),
             params,
-            reference_angle_deg=gamma,
+            **cfg.measure_options(),
             taper=args.taper,
             gate=not args.no_gate,
         )

@@ -37,7 +37,7 @@ def write_report(
     rec = read_recording(run_path)
     cfg, params = config_for(rec, config)
     streams = rebuild(rec.frames)
-    m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
+    m = measure(streams, params, **cfg.measure_options())
     out = result(m, [*streams.warnings, *m.warnings])
     out.update(corrections(m, cfg, params))
     if tolerances is not None and tolerances.uncertainty:

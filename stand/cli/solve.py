@@ -210,9 +210,7 @@ def solve_one(
     rec = read_recording(path)
     cfg, params = config_for(rec, config)
     streams = rebuild(rec.frames)
-    m = measure(
-        streams, params, reference_angle_deg=cfg.stand.reference_angle_deg, taper=taper, gate=gate
-    )
+    m = measure(streams, params, **cfg.measure_options(), taper=taper, gate=gate)
     out = result(m, [*streams.warnings, *m.warnings])
     out.update(corrections(m, cfg, params))
     if tolerances is not None and tolerances.uncertainty:

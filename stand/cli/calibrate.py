@@ -1,0 +1,143 @@
+"""Identify the stand (M, C, H per support, sensor gains and delays, reference angle) from runs."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
+
+from stand.errors import ConfigError, RecordingError
+
+_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+class MassTable(BaseModel):
+    model_config = _STRICT
+    plane: Annotated[int, Field(ge=1, le=2)]
+    mass_g: PositiveFloat
+    angle_deg: FiniteFloat
+
+
+class CalibRun(BaseModel):
+    model_config = _STRICT
+    file: str
+    masses: list[MassTable] = []
+
+
+class CalibFile(BaseModel):
+    model_config = _STRICT
+    runs: Annotated[list[CalibRun], Field(min_length=1)]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "runs",
+        metavar="RUNS.toml",
+        help="[[runs]] file = RUN, masses = [{plane, mass_g, angle_deg}, ...] (the test "
+        "masses on the proving rotor in that run; angles: the seed's phi)",
+    )
+    p.add_argument(
+        "--config",
+        required=True,
+        metavar="CFG",
+        help="the stand's configuration: M3, J3 and the geometry of the proving rotor "
+        "are taken as known, M/C/H as the starting point",
+    )
+    p.add_argument(
+        "--out",
+        required=True,
+        metavar="CALIBRATED.toml",
+        help="the calibrated configuration to write",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from calib.identify import NAMES, CalibrationRun, identify
+    from drivers.recording import read_recording
+    from drivers.streams import rebuild
+    from stand.config import config_toml, load_config, read_toml, validate
+    from stand.core import rpm_to_rad_s
+    from stand.errors import ModelError
+    from stand.measure import measure
+
+    if Path(args.out).exists():
+        raise RecordingError("exists already: refusing to overwrite", path=args.out)
+    cfg, params = load_config(args.config)
+    _, data = read_toml(args.runs)
+    spec = validate(CalibFile, data, args.runs)
+    R = (params.R1, params.R2)
+    runs = []
+    for entry in spec.runs:
+        rec = read_recording(Path(args.runs).parent / entry.file)
+        # raw readings: the configured reference angle, no sensor correction
+        m = measure(rebuild(rec.frames), params, reference_angle_deg=cfg.stand.reference_angle_deg)
+        T = np.zeros(2, complex)
+        for mass in entry.masses:
+            i = mass.plane - 1
+            T[i] += mass.mass_g * 1e-3 * R[i] * np.exp(-1j * math.radians(mass.angle_deg))
+        runs.append(
+            CalibrationRun(
+                float(rpm_to_rad_s(m.rpm)), np.array([ph.A_m_s2 for ph in m.supports]), T
+            )
+        )
+    try:
+        res = identify(params, runs)
+    except ModelError as exc:
+        raise ConfigError(str(exc), source=args.runs) from None
+    v, se = res.values, res.std_errors
+    stand = cfg.stand.model_copy(
+        update={
+            "M1": v["M1"],
+            "M2": v["M2"],
+            "C1": v["C1"],
+            "C2": v["C2"],
+            "H1": v["H1"],
+            "H2": v["H2"],
+            "reference_angle_deg": cfg.stand.reference_angle_deg
+            + math.degrees(v["reference_angle_error_rad"]),
+        }
+    )
+    sensors = cfg.sensors.model_copy(
+        update={"gain": [v["gain1"], v["gain2"]], "delay_s": [v["delay1_s"], v["delay2_s"]]}
+    )
+    new = cfg.model_copy(update={"stand": stand, "sensors": sensors})
+    header = [
+        f"# calibrated by stand calibrate from {len(runs)} runs ({args.runs});",
+        f"# rms misfit of the phasors {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
+    ]
+    for name in NAMES:
+        if not name.startswith("U_res"):
+            header.append(f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}")
+    U = res.residual_unbalance_kg_m
+    header.append(
+        "# proving rotor's own unbalance: "
+        + ", ".join(
+            f"plane {i + 1} {abs(U[i]) * 1e6:.1f} g mm at "
+            f"{-math.degrees(np.angle(U[i])) % 360:.1f} deg"
+            for i in range(2)
+        )
+    )
+    Path(args.out).write_text("\n".join(header) + "\n" + config_toml(new))
+    out = {
+        "values": v,
+        "std_errors": se,
+        "residual_rms_m_s2": res.residual_rms_m_s2,
+        "runs": res.runs,
+        "config": args.out,
+        "reference_angle_deg": stand.reference_angle_deg,
+    }
+    if args.json:
+        json.dump(out, sys.stdout)
+        print()
+    else:
+        print("\n".join(line[2:] for line in header))
+        print(f"wrote {args.out}")
+    return 0
