@@ -178,3 +178,89 @@ def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
         residual_unbalance_kg_m=np.array([complex(z[6], z[7]), complex(z[8], z[9])]),
         runs=len(runs),
     )
+
+
+ROTOR_NAMES = ("M3", "J3", "x_cm_m", "U_res1_re", "U_res1_im", "U_res2_re", "U_res2_im")
+
+
+@dataclass(frozen=True)
+class RotorIdentification:
+    """A new rotor type on an identified stand: mass, inertia, centre of mass.
+
+    ``x_cm_m`` is the centre of mass from support 1; ``b = x_cm - a`` and
+    ``c = a + b + c - x_cm`` follow (the planes' positions are known).
+    """
+
+    params: StandParameters
+    values: dict[str, float]
+    std_errors: dict[str, float]
+    residual_rms_m_s2: float
+    residual_unbalance_kg_m: NDArray[np.complex128]
+    runs: int
+
+
+def identify_rotor(
+    p0: StandParameters,
+    runs: list[CalibrationRun],
+    gain: tuple[float, float] = (1.0, 1.0),
+    delay_s: tuple[float, float] = (0.0, 0.0),
+) -> RotorIdentification:
+    """M3, J3 and the centre of mass of a rotor on an identified stand, from test-mass runs.
+
+    ``p0`` holds the identified stand and the rotor's planes and first guesses;
+    ``runs`` are the phasors as measured (the sensors' gains and delays are
+    taken out here).  One run per test mass, at one speed or more: the
+    seven unknowns (with the rotor's own unbalance) need two runs at least.
+    """
+    from scipy.optimize import least_squares
+
+    if len(runs) < 2:
+        raise ModelError(f"need 2 runs or more (7 unknowns, 4 equations a run), got {len(runs)}")
+    plane1, plane2 = p0.a, p0.a + p0.b + p0.c
+    g = np.array(gain)
+    d = np.array(delay_s)
+    meas = np.array([r.A_m_s2 / (g * np.exp(-1j * r.omega_rad_s * d)) for r in runs])
+    level = float(np.sqrt(np.mean(np.abs(meas) ** 2)))
+
+    def rotor(z: NDArray[np.float64]) -> StandParameters:
+        x = float(z[2])
+        return dataclasses.replace(p0, M3=float(z[0]), J3=float(z[1]), b=x - plane1, c=plane2 - x)
+
+    def residual(z: NDArray[np.float64]) -> NDArray[np.float64]:
+        q = rotor(z)
+        U_res = np.array([complex(z[3], z[4]), complex(z[5], z[6])])
+        model = np.array([forward(q, r.omega_rad_s, U_res + r.test_kg_m) for r in runs])
+        e = (model - meas).reshape(-1) / level
+        return np.concatenate([e.real, e.imag])
+
+    z0 = np.array([p0.M3, p0.J3, p0.a + p0.b, 0.0, 0.0, 0.0, 0.0])
+    typical = np.array([p0.M3, p0.J3, p0.L, *([1e-6 * p0.M3] * 4)])
+    # physical bounds: positive mass and inertia, the centre of mass between the supports
+    lo = np.array([1e-9 * p0.M3, 1e-9 * p0.J3, 1e-6 * p0.L, *([-np.inf] * 4)])
+    hi = np.array([np.inf, np.inf, p0.L * (1 - 1e-6), *([np.inf] * 4)])
+    try:
+        sol = least_squares(
+            residual, z0, x_scale=typical, bounds=(lo, hi), method="trf", max_nfev=20000
+        )
+        q = rotor(sol.x)
+        q.check()
+    except (ValueError, ArithmeticError) as exc:
+        raise ModelError(f"rotor identification failed: {exc}") from None
+    r = sol.fun
+    s2 = float(r @ r) / max(len(r) - len(z0), 1)
+    try:
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
+    except np.linalg.LinAlgError:
+        raise ModelError(
+            "the runs do not determine the rotor: use test masses in both planes"
+        ) from None
+    se = np.sqrt(np.maximum(np.diag(cov), 0))
+    z = sol.x
+    return RotorIdentification(
+        params=q,
+        values=dict(zip(ROTOR_NAMES, z.tolist(), strict=True)),
+        std_errors=dict(zip(ROTOR_NAMES, se.tolist(), strict=True)),
+        residual_rms_m_s2=level * math.sqrt(float(r @ r) / len(r)),
+        residual_unbalance_kg_m=np.array([complex(z[3], z[4]), complex(z[5], z[6])]),
+        runs=len(runs),
+    )

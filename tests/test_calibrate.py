@@ -140,3 +140,71 @@ def test_calibrate_needs_two_speeds(tmp_path: Path, capsys: pytest.CaptureFixtur
     )
     assert "need runs at two speeds or more" in capsys.readouterr().err
     assert not (tmp_path / "o.toml").exists()
+
+
+def test_calibrate_rotor_finds_mass_inertia_and_centre_of_mass(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A new rotor (45 kg, 14 kg m^2, centre of mass 0.75 m from support 1) on the demo stand,
+    one speed, the bare rotor and a 20 g trial per plane; the config still holds the old
+    rotor type (60 kg, 21 kg m^2, 1.00 m)."""
+    lines = []
+    for k, (masses, t1, t2) in enumerate(
+        (
+            ("[]", 0, 0),
+            ("[{ plane = 1, mass_g = 20.0, angle_deg = 90.0 }]", 1, 0),
+            ("[{ plane = 2, mass_g = 20.0, angle_deg = 300.0 }]", 0, 1),
+        )
+    ):
+        u1 = 1e-3 * cmath.exp(-1j * math.radians(10)) + t1 * 0.02 * 0.09 * cmath.exp(
+            -1j * math.radians(90)
+        )
+        u2 = 2e-3 * cmath.exp(-1j * math.radians(130)) + t2 * 0.02 * 0.08 * cmath.exp(
+            -1j * math.radians(300)
+        )
+        text = Path(str(shipped_scenes()["demo"])).read_text()
+        text = (
+            text.replace("M3 = 60.0", "M3 = 45.0")
+            .replace("J3 = 21.0", "J3 = 14.0")
+            .replace("b = 0.85", "b = 0.60")
+            .replace("c = 0.70", "c = 0.95")
+            .replace("seconds = 8.0", "seconds = 4.0")
+            .replace("seed = 0", f"seed = {k}")
+        )
+        for old, u in (
+            ("g_mm = 5000.0, angle_deg = 30.0", u1),
+            ("g_mm = 3000.0, angle_deg = 200.0", u2),
+        ):
+            text = text.replace(
+                old, f"g_mm = {abs(u) * 1e6!r}, angle_deg = {-math.degrees(cmath.phase(u)) % 360!r}"
+            )
+        (tmp_path / f"r{k}.toml").write_text(text)
+        assert (
+            main(["simulate", str(tmp_path / f"r{k}.toml"), "--out", str(tmp_path / f"r{k}.h5")])
+            == 0
+        )
+        lines.append(f'[[runs]]\nfile = "r{k}.h5"\nmasses = {masses}\n')
+    (tmp_path / "rotor.toml").write_text("\n".join(lines))
+    cfg = Path(__file__).resolve().parents[1] / "examples" / "demo-stand.toml"
+    capsys.readouterr()
+    assert (
+        main(
+            [
+                "calibrate",
+                str(tmp_path / "rotor.toml"),
+                "--config",
+                str(cfg),
+                "--rotor",
+                "--out",
+                str(tmp_path / "new.toml"),
+                "--json",
+            ]
+        )
+        == 0
+    )
+    res = json.loads(capsys.readouterr().out)
+    v, se = res["values"], res["std_errors"]
+    for name, truth in (("M3", 45.0), ("J3", 14.0), ("x_cm_m", 0.75)):
+        assert abs(v[name] - truth) <= 4 * se[name], (name, v[name], se[name])
+    new = tomllib.loads((tmp_path / "new.toml").read_text())
+    assert new["rotor"]["b"] == pytest.approx(0.60, abs=0.005)

@@ -7,7 +7,7 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
 
@@ -54,6 +54,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="CALIBRATED.toml",
         help="the calibrated configuration to write",
     )
+    p.add_argument(
+        "--rotor",
+        action="store_true",
+        help="a new rotor type on an identified stand (the config's): identify its "
+        "M3, J3 and centre of mass instead of the stand",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -88,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
                 float(rpm_to_rad_s(m.rpm)), np.array([ph.A_m_s2 for ph in m.supports]), T
             )
         )
+    if args.rotor:
+        return _rotor(args, cfg, params, runs)
     try:
         res = identify(params, runs)
     except ModelError as exc:
@@ -136,6 +144,56 @@ def run(args: argparse.Namespace) -> int:
     }
     if args.json:
         json.dump(out, sys.stdout)
+        print()
+    else:
+        print("\n".join(line[2:] for line in header))
+        print(f"wrote {args.out}")
+    return 0
+
+
+def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
+    """``--rotor``: M3, J3 and the centre of mass on the configured (identified) stand."""
+    import numpy as np
+
+    from calib.identify import ROTOR_NAMES, identify_rotor
+    from stand.config import config_toml
+    from stand.errors import ModelError
+
+    try:
+        res = identify_rotor(params, runs, tuple(cfg.sensors.gain), tuple(cfg.sensors.delay_s))
+    except ModelError as exc:
+        raise ConfigError(str(exc), source=args.runs) from None
+    v, se = res.values, res.std_errors
+    q = res.params
+    rotor = cfg.rotor.model_copy(update={"M3": q.M3, "J3": q.J3, "b": q.b, "c": q.c})
+    new = cfg.model_copy(update={"rotor": rotor})
+    header = [
+        f"# rotor identified by stand calibrate --rotor from {len(runs)} runs ({args.runs});",
+        f"# rms misfit {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
+    ]
+    for name in ROTOR_NAMES[:3]:
+        header.append(f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}")
+    U = res.residual_unbalance_kg_m
+    header.append(
+        "# the rotor's own unbalance: "
+        + ", ".join(
+            f"plane {i + 1} {abs(U[i]) * 1e6:.1f} g mm at "
+            f"{-math.degrees(np.angle(U[i])) % 360:.1f} deg"
+            for i in range(2)
+        )
+    )
+    Path(args.out).write_text("\n".join(header) + "\n" + config_toml(new))
+    if args.json:
+        json.dump(
+            {
+                "values": v,
+                "std_errors": se,
+                "residual_rms_m_s2": res.residual_rms_m_s2,
+                "runs": res.runs,
+                "config": args.out,
+            },
+            sys.stdout,
+        )
         print()
     else:
         print("\n".join(line[2:] for line in header))
