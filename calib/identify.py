@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -128,6 +129,20 @@ def _model(
     return np.array(out)
 
 
+def _errors(sol: Any, level: float, advice: str) -> tuple[NDArray[np.float64], float]:
+    """Standard errors (Jacobian, scaled by the residual) and the rms misfit [m/s^2]."""
+    r = sol.fun
+    s2 = float(r @ r) / max(len(r) - len(sol.x), 1)
+    try:
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
+    except np.linalg.LinAlgError:
+        raise ModelError(
+            f"the runs do not determine every parameter (singular Jacobian): {advice}"
+        ) from None
+    se: NDArray[np.float64] = np.sqrt(np.maximum(np.diag(cov), 0))
+    return se, level * math.sqrt(float(r @ r) / len(r))
+
+
 def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
     """Identify the stand (see the module docstring); ``p0`` gives M3, J3 and the geometry."""
     from scipy.optimize import least_squares
@@ -156,25 +171,14 @@ def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
         sol = least_squares(residual, z0, x_scale=typical, method="lm", max_nfev=20000)
     except ValueError as exc:
         raise ModelError(f"identification failed: {exc}") from None
-    r = sol.fun
-    dof = max(len(r) - len(z0), 1)
-    s2 = float(r @ r) / dof
-    J = sol.jac
-    try:
-        cov = np.linalg.inv(J.T @ J) * s2
-    except np.linalg.LinAlgError:
-        raise ModelError(
-            "the runs do not determine every parameter (singular Jacobian): add "
-            "runs with test masses in both planes, at two speeds or more"
-        ) from None
-    se = np.sqrt(np.maximum(np.diag(cov), 0))
+    se, rms = _errors(sol, level, "add runs with test masses in both planes, at two speeds or more")
     z = sol.x
     q = dataclasses.replace(p0, **dict(zip(STAND_NAMES, z[:6].tolist(), strict=True)))
     return Identification(
         params=q,
         values=dict(zip(NAMES, z.tolist(), strict=True)),
         std_errors=dict(zip(NAMES, se.tolist(), strict=True)),
-        residual_rms_m_s2=level * math.sqrt(float(r @ r) / len(r)),
+        residual_rms_m_s2=rms,
         residual_unbalance_kg_m=np.array([complex(z[6], z[7]), complex(z[8], z[9])]),
         runs=len(runs),
     )
@@ -246,21 +250,13 @@ def identify_rotor(
         q.check()
     except (ValueError, ArithmeticError) as exc:
         raise ModelError(f"rotor identification failed: {exc}") from None
-    r = sol.fun
-    s2 = float(r @ r) / max(len(r) - len(z0), 1)
-    try:
-        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
-    except np.linalg.LinAlgError:
-        raise ModelError(
-            "the runs do not determine the rotor: use test masses in both planes"
-        ) from None
-    se = np.sqrt(np.maximum(np.diag(cov), 0))
+    se, rms = _errors(sol, level, "use test masses in both planes")
     z = sol.x
     return RotorIdentification(
         params=q,
         values=dict(zip(ROTOR_NAMES, z.tolist(), strict=True)),
         std_errors=dict(zip(ROTOR_NAMES, se.tolist(), strict=True)),
-        residual_rms_m_s2=level * math.sqrt(float(r @ r) / len(r)),
+        residual_rms_m_s2=rms,
         residual_unbalance_kg_m=np.array([complex(z[3], z[4]), complex(z[5], z[6])]),
         runs=len(runs),
     )
