@@ -27,21 +27,11 @@ def write_report(
     run_path: str, out_path: str, config: str | None = None, tolerances: Any = None
 ) -> dict[str, Any]:
     """Solve the run and write its report (atomically: all or nothing); return the result."""
-    from drivers.recording import read_recording
-    from drivers.streams import rebuild
-    from stand.cli.solve import config_for, corrections, result, uncertainty
+    from stand.cli.solve import solve_recording
     from stand.config import config_toml
-    from stand.measure import measure
     from stand.report import render
 
-    rec = read_recording(run_path)
-    cfg, params = config_for(rec, config)
-    streams = rebuild(rec.frames)
-    m = measure(streams, params, **cfg.measure_options())
-    out = result(m, [*streams.warnings, *m.warnings])
-    out.update(corrections(m, cfg, params))
-    if tolerances is not None and tolerances.uncertainty:
-        out.update(uncertainty(m, params, tolerances))
+    out, rec, streams, cfg = solve_recording(run_path, config, tolerances=tolerances)
     meta = {
         "run file": run_path,
         "start time": rec.meta.get("start_time", ""),

@@ -195,14 +195,14 @@ def print_result(out: dict[str, Any]) -> None:
         print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
 
 
-def solve_one(
+def solve_recording(
     path: str,
     config: str | None,
     taper: bool = False,
     gate: bool = True,
     tolerances: argparse.Namespace | None = None,
-) -> dict[str, Any]:
-    """The whole result of one run (raises :class:`StandError` on bad input)."""
+) -> tuple[dict[str, Any], Any, Any, Any]:
+    """Solve one run: the result, and the recording, streams and config it came from."""
     from drivers.recording import read_recording
     from drivers.streams import rebuild
     from stand.measure import measure
@@ -215,7 +215,18 @@ def solve_one(
     out.update(corrections(m, cfg, params))
     if tolerances is not None and tolerances.uncertainty:
         out.update(uncertainty(m, params, tolerances))
-    return out
+    return out, rec, streams, cfg
+
+
+def solve_one(
+    path: str,
+    config: str | None,
+    taper: bool = False,
+    gate: bool = True,
+    tolerances: argparse.Namespace | None = None,
+) -> dict[str, Any]:
+    """The whole result of one run (raises :class:`StandError` on bad input)."""
+    return solve_recording(path, config, taper, gate, tolerances)[0]
 
 
 def run(args: argparse.Namespace) -> int:
