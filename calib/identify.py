@@ -63,19 +63,20 @@ class CalibrationRun:
 
 @dataclass(frozen=True)
 class Identification:
-    """The identified stand.
+    """An identified stand (:func:`identify`) or rotor (:func:`identify_rotor`).
 
     Attributes
     ----------
     params : StandParameters
-        With M1, M2, C1, C2, H1, H2 identified.
+        With the identified values (M1, M2, C1, C2, H1, H2; or M3, J3, b, c).
     values, std_errors : dict
-        Every unknown (``NAMES``) and its standard error (SI units; the
-        reference angle's error ``reference_angle_error_rad`` in rad).
+        Every unknown (``NAMES`` or ``ROTOR_NAMES``) and its standard error
+        (SI units; the reference angle's error ``reference_angle_error_rad``
+        in rad; the rotor's centre of mass ``x_cm_m`` from support 1).
     residual_rms_m_s2 : float
         Rms misfit of the phasors.
     residual_unbalance_kg_m : ndarray of complex
-        The proving rotor's own unbalance.
+        The rotor's own unbalance.
     """
 
     params: StandParameters
@@ -187,29 +188,16 @@ def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
 ROTOR_NAMES = ("M3", "J3", "x_cm_m", "U_res1_re", "U_res1_im", "U_res2_re", "U_res2_im")
 
 
-@dataclass(frozen=True)
-class RotorIdentification:
-    """A new rotor type on an identified stand: mass, inertia, centre of mass.
-
-    ``x_cm_m`` is the centre of mass from support 1; ``b = x_cm - a`` and
-    ``c = a + b + c - x_cm`` follow (the planes' positions are known).
-    """
-
-    params: StandParameters
-    values: dict[str, float]
-    std_errors: dict[str, float]
-    residual_rms_m_s2: float
-    residual_unbalance_kg_m: NDArray[np.complex128]
-    runs: int
-
-
 def identify_rotor(
     p0: StandParameters,
     runs: list[CalibrationRun],
     gain: tuple[float, float] = (1.0, 1.0),
     delay_s: tuple[float, float] = (0.0, 0.0),
-) -> RotorIdentification:
+) -> Identification:
     """M3, J3 and the centre of mass of a rotor on an identified stand, from test-mass runs.
+
+    The centre of mass ``x_cm`` is counted from support 1; ``b = x_cm - a`` and
+    ``c = a + b + c - x_cm`` follow (the planes' positions are known).
 
     ``p0`` holds the identified stand and the rotor's planes and first guesses;
     ``runs`` are the phasors as measured (the sensors' gains and delays are
@@ -252,7 +240,7 @@ def identify_rotor(
         raise ModelError(f"rotor identification failed: {exc}") from None
     se, rms = _errors(sol, level, "use test masses in both planes")
     z = sol.x
-    return RotorIdentification(
+    return Identification(
         params=q,
         values=dict(zip(ROTOR_NAMES, z.tolist(), strict=True)),
         std_errors=dict(zip(ROTOR_NAMES, se.tolist(), strict=True)),

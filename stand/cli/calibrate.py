@@ -69,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from calib.identify import NAMES, CalibrationRun, identify
     from drivers.recording import read_recording
     from drivers.streams import rebuild
-    from stand.config import config_toml, load_config, read_toml, validate
+    from stand.config import load_config, read_toml, validate
     from stand.core import rpm_to_rad_s
     from stand.errors import ModelError
     from stand.measure import measure
@@ -117,23 +117,14 @@ def run(args: argparse.Namespace) -> int:
         update={"gain": [v["gain1"], v["gain2"]], "delay_s": [v["delay1_s"], v["delay2_s"]]}
     )
     new = cfg.model_copy(update={"stand": stand, "sensors": sensors})
-    header = [
-        f"# calibrated by stand calibrate from {len(runs)} runs ({args.runs});",
-        f"# rms misfit of the phasors {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
-    ]
-    for name in NAMES:
-        if not name.startswith("U_res"):
-            header.append(f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}")
-    U = res.residual_unbalance_kg_m
-    header.append(
-        "# proving rotor's own unbalance: "
-        + ", ".join(
-            f"plane {i + 1} {abs(U[i]) * 1e6:.1f} g mm at "
-            f"{-math.degrees(np.angle(U[i])) % 360:.1f} deg"
-            for i in range(2)
-        )
+    header = _write(
+        args.out,
+        f"calibrated by stand calibrate from {len(runs)} runs ({args.runs})",
+        res,
+        [n for n in NAMES if not n.startswith("U_res")],
+        "proving rotor's",
+        new,
     )
-    Path(args.out).write_text("\n".join(header) + "\n" + config_toml(new))
     out = {
         "values": v,
         "std_errors": se,
@@ -153,10 +144,8 @@ def run(args: argparse.Namespace) -> int:
 
 def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
     """``--rotor``: M3, J3 and the centre of mass on the configured (identified) stand."""
-    import numpy as np
 
     from calib.identify import ROTOR_NAMES, identify_rotor
-    from stand.config import config_toml
     from stand.errors import ModelError
 
     try:
@@ -167,22 +156,14 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
     q = res.params
     rotor = cfg.rotor.model_copy(update={"M3": q.M3, "J3": q.J3, "b": q.b, "c": q.c})
     new = cfg.model_copy(update={"rotor": rotor})
-    header = [
-        f"# rotor identified by stand calibrate --rotor from {len(runs)} runs ({args.runs});",
-        f"# rms misfit {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
-    ]
-    for name in ROTOR_NAMES[:3]:
-        header.append(f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}")
-    U = res.residual_unbalance_kg_m
-    header.append(
-        "# the rotor's own unbalance: "
-        + ", ".join(
-            f"plane {i + 1} {abs(U[i]) * 1e6:.1f} g mm at "
-            f"{-math.degrees(np.angle(U[i])) % 360:.1f} deg"
-            for i in range(2)
-        )
+    header = _write(
+        args.out,
+        f"rotor identified by stand calibrate --rotor from {len(runs)} runs ({args.runs})",
+        res,
+        list(ROTOR_NAMES[:3]),
+        "the rotor's",
+        new,
     )
-    Path(args.out).write_text("\n".join(header) + "\n" + config_toml(new))
     if args.json:
         json.dump(
             {
@@ -199,3 +180,28 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
         print("\n".join(line[2:] for line in header))
         print(f"wrote {args.out}")
     return 0
+
+
+def _write(path: str, title: str, res: Any, names: list[str], whose: str, cfg: Any) -> list[str]:
+    """The calibrated configuration, its fit and standard errors as comments on top."""
+    import numpy as np
+
+    from stand.config import config_toml
+
+    v, se = res.values, res.std_errors
+    header = [
+        f"# {title};",
+        f"# rms misfit of the phasors {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
+    ]
+    header += [f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}" for name in names]
+    U = res.residual_unbalance_kg_m
+    header.append(
+        f"# {whose} own unbalance: "
+        + ", ".join(
+            f"plane {i + 1} {abs(U[i]) * 1e6:.1f} g mm at "
+            f"{-math.degrees(np.angle(U[i])) % 360:.1f} deg"
+            for i in range(2)
+        )
+    )
+    Path(path).write_text("\n".join(header) + "\n" + config_toml(cfg))
+    return header
