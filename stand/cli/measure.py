@@ -24,9 +24,8 @@ from stand.cli.common import (
 from stand.cli.solve import (
     add_measure_arguments,
     corrections,
-    print_corrections,
-    print_result,
     result,
+    show,
 )
 from stand.errors import BusError
 
@@ -263,12 +262,7 @@ def emit(
         }
     )
     out.update(extra or {})
-    if args.json:
-        json.dump(out, sys.stdout)
-        print()
-    else:
-        print_result(out)
-        print_corrections(out)
+    if show(out, args.json):
         print(f"stopped by: {lv.stopped_by} after {lv.elapsed_s:.1f} s; recorded in {lv.run_file}")
         print_warnings(lv.warnings)
     return out

@@ -239,13 +239,7 @@ def run(args: argparse.Namespace) -> int:
 
         return run_batch(args)
     out = solve_one(args.runs[0], args.config, args.taper, not args.no_gate, args)
-    if args.json:
-        json.dump(out, sys.stdout)
-        print()
-    else:
-        print_result(out)
-        print_corrections(out)
-        print_uncertainty(out)
+    if show(out, args.json):
         for w in out["warnings"]:
             print(f"warning: {w}", file=sys.stderr)
     return 0
@@ -368,6 +362,18 @@ def print_corrections(out: dict[str, Any]) -> None:
             f"  plane {p['plane']}: {p['residual_g_mm']:.1f} g mm against "
             f"{p['permissible_g_mm']:.1f} permissible: {verdict} ({how} g mm)"
         )
+
+
+def show(out: dict[str, Any], as_json: bool) -> bool:
+    """Print a result: one JSON object, or the tables (then True: the caller adds its lines)."""
+    if as_json:
+        json.dump(out, sys.stdout)
+        print()
+        return False
+    print_result(out)
+    print_corrections(out)
+    print_uncertainty(out)
+    return True
 
 
 def print_uncertainty(out: dict[str, Any]) -> None:
