@@ -20,7 +20,7 @@ import threading
 import time
 from typing import Any
 
-from drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
+from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
 from stand.errors import BusError, BusTimeoutError
 
 MAX_PENDING = 1_000_000
@@ -251,7 +251,7 @@ def play(
     int
         Frames sent.
     """
-    from drivers.logs import messages_from_frames
+    from stand.drivers.logs import messages_from_frames
 
     if len(frames) == 0:
         return 0

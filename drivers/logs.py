@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from drivers.protocol import (
+from stand.drivers.protocol import (
     FLAG_ERROR,
     FLAG_EXTENDED,
     FLAG_FD,

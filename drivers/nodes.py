@@ -20,7 +20,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from drivers.protocol import (
+from stand.drivers.protocol import (
     SAMPLES_PER_FRAME,
     Frames,
     edge_fields,

@@ -21,8 +21,9 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -255,6 +256,41 @@ class Decoded:
     unknown_frames: int
     error_frames: int
     bad: tuple[BadFrame, ...] = field(default=())
+
+
+def shift_decoded(dec: Decoded, offset: int) -> Decoded:
+    """The same records with their ``frame`` indices moved by ``offset`` (a later block)."""
+    if offset == 0:
+        return dec
+    return Decoded(
+        samples=replace(dec.samples, frame=dec.samples.frame + offset),
+        status=replace(dec.status, frame=dec.status.frame + offset),
+        marks=replace(dec.marks, frame=dec.marks.frame + offset),
+        unknown_frames=dec.unknown_frames,
+        error_frames=dec.error_frames,
+        bad=tuple(replace(b, frame=b.frame + offset) for b in dec.bad),
+    )
+
+
+def concat_decoded(parts: Sequence[Decoded]) -> Decoded:
+    """Decoded blocks one after the other (their ``frame`` indices already run on)."""
+
+    def cat(records: Sequence[Any]) -> Any:
+        kind = type(records[0])
+        return kind(
+            **{f.name: np.concatenate([getattr(r, f.name) for r in records]) for f in fields(kind)}
+        )
+
+    if not parts:
+        return decode(Frames.empty())
+    return Decoded(
+        samples=cat([p.samples for p in parts]),
+        status=cat([p.status for p in parts]),
+        marks=cat([p.marks for p in parts]),
+        unknown_frames=sum(p.unknown_frames for p in parts),
+        error_frames=sum(p.error_frames for p in parts),
+        bad=tuple(b for p in parts for b in p.bad),
+    )
 
 
 def _field(d8: NDArray[np.uint8], rows: NDArray[np.int64], kind: str, name: str) -> NDArray:  # type: ignore[type-arg]

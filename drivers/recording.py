@@ -41,9 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from drivers.protocol import FRAME_DLC, Frames
-from drivers.streams import RunStreams
 from stand.core import Diagnostic
+from stand.drivers.protocol import FRAME_DLC, Frames
+from stand.drivers.streams import RunStreams
 from stand.errors import RecordingError
 
 RUN_FORMAT = "rotor-stand-run"
@@ -121,6 +121,11 @@ class RunWriter:
         flush_interval_s: float = FLUSH_INTERVAL_S,
     ):
         self.path = Path(path)
+        self.software = software
+        self.source = source
+        self.end_time = ""
+        self.warnings: tuple[Diagnostic, ...] = ()
+        """Every warning recorded so far."""
         self.flush_interval_s = flush_interval_s
         self._pending: list[Frames] = []
         self._warnings: list[Diagnostic] = []
@@ -132,13 +137,14 @@ class RunWriter:
             raise RecordingError("exists already: refusing to overwrite a run", path=str(self.path))
         h5py = _h5py()
         tmp = self.path.with_name(self.path.name + ".part")
+        self.start_time = _utc_now()
         try:
             with h5py.File(tmp, "w") as f:
                 f.attrs.update(
                     format=RUN_FORMAT,
                     format_version=RUN_FORMAT_VERSION,
                     software=software,
-                    start_time=_utc_now(),
+                    start_time=self.start_time,
                     source=source,
                     config_toml=config_toml,
                     frames_committed=0,
@@ -189,7 +195,9 @@ class RunWriter:
 
     def warn(self, warnings: Iterable[Diagnostic]) -> None:
         """Record warnings (written with the next flush)."""
+        warnings = list(warnings)
         self._warnings.extend(warnings)
+        self.warnings = (*self.warnings, *warnings)
 
     def flush(self) -> None:
         """Open the file, append what is pending, commit, close."""
@@ -239,8 +247,15 @@ class RunWriter:
         with _h5py().File(self.path, "a") as f:
             if streams is not None:
                 write_streams(f, streams)
-            f.attrs["end_time"] = _utc_now()
+            self.end_time = _utc_now()
+            f.attrs["end_time"] = self.end_time
             f.attrs["complete"] = True
+
+    def discard(self) -> None:
+        """Close and remove the run file: for a run that never received a frame."""
+        self._closed = True
+        self._pending = []
+        self.path.unlink(missing_ok=True)
 
     def __enter__(self) -> RunWriter:
         return self
@@ -327,9 +342,7 @@ def read_run(path: str | Path) -> Recording:
         np.ascontiguousarray(data, dtype=np.uint8),
         cols["flags"].astype(np.uint8),
     )
-    warnings = tuple(
-        Diagnostic(str(c), str(s), float("nan")) for c, s in zip(codes, msgs, strict=True)
-    )
+    warnings = tuple(Diagnostic(str(c), str(s)) for c, s in zip(codes, msgs, strict=True))
     return Recording(str(path), frames, meta, warnings)
 
 
@@ -348,7 +361,7 @@ def read_recording(path: str | Path) -> Recording:
     """
     if is_run_file(path):
         return read_run(path)
-    from drivers.logs import read_log
+    from stand.drivers.logs import read_log
 
     return Recording(str(path), read_log(path))
 
@@ -369,7 +382,7 @@ def write_recording(
             w.warn(recording.warnings)
             w.close(streams)
         return
-    from drivers.logs import write_log
+    from stand.drivers.logs import write_log
 
     Path(path).unlink(missing_ok=True)
     write_log(recording.frames, path)

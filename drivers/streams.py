@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from drivers.protocol import (
+from stand.core import Diagnostic
+from stand.drivers.protocol import (
     FRAC_SCALE,
     INVALID_COUNT,
     SAMPLES_PER_FRAME,
@@ -40,9 +41,10 @@ from drivers.protocol import (
     BadFrame,
     Decoded,
     Frames,
+    concat_decoded,
     decode,
+    shift_decoded,
 )
-from stand.core import Diagnostic
 from stand.errors import NoStatusError
 
 STATUS_WITHIN_S = 1.5
@@ -199,6 +201,7 @@ def _node_warnings(
                 Diagnostic(
                     f"status_{name}",
                     f"node {node}: STATUS reports {name.replace('_', ' ')} {when}",
+                    float(b - a + 1),
                     float(st_t[a] - t0),
                 )
             )
@@ -232,7 +235,7 @@ def _rebuild_node(
         )
         if strict_status:
             raise NoStatusError(what, node=node, frame=int(all_frames[0]))
-        warn.append(Diagnostic("no_status", what, float(first_t - t0)))
+        warn.append(Diagnostic("no_status", what, None, float(first_t - t0)))
     for name, values, unit in (("rate", rate, "Hz"), ("scale", scale, "µm/s² per count")):
         if len(np.unique(values)) > 1:
             seen = sorted(set(values.tolist()))
@@ -381,13 +384,19 @@ def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
     RunStreams
         Nodes by id, counts of unknown and bad frames, duration, warnings.
     """
-    dec = decode(frames)
-    t0 = float(frames.t_s[0]) if len(frames) else 0.0
+    return rebuild_decoded(decode(frames), frames.t_s, strict_status=strict_status)
+
+
+def rebuild_decoded(
+    dec: Decoded, t_s: NDArray[np.float64], *, strict_status: bool = True
+) -> RunStreams:
+    """:func:`rebuild` from frames already decoded (``t_s``: every frame's host time [s])."""
+    t0 = float(t_s[0]) if len(t_s) else 0.0
     present = np.union1d(np.union1d(dec.samples.node, dec.status.node), dec.marks.node)
     nodes: dict[int, NodeStream] = {}
     warnings: list[Diagnostic] = []
     for node in present.tolist():
-        stream, w = _rebuild_node(int(node), dec, frames.t_s, t0, strict_status)
+        stream, w = _rebuild_node(int(node), dec, t_s, t0, strict_status)
         nodes[int(node)] = stream
         warnings.extend(w)
     if dec.bad:
@@ -408,13 +417,51 @@ def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
                 float(dec.error_frames),
             )
         )
-    duration = float(frames.t_s[-1] - frames.t_s[0]) if len(frames) else 0.0
+    duration = float(t_s[-1] - t_s[0]) if len(t_s) else 0.0
     return RunStreams(
         nodes=nodes,
-        frames=len(frames),
+        frames=len(t_s),
         unknown_frames=dec.unknown_frames,
         error_frames=dec.error_frames,
         bad=dec.bad,
         duration_s=duration,
         warnings=tuple(warnings),
     )
+
+
+class StreamBuilder:
+    """Frames decoded once, as they arrive; the node streams rebuilt from them on demand.
+
+    A live session :meth:`add` s each block as it comes (decoding it, and
+    nothing else); :meth:`streams` rebuilds the nodes from everything
+    decoded so far without decoding again.  ``rebuild(frames)`` and a
+    builder fed the same frames in any blocks give the same streams.
+    """
+
+    def __init__(self) -> None:
+        self._parts: list[Decoded] = []
+        self._times: list[NDArray[np.float64]] = []
+        self.frames = 0
+        self.last_block = Frames.empty()
+        """The block added last (for a display of what just came)."""
+
+    def add(self, frames: Frames) -> None:
+        """Decode a block of frames (in arrival order, after those added before)."""
+        if not len(frames):
+            return
+        self.last_block = frames
+        self._parts.append(shift_decoded(decode(frames), self.frames))
+        self._times.append(frames.t_s)
+        self.frames += len(frames)
+
+    def decoded(self) -> tuple[Decoded, NDArray[np.float64]]:
+        """Everything decoded so far, as one block, and every frame's host time [s]."""
+        if len(self._parts) != 1:
+            self._parts = [concat_decoded(self._parts)]
+            self._times = [np.concatenate(self._times) if self._times else np.zeros(0)]
+        return self._parts[0], self._times[0]
+
+    def streams(self, *, strict_status: bool = True) -> RunStreams:
+        """The node streams of every frame added so far."""
+        dec, t_s = self.decoded()
+        return rebuild_decoded(dec, t_s, strict_status=strict_status)

@@ -34,8 +34,8 @@ from pydantic import (
     ValidationError,
 )
 
-from stand.core.model import STAND_KEYS, ParameterError, StandParameters
-from stand.errors import ConfigError
+from stand.core.model import STAND_KEYS, StandParameters
+from stand.errors import ConfigError, ParameterError
 
 _STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 

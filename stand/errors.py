@@ -6,13 +6,38 @@ caller that only knows ``ValueError`` or ``TimeoutError`` still catches it,
 and carries the figures that explain it as attributes.
 
 The CLI turns any :class:`StandError` into one line on stderr and exit code 2.
+An error that wraps a library's error chains it (``raise ... from exc``).
+
+Every class pickles whole, figures included (batch workers return them to
+the parent process): :meth:`StandError.__reduce__` restores the message and
+the attributes without calling ``__init__`` again.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+
+def _restore(cls: type[StandError], args: tuple[Any, ...], state: dict[str, Any]) -> StandError:
+    err = cls.__new__(cls)
+    Exception.__init__(err, *args)
+    err.__dict__.update(state)
+    return err
+
 
 class StandError(Exception):
     """Base of every error raised on purpose by this project."""
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_restore, (type(self), self.args, dict(self.__dict__)))
+
+
+class UsageError(StandError, ValueError):
+    """A command-line argument is missing or malformed."""
+
+
+class MeasurementError(StandError, ValueError):
+    """The data cannot give an unbalance (a node missing, no reference edges ...)."""
 
 
 class ConfigError(StandError, ValueError):
@@ -37,6 +62,20 @@ class ConfigError(StandError, ValueError):
 
 class ModelError(StandError, ValueError):
     """The stand model cannot answer for these inputs (bad speed, shapes, ...)."""
+
+
+class ParameterError(ModelError):
+    """A stand or rotor parameter is physically refused.
+
+    Attributes
+    ----------
+    key : str
+        The parameter's name (the seed's symbol, e.g. ``"C1"``).
+    """
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        super().__init__(f"{key}: {message}")
 
 
 class PlanesTooCloseError(ModelError):

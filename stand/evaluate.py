@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.streams import rebuild
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
+from stand.drivers.streams import rebuild
 from stand.measure import Measurement, measure
 from stand.sim import Scene, simulate
 from stand.sim.scene import PlaneUnbalance, UnbalanceTable

@@ -18,11 +18,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from drivers.streams import NodeStream, RunStreams
 from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.dsp import Phasor, fit_1x, radius_factor, shaft_angle
 from stand.core.inverse import UnbalanceSolution
-from stand.errors import StandError
+from stand.drivers.streams import NodeStream, RunStreams
+from stand.errors import MeasurementError
 
 SPEED_TOLERANCE = 0.03
 """A revolution is at steady speed within 3 % of the steady part's median."""
@@ -41,10 +41,6 @@ SCATTER_LIMIT = 4.0
 something moves the 1x reading: a neighbour within the 1x bin, unsteady conditions."""
 MIN_REVS = 30
 """A steady, settled window shorter than this many revolutions draws a warning."""
-
-
-class MeasurementError(StandError, ValueError):
-    """The data cannot give an unbalance (a node missing, no reference edges ...)."""
 
 
 @dataclass(frozen=True)
@@ -71,8 +67,8 @@ class Measurement:
         Radius of each plane's 95 % circle around its unbalance [kg m].
     radius_m : tuple of float
         Correction radii R1, R2 [m].
-    rpm : float
-        Mean speed over the window [rpm].
+    omega_rad_s : float
+        Mean speed over the window [rad/s].
     windows : list of Window
     warnings : list of Diagnostic
     """
@@ -81,7 +77,7 @@ class Measurement:
     solution: UnbalanceSolution
     radius95_kg_m: np.ndarray
     radius_m: tuple[float, float]
-    rpm: float
+    omega_rad_s: float
     windows: list[Window]
     warnings: list[Diagnostic] = field(default_factory=list)
 
@@ -362,7 +358,7 @@ def measure(
         solution=sol,
         radius95_kg_m=radius,
         radius_m=(p.R1, p.R2),
-        rpm=omega * 60 / (2 * math.pi),
+        omega_rad_s=float(omega),
         windows=windows,
         warnings=warnings,
     )

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from drivers.streams import RunStreams
+from stand.result import Result, Traces, to_json
 
 
 def _png(fig: Any) -> str:
@@ -74,23 +74,13 @@ def _polar(out: dict[str, Any]) -> str:
     return _png(fig)
 
 
-def _spectrum_and_speed(streams: RunStreams, rpm: float) -> tuple[str, str]:
+def _spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
     import matplotlib.pyplot as plt
 
     f1 = rpm / 60
     fig, ax = plt.subplots(figsize=(9, 3.2))
-    for n, s in sorted(streams.nodes.items()):
-        if s.accel_m_s2 is None or s.rate_hz is None or len(s.index) < 64:
-            continue
-        seg = s.segment == 0
-        idx = s.index[seg]
-        a = np.zeros(int(idx[-1] - idx[0]) + 1)
-        a[idx - idx[0]] = s.accel_m_s2[seg]  # lost samples as zeros: a spectrum is a view
-        win = np.hanning(len(a))
-        spec = 2 * np.abs(np.fft.rfft(a * win)) / np.sum(win)
-        f = np.fft.rfftfreq(len(a), 1 / s.rate_hz)
-        band = f <= 4 * f1
-        ax.semilogy(f[band], spec[band], lw=1, label=f"support {n}")
+    for n, (f, spec) in sorted((traces.spectra if traces else {}).items()):
+        ax.semilogy(f, spec, lw=1, label=f"support {n}")
     for k in (1, 2, 3):
         ax.axvline(k * f1, color="grey", ls=":", lw=1)
         ax.text(k * f1, ax.get_ylim()[1], f"{k}x", ha="center", va="bottom", fontsize=8)
@@ -101,13 +91,8 @@ def _spectrum_and_speed(streams: RunStreams, rpm: float) -> tuple[str, str]:
     spectrum = _png(fig)
 
     fig, ax = plt.subplots(figsize=(9, 2.6))
-    for n, s in sorted(streams.nodes.items()):
-        m = s.mark_segment == 0
-        pos, rev = s.mark_position[m], s.mark_rev[m]
-        if len(pos) < 2 or s.rate_hz is None:
-            continue
-        t = (pos[1:] + pos[:-1]) / 2 / s.rate_hz
-        ax.plot(t, 60 * s.rate_hz * np.diff(rev) / np.diff(pos), lw=1, label=f"node {n}")
+    for n, (t, w) in sorted((traces.speeds if traces else {}).items()):
+        ax.plot(t, w * 60 / (2 * np.pi), lw=1, label=f"node {n}")
     ax.set_xlabel("time [s] (node clock)")
     ax.set_ylabel("speed [rpm]")
     ax.ticklabel_format(axis="y", useOffset=False, style="plain")
@@ -173,9 +158,21 @@ def _uncertainty(out: dict[str, Any]) -> str:
     )
 
 
-def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], config_text: str) -> str:
-    """The report as one HTML document (figures embedded)."""
+def render(result: Result) -> str:
+    """The report of a result as one HTML document (figures embedded): formatting only."""
     e = html.escape
+    out = to_json(result)
+    p = result.provenance
+    meta = {
+        "run file": p.run_file or "",
+        "start time": p.start_time,
+        "software": p.software,
+        "source": p.source,
+        "frames": p.frames,
+        "duration [s]": round(p.duration_s, 3),
+        "configuration": f"{p.config_source} (SHA-256 {p.config_sha256[:16]})",
+    }
+    config_text = p.config_toml
     rows = []
     tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
     for plane, corr in zip(out["planes"], out["corrections"], strict=True):
@@ -219,7 +216,7 @@ def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], confi
         "".join(f'<div class="warn">{e(w)}</div>' for w in out["warnings"])
         or "<p class=muted>none</p>"
     )
-    spectrum, speed = _spectrum_and_speed(streams, out["rpm"])
+    spectrum, speed = _spectrum_and_speed(result.traces, out["rpm"])
     st, cp = out["static"], out["couple"]
     t = out.get("tolerance")
     tol_line = (
@@ -240,9 +237,9 @@ def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], confi
 <p class=muted>{e(str(meta.get("run file", "")))} · {out["rpm"]:.1f} rpm ·
 {e(str(meta.get("start time", "")))}</p>
 <h2>Correction</h2>
-<p class=muted>Angles from the reference mark, counted <b>against the direction of rotation</b>
-(the seed's φ). To remove: at φ; to add: at φ + 180°.</p>
-<table><tr><th>plane</th><th>unbalance [g mm] (95 %)</th><th>angle φ</th>
+<p class=muted>Angles from the reference mark, counted <b>against the direction of rotation</b>.
+To remove material: at that angle; to add a weight: 180° opposite.</p>
+<table><tr><th>plane</th><th>unbalance [g mm] (95 %)</th><th>angle</th>
 <th class=l>correction</th><th class=l>tolerance</th></tr>{"".join(rows)}</table>
 <p>Static part {st["unbalance_g_mm"]:.0f} g mm at {st["angle_deg"]:.1f}°; couple part
 ±{cp["unbalance_g_mm"]:.0f} g mm at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
@@ -259,3 +256,23 @@ def render(out: dict[str, Any], streams: RunStreams, meta: dict[str, Any], confi
 <pre>{e(config_text)}</pre>
 </body></html>
 """
+
+
+def write_report(result: Result, out_path: str) -> None:
+    """Render the result and write it atomically (a temporary name, then renamed)."""
+    import os
+    from pathlib import Path
+
+    from stand.errors import RecordingError
+
+    text = render(result)
+    dest = Path(out_path)
+    tmp = dest.with_name(f".{dest.name}.{os.getpid()}.part")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, dest)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise RecordingError(
+            f"cannot write the report: {exc.strerror or exc}", path=out_path
+        ) from exc

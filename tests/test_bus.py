@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from synth import sine_run
 
-from drivers.bus import BusReader, open_bus, play
-from drivers.protocol import FLAG_ERROR, Frames
+from stand.drivers.bus import BusReader, open_bus, play
+from stand.drivers.protocol import FLAG_ERROR, Frames
 from stand.errors import BusError, BusTimeoutError
 
 

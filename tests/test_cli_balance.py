@@ -81,7 +81,7 @@ def test_ctrl_c_stops_cleanly_keeps_the_recording_and_still_answers(tmp_path: Pa
     import sys
     import time
 
-    from drivers.recording import read_run
+    from stand.drivers.recording import read_run
 
     run = tmp_path / "r.h5"
     proc = subprocess.Popen(

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from synth import sine_run
 
-from drivers.bus import play
-from drivers.logs import write_log
-from drivers.protocol import Frames
-from drivers.recording import read_run
 from stand.cli import main
+from stand.drivers.bus import play
+from stand.drivers.logs import write_log
+from stand.drivers.protocol import Frames
+from stand.drivers.recording import read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "examples" / "demo-stand.toml"

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drivers.recording import read_recording, read_run
 from stand.cli import main
 from stand.config import config_from_dict
+from stand.drivers.recording import read_recording, read_run
 from stand.sim import load_scene, shipped_scenes, simulate
 
 

@@ -10,9 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_sim import scene
 
-from drivers.streams import rebuild
 from stand.core import forward, unbalance_from_polar
 from stand.core.dsp import fit_1x, radius_factor, shaft_angle
+from stand.drivers.streams import rebuild
 from stand.measure import measure
 from stand.sim import simulate
 

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from calib.influence import InfluenceRun, Trial, correct, influence_matrix, phasors
+from stand.calib.influence import InfluenceRun, Trial, correct, influence_matrix, phasors
 from stand.cli import main
 from stand.errors import ModelError
 from stand.sim import shipped_scenes

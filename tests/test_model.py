@@ -26,7 +26,6 @@ from reference import exact_forward, exact_terms, seed_forward
 from strategies import DEMO, speeds_rad_s, stands, unbalances
 
 from stand.core import (
-    ParameterError,
     StandParameters,
     forward,
     inverse_matrix,
@@ -44,6 +43,7 @@ from stand.core.model import (
     support_determinant,
     wrap_deg,
 )
+from stand.errors import ParameterError
 
 EPS = float(np.finfo(float).eps)
 FACTOR = 8.0

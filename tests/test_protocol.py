@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from drivers.protocol import (
+from stand.drivers.protocol import (
     DBC_PATH,
     FLAG_ERROR,
     FLAG_EXTENDED,

@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 from synth import sine_run
 
-from drivers.logs import read_candump, read_log, write_log
-from drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
-from drivers.recording import (
+from stand.core import Diagnostic
+from stand.drivers.logs import read_candump, read_log, write_log
+from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
+from stand.drivers.recording import (
     FLUSH_INTERVAL_S,
     Recording,
     RunWriter,
@@ -25,8 +26,7 @@ from drivers.recording import (
     read_run,
     write_recording,
 )
-from drivers.streams import rebuild
-from stand.core import Diagnostic
+from stand.drivers.streams import rebuild
 from stand.errors import RecordingError
 
 TESTS = Path(__file__).resolve().parent
@@ -101,7 +101,7 @@ def test_python_can_logs_round_trip(tmp_path: Path, suffix: str) -> None:
 def test_fast_candump_reader_equals_python_can(tmp_path: Path) -> None:
     import can
 
-    from drivers.logs import frames_from_messages
+    from stand.drivers.logs import frames_from_messages
 
     path = tmp_path / "run.log"
     write_log(_mixed(), path)
@@ -177,7 +177,7 @@ KILL_SCRIPT = textwrap.dedent(
     sys.path.insert(0, {tests!r})
     import can
     from synth import sine_run
-    from drivers.bus import play
+    from stand.drivers.bus import play
     from stand.cli import main
 
     frames = sine_run(seconds=30.0)

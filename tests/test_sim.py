@@ -14,8 +14,6 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from strategies import log_uniform, stands, unbalances
 
-from drivers.protocol import SAMPLES_BASE, decode
-from drivers.streams import rebuild
 from stand.config import validate
 from stand.core import (
     StandParameters,
@@ -24,6 +22,8 @@ from stand.core import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
+from stand.drivers.protocol import SAMPLES_BASE, decode
+from stand.drivers.streams import rebuild
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate
 from stand.sim.emit import Simulation

@@ -8,9 +8,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from synth import sine_run
 
-from drivers.nodes import merge, node_frames
-from drivers.protocol import INVALID_COUNT, MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames, decode
-from drivers.streams import rebuild
+from stand.drivers.nodes import merge, node_frames
+from stand.drivers.protocol import (
+    INVALID_COUNT,
+    MARK_BASE,
+    SAMPLES_BASE,
+    STATUS_BASE,
+    Frames,
+    decode,
+)
+from stand.drivers.streams import rebuild
 from stand.errors import NoStatusError
 
 
@@ -185,12 +192,12 @@ def test_status_flags_become_warnings_with_their_time() -> None:
     r = rebuild(f)
     assert r.nodes[1].flags == ("overrange", "sensor_fault")
     msgs = {w.code: w for w in r.warnings}
-    assert msgs["status_sensor_fault"].value == pytest.approx(3.0, abs=1e-3)
+    assert msgs["status_sensor_fault"].t_s == pytest.approx(3.0, abs=1e-3)
     assert (
         "sensor fault at 3.00 s (in 2 STATUS frames, until 4.00 s)"
         in msgs["status_sensor_fault"].message
     )
-    assert msgs["status_overrange"].value == pytest.approx(6.0, abs=1e-3)
+    assert msgs["status_overrange"].t_s == pytest.approx(6.0, abs=1e-3)
 
 
 def test_other_ids_and_bad_frames_are_counted_never_fatal() -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from strategies import DEMO
 
-from calib.tolerance import Tolerances, parameter_uncertainty
+from stand.calib.tolerance import Tolerances, parameter_uncertainty
 from stand.cli import main
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 
@@ -49,7 +49,7 @@ def test_solve_uncertainty_from_the_cli(tmp_path: Path, capsys: pytest.CaptureFi
     assert 100 < p1["radius95_linear_g_mm"] < 300  # C +-5 %, M +-2 %, 1 mm, gain 1 %
     assert p1["combined_g_mm"] >= p1["radius95_monte_carlo_g_mm"]
     assert main(["solve", str(run), "--uncertainty", "--tol-c", "-1"]) == 2
-    assert "--tol-c must be >= 0" in capsys.readouterr().err
+    assert "--tol-c must be a finite number >= 0" in capsys.readouterr().err
     out = tmp_path / "r.html"
     assert main(["report", str(run), "-o", str(out), "--uncertainty", "--draws", "100"]) == 0
     assert "Parameter tolerances" in out.read_text()

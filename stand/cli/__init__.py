@@ -16,8 +16,7 @@ from collections.abc import Callable, Sequence
 from types import ModuleType
 
 from stand import __version__
-from stand.cli.common import UsageError
-from stand.errors import StandError
+from stand.errors import StandError, UsageError
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1

@@ -20,7 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from calib.advisor import advise
+    from stand.calib.advisor import advise
     from stand.config import load_config
 
     cfg, params = load_config(args.config)

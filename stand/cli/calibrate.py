@@ -66,13 +66,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from calib.identify import NAMES, CalibrationRun, identify
-    from drivers.recording import read_recording
-    from drivers.streams import rebuild
+    from stand.calib.identify import NAMES, CalibrationRun, identify
     from stand.config import load_config, read_toml, validate
-    from stand.core import rpm_to_rad_s
     from stand.errors import ModelError
-    from stand.measure import measure
+    from stand.pipeline import measure_recording
 
     if Path(args.out).exists():
         raise RecordingError("exists already: refusing to overwrite", path=args.out)
@@ -82,18 +79,15 @@ def run(args: argparse.Namespace) -> int:
     R = (params.R1, params.R2)
     runs = []
     for entry in spec.runs:
-        rec = read_recording(Path(args.runs).parent / entry.file)
         # raw readings: the configured reference angle, no sensor correction
-        m = measure(rebuild(rec.frames), params, reference_angle_deg=cfg.stand.reference_angle_deg)
+        m, _, _ = measure_recording(
+            str(Path(args.runs).parent / entry.file), args.config, raw_sensors=True
+        )
         T = np.zeros(2, complex)
         for mass in entry.masses:
             i = mass.plane - 1
             T[i] += mass.mass_g * 1e-3 * R[i] * np.exp(-1j * math.radians(mass.angle_deg))
-        runs.append(
-            CalibrationRun(
-                float(rpm_to_rad_s(m.rpm)), np.array([ph.A_m_s2 for ph in m.supports]), T
-            )
-        )
+        runs.append(CalibrationRun(m.omega_rad_s, np.array([ph.A_m_s2 for ph in m.supports]), T))
     if args.rotor:
         return _rotor(args, cfg, params, runs)
     try:
@@ -145,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
 def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
     """``--rotor``: M3, J3 and the centre of mass on the configured (identified) stand."""
 
-    from calib.identify import ROTOR_NAMES, identify_rotor
+    from stand.calib.identify import ROTOR_NAMES, identify_rotor
     from stand.errors import ModelError
 
     try:

@@ -6,13 +6,10 @@ import argparse
 import math
 import sys
 from collections.abc import Iterable, Mapping
+from typing import Any
 
 from stand.core import Diagnostic
-from stand.errors import StandError
-
-
-class UsageError(StandError, ValueError):
-    """A command-line argument is missing or malformed."""
+from stand.errors import UsageError
 
 
 def parse_rpm(text: str) -> float:
@@ -108,3 +105,72 @@ def add_live_arguments(p: argparse.ArgumentParser) -> None:
         help="end after S seconds without any frame (default 2)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+
+
+def add_measure_arguments(p: argparse.ArgumentParser) -> None:
+    """How a run is solved: ``--taper``, ``--no-gate``."""
+    p.add_argument(
+        "--taper",
+        action="store_true",
+        help="Hann taper against a neighbour close to 1x (costs 1.5x noise variance)",
+    )
+    p.add_argument(
+        "--no-gate",
+        action="store_true",
+        help="use the whole run, not only its steady, settled part",
+    )
+
+
+def add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
+    """``--uncertainty`` and the parameter tolerances it propagates."""
+    g = p.add_argument_group("parameter tolerances (--uncertainty)")
+    g.add_argument(
+        "--uncertainty",
+        action="store_true",
+        help="add the spread the parameter tolerances cause (linearised and Monte Carlo)",
+    )
+    g.add_argument("--tol-c", type=float, default=5.0, metavar="PCT", help="C1, C2 (default 5)")
+    g.add_argument(
+        "--tol-m", type=float, default=2.0, metavar="PCT", help="M1, M2, M3, J3 (default 2)"
+    )
+    g.add_argument(
+        "--tol-length-mm", type=float, default=1.0, metavar="MM", help="a, b, c, d (default 1)"
+    )
+    g.add_argument(
+        "--tol-gain",
+        type=float,
+        default=1.0,
+        metavar="PCT",
+        help="sensor sensitivities (default 1)",
+    )
+    g.add_argument("--draws", type=int, default=1000, help="Monte Carlo draws (default 1000)")
+
+
+def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
+    """The :class:`stand.pipeline.SolveOptions` the arguments ask for (validated)."""
+    from stand.pipeline import SolveOptions
+
+    tolerances = None
+    if getattr(args, "uncertainty", False):
+        from stand.calib.tolerance import Tolerances
+
+        for name in ("tol_c", "tol_m", "tol_length_mm", "tol_gain"):
+            value = getattr(args, name)
+            if not (math.isfinite(value) and value >= 0):
+                flag = "--" + name.replace("_", "-")
+                raise UsageError(f"{flag} must be a finite number >= 0, got {value}")
+        if args.draws < 10:
+            raise UsageError(f"--draws must be >= 10, got {args.draws}")
+        tolerances = Tolerances(
+            C_rel=args.tol_c / 100,
+            M_rel=args.tol_m / 100,
+            length_m=args.tol_length_mm / 1000,
+            gain_rel=args.tol_gain / 100,
+        )
+    return SolveOptions(
+        taper=getattr(args, "taper", False),
+        gate=not getattr(args, "no_gate", False),
+        tolerances=tolerances,
+        draws=getattr(args, "draws", 1000),
+        traces=traces,
+    )

@@ -15,8 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drivers.recording import read_recording, write_recording
-    from drivers.streams import rebuild
+    from stand.drivers.recording import read_recording, write_recording
+    from stand.drivers.streams import rebuild
 
     if Path(args.dest).exists() and not args.force:
         raise RecordingError("exists already (use --force to replace it)", path=args.dest)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from stand.cli.common import UsageError, parse_rpm, parse_unbalance, print_warnings
+from stand.cli.common import parse_rpm, parse_unbalance, print_warnings
 from stand.config import load_config
 from stand.core import (
     forward,
@@ -18,6 +18,7 @@ from stand.core import (
     unbalance_from_polar,
 )
 from stand.core.inverse import speed_diagnostics
+from stand.errors import UsageError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

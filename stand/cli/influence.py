@@ -11,8 +11,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
 
-from stand.cli.common import UsageError, print_warnings
-from stand.errors import ConfigError
+from stand.cli.common import print_warnings
+from stand.errors import ConfigError, UsageError
 
 _STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 
@@ -63,7 +63,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _readings(entry: RunEntry, k: int, source: str, config: str | None) -> list[complex]:
-    from calib.influence import phasors
+    from stand.calib.influence import phasors
 
     if (entry.sensors is None) == (entry.file is None):
         raise ConfigError(
@@ -78,15 +78,9 @@ def _readings(entry: RunEntry, k: int, source: str, config: str | None) -> list[
         if min(amp) < 0:
             raise ConfigError("an amplitude is negative", source=source, key=f"runs[{k}].sensors")
         return [complex(z) for z in phasors(amp, ph)]
-    from drivers.recording import read_recording
-    from drivers.streams import rebuild
-    from stand.cli.solve import config_for
-    from stand.measure import measure
+    from stand.pipeline import measure_recording
 
-    path = Path(source).parent / str(entry.file)
-    rec = read_recording(path)
-    cfg, params = config_for(rec, config)
-    m = measure(rebuild(rec.frames), params, **cfg.measure_options())
+    m, _, _ = measure_recording(str(Path(source).parent / str(entry.file)), config)
     # conj: our phasors follow U = q R e^{-i phi}; conjugated, a trial at the seed's angle
     # phi acts as e^{+i phi}, so trial and correction angles are the seed's phi
     return [complex(ph.A_m_s2).conjugate() for ph in m.supports]
@@ -94,7 +88,7 @@ def _readings(entry: RunEntry, k: int, source: str, config: str | None) -> list[
 
 def load_runs(path: str, config: str | None) -> list[Any]:
     """The runs of a runs file (ConfigError naming the file and the run if bad)."""
-    from calib.influence import InfluenceRun, Trial
+    from stand.calib.influence import InfluenceRun, Trial
     from stand.config import read_toml, validate
 
     _, data = read_toml(path)
@@ -116,7 +110,7 @@ def load_runs(path: str, config: str | None) -> list[Any]:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from calib.influence import correct, influence_matrix
+    from stand.calib.influence import correct, influence_matrix
     from stand.errors import ModelError
 
     runs = load_runs(args.runs, args.config)

@@ -4,16 +4,11 @@ from __future__ import annotations
 
 import argparse
 import collections
-import json
 import sys
-import time
-from pathlib import Path
 from typing import Any
 
-from stand import __version__
-from stand.cli.common import UsageError, add_bus_arguments, add_live_arguments, bus_kwargs
-from stand.core import Diagnostic
-from stand.errors import BusError, BusTimeoutError
+from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs
+from stand.errors import BusError, BusTimeoutError, UsageError
 
 STATUS_EVERY_S = 1.0
 SPEED_WINDOW_S = 2.0
@@ -33,8 +28,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def speed_line(window: collections.deque[Any], elapsed: float, frames: int) -> str:
-    from drivers.protocol import Frames
-    from drivers.streams import rebuild
+    """The speed each node saw over the last seconds (from the blocks in ``window``)."""
+    from stand.drivers.protocol import Frames
+    from stand.drivers.streams import rebuild
 
     recent = rebuild(Frames.concat([b for _, b in window]), strict_status=False)
     nodes = []
@@ -59,89 +55,58 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drivers.bus import BusReader, describe_bus, open_bus
-    from drivers.recording import RunWriter, read_run
-    from drivers.streams import rebuild
-    from stand.cli.inspect import report
-    from stand.config import config_from_dict, read_toml
+    import time
+
+    from stand.cli.inventory import report
+    from stand.drivers.protocol import Frames
+    from stand.drivers.recording import Recording
+    from stand.live import LiveSession
+    from stand.pipeline import load_config_text
 
     if args.seconds is not None and not args.seconds > 0:
         raise UsageError(f"stand record: --seconds must be > 0, got {args.seconds}")
     config_text, table = "", None
     if args.config:
-        config_text, data = read_toml(args.config)
-        cfg, _ = config_from_dict(data, source=args.config)
+        cfg, _, config_text = load_config_text(args.config)
         table = cfg.bus
     kwargs = bus_kwargs(args, table)
-    where = describe_bus(kwargs)
-    writer = RunWriter(
-        args.out,
-        source=json.dumps(kwargs, default=str),
-        config_toml=config_text,
-        software=f"stand {__version__}",
-    )
-    failure: BusError | None = None
-    interrupted = False
-    try:
-        bus = open_bus(kwargs)
-    except BusError:
-        writer.close()
-        Path(args.out).unlink()  # nothing was received: leave no empty run behind
-        raise
-    reader = BusReader(bus, channel_info=where, silence_timeout_s=args.timeout)
-    try:
-        start = time.monotonic()
-        next_status = start + STATUS_EVERY_S
+    with LiveSession(
+        kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout
+    ) as session:
+        next_status = STATUS_EVERY_S
         window: collections.deque[tuple[float, Any]] = collections.deque()
         if not args.quiet:
-            print(f"recording {where} into {args.out} (Ctrl-C stops)", file=sys.stderr)
-        while args.seconds is None or time.monotonic() - start < args.seconds:
-            try:
-                block = reader.read_block(0.1)
-            except BusError as exc:
-                failure = exc
-                break
-            writer.append(block)
+            print(f"recording {session.where} into {args.out} (Ctrl-C stops)", file=sys.stderr)
+        while not session.stopping and (args.seconds is None or session.elapsed_s < args.seconds):
+            before = session.builder.frames
+            session.read(0.1)
             now = time.monotonic()
-            if len(block):
-                window.append((now, block))
+            if session.builder.frames > before:
+                window.append((now, session.builder.last_block))
             while window and window[0][0] < now - SPEED_WINDOW_S:
                 window.popleft()
-            if not args.quiet and now >= next_status:
+            if not args.quiet and session.elapsed_s >= next_status:
                 next_status += STATUS_EVERY_S
-                print(speed_line(window, now - start, reader.frames_received), file=sys.stderr)
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        reader.close()
-        bus.shutdown()
-        try:
-            writer.append(reader.read_block(0.0))  # what came while stopping
-        except BusError:
-            pass
-        notes = []
-        if reader.overruns:
-            notes.append(
-                Diagnostic(
-                    "host_overrun",
-                    f"{reader.overruns} frames dropped: the host did not keep up",
-                    float(reader.overruns),
+                print(
+                    speed_line(window, session.elapsed_s, session.frames_received),
+                    file=sys.stderr,
                 )
-            )
-        if failure is not None:
-            notes.append(Diagnostic("bus_error", str(failure), float("nan")))
-        writer.warn(notes)
-        writer.flush()
-        rec = read_run(args.out)
-        streams = rebuild(rec.frames, strict_status=False) if len(rec.frames) else None
-        writer.close(streams)
-    if interrupted and not args.quiet:
+    streams = session.close()
+    frames = session.builder.frames
+    if session.stop_signal is not None and not args.quiet:
         print("interrupted: the recording is kept", file=sys.stderr)
-    rec = read_run(args.out)
     if streams is not None:
-        report(rec, streams, as_json=args.json)
-    if failure is not None:
-        if len(rec.frames) == 0:
-            Path(args.out).unlink()
-        raise _reraise_with_path(failure, args.out, len(rec.frames))
+        w = session.writer
+        meta = {
+            "software": w.software,
+            "start_time": w.start_time,
+            "end_time": w.end_time,
+            "source": w.source,
+            "complete": True,
+        }
+        report(Recording(args.out, Frames.empty(), meta, w.warnings), streams, as_json=args.json)
+    if session.failure is not None:
+        if frames == 0:
+            session.writer.discard()
+        raise _reraise_with_path(session.failure, args.out, frames)
     return 0

@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from stand import __version__
-from stand.cli.common import UsageError, add_bus_arguments, bus_kwargs
-from stand.errors import RecordingError
+from stand.cli.common import add_bus_arguments, bus_kwargs
+from stand.errors import RecordingError, UsageError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -30,9 +30,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from drivers.recording import Recording, write_recording
-    from drivers.streams import rebuild
     from stand.config import config_toml
+    from stand.drivers.recording import Recording, write_recording
+    from stand.drivers.streams import rebuild
     from stand.sim import load_scene, shipped_scenes, simulate
 
     if not args.out and not args.bus:
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
         write_recording(rec, args.out, rebuild(sim.frames, strict_status=False))
         print(f"wrote {args.out}", file=sys.stderr)
     if args.bus:
-        from drivers.bus import describe_bus, open_bus, play
+        from stand.drivers.bus import describe_bus, open_bus, play
 
         table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
         kwargs = bus_kwargs(args, table)

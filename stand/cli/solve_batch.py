@@ -5,10 +5,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import multiprocessing
-import os
 import sys
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
@@ -30,16 +27,6 @@ COLUMNS = [
 ]
 
 
-def _worker(path: str, config: str | None, taper: bool, gate: bool) -> dict[str, Any]:
-    """One run, never raising for bad input (our errors do not cross processes whole)."""
-    from stand.cli.solve import solve_one
-
-    try:
-        return solve_one(path, config, taper, gate)
-    except StandError as exc:
-        return {"error": str(exc)}
-
-
 def _row(path: str, res: dict[str, Any]) -> dict[str, Any]:
     row: dict[str, Any] = {k: "" for k in COLUMNS}
     row["run"] = path
@@ -58,14 +45,17 @@ def _row(path: str, res: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
-def run_batch(args: argparse.Namespace) -> int:
+def run_batch(args: argparse.Namespace, options: Any) -> int:
     """Solve every run; a progress bar on stderr; a table on stdout; the summary file."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
+    from stand.cli.format import dump_json
+    from stand.pipeline import solve_many
+    from stand.result import to_json
+
     runs = list(args.runs)
     results: dict[str, dict[str, Any]] = {}
-    gate = not args.no_gate
     progress = Progress(
         "[progress.description]{task.description}",
         BarColumn(),
@@ -76,35 +66,22 @@ def run_batch(args: argparse.Namespace) -> int:
     )
     with progress:
         task = progress.add_task("solving", total=len(runs))
-        if args.jobs == 1:
-            for path in runs:
-                results[path] = _worker(path, args.config, args.taper, gate)
-                progress.advance(task)
-        else:
-            # fresh interpreters with one BLAS thread each: N processes, not N x cores threads
-            for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-                os.environ.setdefault(var, "1")
-            context = multiprocessing.get_context("spawn")
-            with ProcessPoolExecutor(max_workers=args.jobs, mp_context=context) as pool:
-                futures: dict[Future[dict[str, Any]], str] = {
-                    pool.submit(_worker, path, args.config, args.taper, gate): path for path in runs
-                }
-                for f in as_completed(futures):
-                    results[futures[f]] = f.result()
-                    progress.advance(task)
+        for path, res in solve_many(
+            runs, args.config, options, args.jobs, lambda: progress.advance(task)
+        ):
+            results[path] = {"error": str(res)} if isinstance(res, StandError) else to_json(res)
     rows = [_row(path, results[path]) for path in runs]
     if args.summary:
         dest = Path(args.summary)
         if dest.suffix.lower() == ".json":
-            dest.write_text(json.dumps({p: results[p] for p in runs}, indent=1))
+            dest.write_text(json.dumps({p: results[p] for p in runs}, indent=1, allow_nan=False))
         else:
             with dest.open("w", newline="") as handle:
                 w = csv.DictWriter(handle, fieldnames=COLUMNS)
                 w.writeheader()
                 w.writerows(rows)
     if args.json:
-        json.dump({p: results[p] for p in runs}, sys.stdout)
-        print()
+        dump_json({p: results[p] for p in runs})
     else:
         for r in rows:
             if r["error"]:

@@ -14,7 +14,6 @@ from stand.core.inverse import (
     static_resultant,
 )
 from stand.core.model import (
-    ParameterError,
     StandParameters,
     forward,
     inverse_matrix,
@@ -25,6 +24,7 @@ from stand.core.model import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
+from stand.errors import ParameterError
 
 __all__ = [
     "Diagnostic",

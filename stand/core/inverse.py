@@ -57,14 +57,18 @@ class Diagnostic:
         ``planes_close``).
     message : str
         One sentence for the operator, with the figure.
-    value : float
+    value : float or None
         The figure the warning is about (a frequency ratio, a condition
-        number).
+        number, a count), or None when there is none.
+    t_s : float or None
+        When it was seen, from the start of the run [s], if it belongs to
+        a moment.
     """
 
     code: str
     message: str
-    value: float
+    value: float | None = None
+    t_s: float | None = None
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from stand.core.ddarith import DD
-from stand.errors import ModelError
+from stand.errors import ModelError, ParameterError
 
 ComplexArray = NDArray[np.complex128]
 FloatArray = NDArray[np.float64]
@@ -62,20 +62,6 @@ FloatArray = NDArray[np.float64]
 #: Which table of the config file each parameter lives in.
 STAND_KEYS = ("M1", "M2", "C1", "C2", "H1", "H2")
 ROTOR_KEYS = ("M3", "J3", "a", "b", "c", "d", "R1", "R2")
-
-
-class ParameterError(ModelError):
-    """A stand or rotor parameter is physically refused.
-
-    Attributes
-    ----------
-    key : str
-        The parameter's name (the seed's symbol, e.g. ``"C1"``).
-    """
-
-    def __init__(self, key: str, message: str):
-        self.key = key
-        super().__init__(f"{key}: {message}")
 
 
 @dataclass(frozen=True)

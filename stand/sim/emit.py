@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from drivers.nodes import STATUS_PERIOD_S, merge, node_frames
-from drivers.protocol import Frames
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.model import FloatArray, StandParameters
+from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
+from stand.drivers.protocol import Frames
 from stand.sim.physics import SceneSpeed, closed_form, edge_times, integrated, support_force
 from stand.sim.scene import Scene, per_node, unbalance_kg_m
 

@@ -28,12 +28,12 @@ import can
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from synth import sine_run
 
-from drivers.bus import BusReader, play
-from drivers.logs import read_log, write_log
-from drivers.protocol import Frames
-from drivers.recording import Recording, RunWriter, read_run, write_recording
-from drivers.streams import rebuild
 from stand.cli.record import speed_line
+from stand.drivers.bus import BusReader, play
+from stand.drivers.logs import read_log, write_log
+from stand.drivers.protocol import Frames
+from stand.drivers.recording import Recording, RunWriter, read_run, write_recording
+from stand.drivers.streams import rebuild
 from stand.errors import BusError
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drivers.recording import Recording, write_recording
+from stand.drivers.recording import Recording, write_recording
 from stand.sim import load_scene, simulate
 from stand.sim.emit import scene_speed
 

@@ -1,0 +1,333 @@
+"""The application layer: from a recording (or live streams) and a config to one :class:`Result`.
+
+Data flows one way::
+
+    CAN frames -> per-node streams (stand.drivers.streams)
+               -> 1x phasor per support, unbalance per plane (stand.measure)
+               -> corrections, tolerance, parameter spread, check (here)
+               -> Result (stand.result) -> text, JSON, report, summary
+
+Every command that measures goes through :func:`solve_recording` (a file)
+or :func:`build_result` (streams it already has, e.g. a live session).  The
+CLI modules parse arguments and format; none of them repeats a step here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tomllib
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from stand import __version__
+from stand.core import StandParameters, rpm_to_rad_s
+from stand.core.balance import correction, permissible_unbalance, plane_tolerances, static_couple
+from stand.errors import ConfigError, StandError
+from stand.measure import Measurement, measure
+from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
+
+SOFTWARE = f"stand {__version__}"
+SPECTRUM_MAX_SAMPLES = 1 << 18
+"""The report's spectrum uses at most this many samples per node (the run's last ones)."""
+
+
+@dataclass(frozen=True)
+class SolveOptions:
+    """How to solve a run.
+
+    Attributes
+    ----------
+    taper : bool
+        Hann taper against a neighbour close to 1x.
+    gate : bool
+        Use only the steady, settled part of the run.
+    tolerances : stand.calib.tolerance.Tolerances or None
+        Parameter tolerances to propagate (None: no parameter spread).
+    draws : int
+        Monte Carlo draws for the parameter spread.
+    traces : bool
+        Also compute the spectra and speed traces the report plots.
+    """
+
+    taper: bool = False
+    gate: bool = True
+    tolerances: Any = None
+    draws: int = 1000
+    traces: bool = False
+
+
+def config_digest(text: str) -> str:
+    """SHA-256 of a configuration's text (hex)."""
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:
+    """The configuration a run file carries: (config, parameters, text)."""
+    from stand.config import config_from_dict
+
+    text = str(meta.get("config_toml", ""))
+    if not text:
+        raise ConfigError("carries no configuration: give --config CFG", source=path)
+    source = f"{path} (stored config)"
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"the stored configuration is not TOML ({exc})", source=path) from exc
+    cfg, params = config_from_dict(data, source=source)
+    return cfg, params, text
+
+
+def load_config_text(path: str) -> tuple[Any, StandParameters, str]:
+    """A configuration file: (config, parameters, text)."""
+    from stand.config import config_from_dict, read_toml
+
+    text, data = read_toml(path)
+    cfg, params = config_from_dict(data, source=path)
+    return cfg, params, text
+
+
+def tolerance_of(cfg: Any, params: StandParameters) -> Tolerance | None:
+    """The ISO 21940-11 tolerance of the config's ``[tolerance]`` table, if any."""
+    t = cfg.tolerance
+    if t is None:
+        return None
+    omega = float(rpm_to_rad_s(t.max_speed_rpm))
+    U_per = permissible_unbalance(params.M3, t.grade_mm_s * 1e-3, omega)
+    per = plane_tolerances(params, U_per)
+    return Tolerance(t.grade_mm_s * 1e-3, omega, U_per, (per[0], per[1]))
+
+
+def precision_targets(
+    cfg: Any,
+    params: StandParameters,
+    U_kg_m: Sequence[complex],
+    *,
+    pct: float | None = None,
+    abs_kg_m: float | None = None,
+    tolerance_share: float | None = None,
+    default_pct: float = 5.0,
+) -> tuple[float, float]:
+    """The 95 % radius each plane must reach [kg m].
+
+    An absolute target, else a percentage of each plane's unbalance, else
+    ``tolerance_share`` of each plane's ISO tolerance (when the config has
+    one), else ``default_pct`` of the unbalance.
+    """
+    if abs_kg_m is not None:
+        return abs_kg_m, abs_kg_m
+    if pct is None and tolerance_share is not None:
+        tol = tolerance_of(cfg, params)
+        if tol is not None:
+            return tuple(tolerance_share * u for u in tol.per_plane_kg_m)  # type: ignore[return-value]
+    share = (default_pct if pct is None else pct) / 100
+    return share * abs(U_kg_m[0]), share * abs(U_kg_m[1])
+
+
+def _uncertainty(m: Measurement, params: StandParameters, options: SolveOptions) -> Uncertainty:
+    from stand.calib.tolerance import parameter_uncertainty
+
+    A = np.array([ph.A_m_s2 for ph in m.supports])
+    r = parameter_uncertainty(params, m.omega_rad_s, A, options.tolerances, draws=options.draws)
+    lin, mc = r.radius95_linear, r.radius95_monte_carlo
+    return Uncertainty(
+        options.tolerances,
+        (float(lin[0]), float(lin[1])),
+        (float(mc[0]), float(mc[1])),
+        r.shares,
+        r.draws,
+    )
+
+
+def traces_of(streams: Any, omega_rad_s: float) -> Traces:
+    """Spectra (up to 4x) and speed over the run, per node, for the report."""
+    spectra: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    speeds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    f1 = omega_rad_s / (2 * np.pi)
+    for n, s in sorted(streams.nodes.items()):
+        if s.rate_hz is None or s.rate_hz <= 0:
+            continue
+        if s.accel_m_s2 is not None and len(s.index) >= 64:
+            seg = np.flatnonzero(s.segment == 0)[-SPECTRUM_MAX_SAMPLES:]
+            idx = s.index[seg]
+            a = np.zeros(int(idx[-1] - idx[0]) + 1)
+            a[idx - idx[0]] = s.accel_m_s2[seg]  # lost samples as zeros: a spectrum is a view
+            win = np.hanning(len(a))
+            spec = 2 * np.abs(np.fft.rfft(a * win)) / np.sum(win)
+            f = np.fft.rfftfreq(len(a), 1 / s.rate_hz)
+            band = f <= 4 * f1
+            spectra[n] = (f[band], spec[band])
+        m = s.mark_segment == 0
+        pos, rev = s.mark_position[m], s.mark_rev[m]
+        if len(pos) >= 2:
+            t = (pos[1:] + pos[:-1]) / 2 / s.rate_hz
+            speeds[n] = (t, 2 * np.pi * s.rate_hz * np.diff(rev) / np.diff(pos))
+    return Traces(spectra, speeds)
+
+
+def build_result(
+    m: Measurement,
+    cfg: Any,
+    params: StandParameters,
+    *,
+    stream_warnings: Sequence[Any] = (),
+    provenance: Provenance,
+    options: SolveOptions = SolveOptions(),
+    streams: Any = None,
+    check: Check | None = None,
+    live: LiveInfo | None = None,
+) -> Result:
+    """Corrections, static and couple parts, tolerance and spread for a measurement."""
+    c = cfg.correction
+    corrections = tuple(
+        correction(
+            complex(U),
+            m.radius_m[i],
+            remove=c.mode == "remove",
+            positions=c.positions,
+            position0_deg=c.position0_deg,
+            steps_kg=[w * 1e-3 for w in c.weights_g],
+            step_kg=c.weight_step_g * 1e-3,
+        )
+        for i, U in enumerate(m.solution.U_kg_m)
+    )
+    static, couple = static_couple(params, m.solution.U_kg_m)
+    return Result(
+        measurement=m,
+        corrections=corrections,
+        correction_mode=c.mode,
+        static_kg_m=static,
+        couple_kg_m=couple,
+        tolerance=tolerance_of(cfg, params),
+        warnings=(*stream_warnings, *m.warnings),
+        provenance=provenance,
+        uncertainty=_uncertainty(m, params, options) if options.tolerances is not None else None,
+        check=check,
+        live=live,
+        traces=traces_of(streams, m.omega_rad_s) if options.traces and streams else None,
+    )
+
+
+def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: SolveOptions) -> Any:
+    """The measurement of a run's streams with the config's sensor calibration."""
+    return measure(streams, params, **cfg.measure_options(), taper=options.taper, gate=options.gate)
+
+
+def solve_recording(
+    path: str, config: str | None = None, options: SolveOptions = SolveOptions()
+) -> Result:
+    """Solve one recorded run (a run file or a python-can log).
+
+    Parameters
+    ----------
+    path
+        The recording.
+    config
+        A configuration file; None: the one the run file carries.
+    options
+        How to solve.
+
+    Raises
+    ------
+    StandError
+        Bad input, naming the file and what is wrong.
+    """
+    from stand.drivers.recording import read_recording
+    from stand.drivers.streams import rebuild
+
+    rec = read_recording(path)
+    if config:
+        cfg, params, text = load_config_text(config)
+        source = config
+    else:
+        cfg, params, text = stored_config(rec.meta, rec.path)
+        source = f"{rec.path} (stored)"
+    streams = rebuild(rec.frames)
+    m = measure_streams(streams, cfg, params, options)
+    prov = Provenance(
+        software=SOFTWARE,
+        run_file=path,
+        config_sha256=config_digest(text),
+        config_source=source,
+        start_time=str(rec.meta.get("start_time", "")),
+        source=str(rec.meta.get("source", "")),
+        frames=len(rec.frames),
+        duration_s=streams.duration_s,
+        config_toml=text,
+    )
+    return build_result(
+        m, cfg, params, stream_warnings=streams.warnings, provenance=prov,
+        options=options, streams=streams,
+    )  # fmt: skip
+
+
+def check_against(previous: str, cfg: Any, params: StandParameters, after: Measurement) -> Check:
+    """The run before the correction, measured with the same stand (this config)."""
+    from stand.drivers.recording import read_recording
+    from stand.drivers.streams import rebuild
+
+    rec = read_recording(previous)
+    before = measure_streams(rebuild(rec.frames), cfg, params, SolveOptions())
+    b, a = before.solution.U_kg_m, after.solution.U_kg_m
+    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
+
+
+def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:
+    """One run of a batch: its result, or the error that refused it (never raises bad input)."""
+    try:
+        return solve_recording(path, config, options)
+    except StandError as exc:
+        return exc
+
+
+def solve_many(
+    paths: Sequence[str],
+    config: str | None,
+    options: SolveOptions,
+    jobs: int = 1,
+    progress: Callable[[], None] | None = None,
+) -> Iterator[tuple[str, Result | StandError]]:
+    """Solve several runs (in ``jobs`` processes), yielding each as it is done."""
+    if jobs == 1:
+        for path in paths:
+            yield path, _solve_or_error(path, config, options)
+            if progress:
+                progress()
+        return
+    import multiprocessing
+    import os
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    # fresh interpreters with one BLAS thread each: N processes, not N x cores threads
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        futures = {pool.submit(_solve_or_error, p, config, options): p for p in paths}
+        for f in as_completed(futures):
+            yield futures[f], f.result()
+            if progress:
+                progress()
+
+
+def measure_recording(
+    path: str, config: str | None = None, *, raw_sensors: bool = False
+) -> tuple[Measurement, Any, StandParameters]:
+    """One run's measurement alone, for identification and influence coefficients.
+
+    ``raw_sensors``: the nodes' phasors as they read, without the config's
+    ``[sensors]`` gains and delays (what a calibration identifies).
+    """
+    from stand.drivers.recording import read_recording
+    from stand.drivers.streams import rebuild
+
+    rec = read_recording(path)
+    cfg, params, _ = load_config_text(config) if config else stored_config(rec.meta, rec.path)
+    streams = rebuild(rec.frames)
+    if raw_sensors:
+        m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
+    else:
+        m = measure_streams(streams, cfg, params, SolveOptions())
+    return m, cfg, params

@@ -1,0 +1,335 @@
+"""The one result of a run, typed and frozen, and its one JSON form.
+
+Every command that measures (``solve``, ``report``, ``measure``,
+``balance``, the batch) gets a :class:`Result` from :mod:`stand.pipeline`;
+the CLI, the report and the summary only format it.  Inside, SI units and
+complex numbers (amplitude and phase as one value); :func:`to_json` is the
+only place where g, mm, deg and rpm appear, and the only place that rounds,
+so the printed text, the JSON, the report and the batch summary of one run
+agree to the last digit they show.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from stand.core import Diagnostic, phasor_to_polar, rad_s_to_rpm, unbalance_to_polar
+from stand.core.balance import Correction
+from stand.measure import Measurement
+
+RESULT_VERSION = 1
+"""Version of the JSON form; bumped when a key changes meaning."""
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a result came from.
+
+    Attributes
+    ----------
+    software : str
+        This software and its version.
+    run_file : str or None
+        The recording solved (None: not recorded).
+    config_sha256 : str
+        SHA-256 of the configuration text used (the stored or given one).
+    config_source : str
+        Where the configuration came from (a file, or the run file's stored one).
+    start_time : str
+        When the run was recorded (ISO 8601, UTC), if known.
+    source : str
+        What the frames came from (the bus options), if known.
+    frames : int
+        Frames in the recording.
+    duration_s : float
+        Span of the frames' host timestamps [s].
+    config_toml : str
+        The configuration text itself (for the report; the JSON carries its digest).
+    """
+
+    software: str
+    run_file: str | None
+    config_sha256: str
+    config_source: str
+    start_time: str = ""
+    source: str = ""
+    frames: int = 0
+    duration_s: float = 0.0
+    config_toml: str = field(default="", repr=False)
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """ISO 21940-11 tolerance: ``U_per`` and its share per correction plane [kg m]."""
+
+    grade_m_s: float
+    max_speed_rad_s: float
+    U_per_kg_m: float
+    per_plane_kg_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """How the stand's parameter tolerances spread the unbalance (95 % radii [kg m])."""
+
+    tolerances: Any  # stand.calib.tolerance.Tolerances
+    radius95_linear_kg_m: tuple[float, float]
+    radius95_monte_carlo_kg_m: tuple[float, float]
+    shares: dict[str, tuple[float, float]]
+    draws: int
+
+
+@dataclass(frozen=True)
+class Check:
+    """A check run against the run before the correction: ``U`` before and after [kg m]."""
+
+    previous_run: str
+    before_kg_m: tuple[complex, complex]
+    after_kg_m: tuple[complex, complex]
+
+    @property
+    def urr(self) -> tuple[float | None, float | None]:
+        """Unbalance reduction ratio ``(|U_before| - |U_after|) / |U_before|`` per plane."""
+        out = []
+        for b, a in zip(self.before_kg_m, self.after_kg_m, strict=True):
+            out.append((abs(b) - abs(a)) / abs(b) if abs(b) > 0 else None)
+        return out[0], out[1]
+
+
+@dataclass(frozen=True)
+class LiveInfo:
+    """How a live measurement ended."""
+
+    stopped_by: str
+    elapsed_s: float
+    targets_kg_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Traces:
+    """What the report plots besides the result: spectra and speed per node.
+
+    ``spectra``: node -> (frequency [Hz], amplitude [m/s^2]) up to 4x;
+    ``speeds``: node -> (time on the node's clock [s], speed [rad/s]).
+    """
+
+    spectra: dict[int, tuple[np.ndarray, np.ndarray]]
+    speeds: dict[int, tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Result:
+    """Everything one run says: measurement, corrections, verdict, provenance."""
+
+    measurement: Measurement
+    corrections: tuple[Correction, ...]
+    correction_mode: str
+    static_kg_m: complex
+    couple_kg_m: complex
+    tolerance: Tolerance | None
+    warnings: tuple[Diagnostic, ...]
+    provenance: Provenance
+    uncertainty: Uncertainty | None = None
+    check: Check | None = None
+    live: LiveInfo | None = None
+    traces: Traces | None = field(default=None, compare=False)
+
+    @property
+    def U_kg_m(self) -> np.ndarray:
+        """The unbalance of planes 1 and 2 [kg m] (the seed's ``q R e^{-i phi}``)."""
+        return np.asarray(self.measurement.solution.U_kg_m)
+
+    @property
+    def omega_rad_s(self) -> float:
+        """The speed the result refers to [rad/s]."""
+        return self.measurement.omega_rad_s
+
+
+def _g_mm(kg_m: float) -> float:
+    return round(float(kg_m) * 1e6, 3)
+
+
+def _polar(U: complex) -> dict[str, float]:
+    (q,), (phi,) = unbalance_to_polar([U])
+    return {"unbalance_g_mm": _g_mm(q), "angle_deg": round(float(phi), 3)}
+
+
+def _planes(m: Measurement) -> list[dict[str, Any]]:
+    q, phi = unbalance_to_polar(m.solution.U_kg_m)
+    out = []
+    for i in range(2):
+        R = m.radius_m[i]
+        out.append(
+            {
+                "plane": i + 1,
+                "unbalance_g_mm": _g_mm(q[i]),
+                "angle_deg": round(float(phi[i]), 3),
+                "mass_g": round(float(q[i]) / R * 1e3, 4),
+                "radius_mm": round(R * 1e3, 3),
+                "uncertainty_g_mm": _g_mm(m.radius95_kg_m[i]),
+            }
+        )
+    return out
+
+
+def _supports(m: Measurement) -> list[dict[str, Any]]:
+    out = []
+    for i, ph in enumerate(m.supports):
+        amp, phase = phasor_to_polar(ph.A_m_s2)
+        out.append(
+            {
+                "node": i + 1,
+                "amplitude_m_s2": round(float(amp), 6),
+                "phase_deg": round(float(phase), 4),
+                "uncertainty_m_s2": round(ph.radius95_m_s2, 6),
+                "revolutions": round(ph.revolutions, 2),
+                "samples": ph.samples,
+                "noise_m_s2": round(ph.noise_m_s2, 6),
+                "noise_cost": round(ph.noise_cost, 4),
+            }
+        )
+    return out
+
+
+def _corrections(r: Result) -> list[dict[str, Any]]:
+    out = []
+    for i, corr in enumerate(r.corrections):
+        R = r.measurement.radius_m[i]
+        weights = [
+            {
+                "mass_g": round(w.mass_kg * 1e3, 4),
+                "angle_deg": round(w.angle_deg, 3),
+                "position": w.position,
+                "radius_mm": round(R * 1e3, 3),
+            }
+            for w in corr.weights
+        ]
+        out.append(
+            {
+                "plane": i + 1,
+                "action": r.correction_mode,
+                "weights": weights,
+                "residual_g_mm": _g_mm(abs(corr.residual_kg_m)),
+            }
+        )
+    return out
+
+
+def _tolerance(r: Result) -> dict[str, Any]:
+    t = r.tolerance
+    assert t is not None
+    planes = []
+    for i in range(2):
+        u, rad = abs(r.U_kg_m[i]), float(r.measurement.radius95_kg_m[i])
+        per = t.per_plane_kg_m[i]
+        planes.append(
+            {
+                "plane": i + 1,
+                "permissible_g_mm": _g_mm(per),
+                "residual_g_mm": _g_mm(u),
+                "pass": bool(u <= per),
+                "margin_g_mm": _g_mm(per - u),
+                "pass_with_uncertainty": bool(u + rad <= per),
+            }
+        )
+    return {
+        "standard": "ISO 21940-11",
+        "grade_mm_s": round(t.grade_m_s * 1e3, 6),
+        "max_speed_rpm": round(float(rad_s_to_rpm(t.max_speed_rad_s)), 6),
+        "permissible_g_mm": _g_mm(t.U_per_kg_m),
+        "planes": planes,
+    }
+
+
+def _uncertainty(r: Result) -> dict[str, Any]:
+    u = r.uncertainty
+    assert u is not None
+    planes = []
+    for i in range(2):
+        top = sorted(u.shares.items(), key=lambda kv: -kv[1][i])[:3]
+        mc = u.radius95_monte_carlo_kg_m[i]
+        planes.append(
+            {
+                "plane": i + 1,
+                "radius95_linear_g_mm": _g_mm(u.radius95_linear_kg_m[i]),
+                "radius95_monte_carlo_g_mm": _g_mm(mc),
+                "combined_g_mm": _g_mm(math.hypot(mc, float(r.measurement.radius95_kg_m[i]))),
+                "largest_shares": [[k, round(v[i], 4)] for k, v in top],
+            }
+        )
+    t = u.tolerances
+    return {
+        "tolerances": {
+            "C_pct": round(t.C_rel * 100, 9),
+            "M_pct": round(t.M_rel * 100, 9),
+            "length_mm": round(t.length_m * 1e3, 9),
+            "gain_pct": round(t.gain_rel * 100, 9),
+            "distribution": "uniform within +-tolerance",
+        },
+        "draws": u.draws,
+        "planes": planes,
+    }
+
+
+def _check(c: Check) -> dict[str, Any]:
+    planes = []
+    for i, urr in enumerate(c.urr):
+        planes.append(
+            {
+                "plane": i + 1,
+                "before_g_mm": _g_mm(abs(c.before_kg_m[i])),
+                "after_g_mm": _g_mm(abs(c.after_kg_m[i])),
+                "urr": None if urr is None else round(urr, 5),
+            }
+        )
+    return {"previous_run": c.previous_run, "planes": planes}
+
+
+def to_json(r: Result) -> dict[str, Any]:
+    """The result as one JSON-ready object (g mm, deg, mm, rpm at this edge only).
+
+    Keys: ``rpm``, ``planes``, ``supports``, ``condition_number``,
+    ``warnings``, ``correction_mode``, ``corrections``, ``static``,
+    ``couple``, and when present ``tolerance``, ``parameter_uncertainty``,
+    ``check``, the live keys ``stopped_by``, ``elapsed_s``, ``targets_g_mm``,
+    ``run_file``; ``provenance`` last.
+    """
+    m = r.measurement
+    out: dict[str, Any] = {
+        "rpm": round(float(rad_s_to_rpm(m.omega_rad_s)), 3),
+        "planes": _planes(m),
+        "supports": _supports(m),
+        "condition_number": float(m.solution.condition_number),
+        "warnings": [w.message for w in r.warnings],
+        "correction_mode": r.correction_mode,
+        "corrections": _corrections(r),
+        "static": _polar(r.static_kg_m),
+        "couple": _polar(r.couple_kg_m),
+    }
+    if r.tolerance is not None:
+        out["tolerance"] = _tolerance(r)
+    if r.uncertainty is not None:
+        out["parameter_uncertainty"] = _uncertainty(r)
+    if r.check is not None:
+        out["check"] = _check(r.check)
+    if r.live is not None:
+        out["stopped_by"] = r.live.stopped_by
+        out["elapsed_s"] = round(r.live.elapsed_s, 3)
+        out["targets_g_mm"] = [_g_mm(t) for t in r.live.targets_kg_m]
+        out["run_file"] = r.provenance.run_file
+    p = r.provenance
+    out["provenance"] = {
+        "result_version": RESULT_VERSION,
+        "software": p.software,
+        "run_file": p.run_file,
+        "config_sha256": p.config_sha256,
+        "config_source": p.config_source,
+        "start_time": p.start_time,
+        "frames": p.frames,
+        "duration_s": round(p.duration_s, 6),
+    }
+    return out
