@@ -10,9 +10,5 @@ support -> unbalance per plane -> correction.
 - :mod:`stand.cli`: the ``stand`` command.
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
-try:
-    __version__ = version("rotor-stand")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
+__version__ = "0.1.0"
+"""The version: its one home (pyproject.toml reads it from here)."""

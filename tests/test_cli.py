@@ -13,7 +13,7 @@ import pytest
 from reference import seed_forward
 from strategies import DEMO
 
-from stand.cli import _subcommands, main
+from stand.cli import SUBCOMMANDS, main
 from stand.core import rpm_to_rad_s, unbalance_from_polar
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -133,9 +133,31 @@ def test_the_installed_console_script() -> None:
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "Traceback" not in bad.stderr
 
 
-@pytest.mark.parametrize("command", [None, *sorted(_subcommands())])
+@pytest.mark.parametrize("command", [None, *sorted(SUBCOMMANDS)])
 def test_every_help_page_renders(command: str | None, capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["--help"] if command is None else [command, "--help"]
     with pytest.raises(SystemExit) as e:
         main(argv)
     assert e.value.code == 0 and "usage: stand" in capsys.readouterr().out
+
+
+def test_each_subcommand_module_is_imported_only_when_chosen() -> None:
+    """``stand --version`` and ``stand --help`` import no subcommand, numpy or scipy."""
+    code = (
+        "import sys; from stand.cli import main\n"
+        "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in sys.modules if m.startswith('stand.cli.') "
+        "or m in ('numpy', 'scipy', 'h5py', 'can')))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_help_pages_name_every_subcommand(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = capsys.readouterr().out
+    assert all(name in text for name in SUBCOMMANDS)
+    assert sorted(
+        p.stem for p in (ROOT / "stand" / "cli").glob("*.py") if p.stem in SUBCOMMANDS
+    ) == sorted(SUBCOMMANDS)

@@ -104,7 +104,7 @@ def test_bus_table_goes_through_as_given_and_cli_options_override_it(tmp_path: P
     text = MINIMAL + '\n[bus]\ninterface = "pcan"\nchannel = "PCAN_USBBUS1"\nbitrate = 500000\n'
     cfg, _ = load_config(write(tmp_path, text))
     assert cfg.bus == {"interface": "pcan", "channel": "PCAN_USBBUS1", "bitrate": 500000}
-    args = build_parser().parse_args(
+    args = build_parser("record").parse_args(
         [
             "record",
             "--out",

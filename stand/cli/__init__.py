@@ -10,10 +10,11 @@ the traceback instead.
 from __future__ import annotations
 
 import argparse
+import importlib
+import os
 import sys
 import traceback
 from collections.abc import Callable, Sequence
-from types import ModuleType
 
 from stand import __version__
 from stand.errors import StandError, UsageError
@@ -30,44 +31,40 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
-def _subcommands() -> dict[str, ModuleType]:
-    from stand.cli import (
-        advise,
-        balance,
-        calibrate,
-        convert,
-        evaluate,
-        forward,
-        influence,
-        inspect,
-        measure,
-        record,
-        report,
-        scenes,
-        simulate,
-        solve,
-    )
+SUBCOMMANDS: dict[str, str] = {
+    "balance": "measure live until precise, then the correction per plane, the tolerance, "
+    "the check",
+    "measure": "measure live until the unbalance is precise enough, recording the run",
+    "solve": "solve recorded runs: the unbalance of both planes, with its 95 % interval",
+    "report": "write the balancing report of a run: one self-contained HTML file",
+    "record": "record the sensor nodes from a CAN bus into an HDF5 run file",
+    "inspect": "what a run file or CAN log holds: nodes, frames, losses, speed, warnings",
+    "convert": "convert a run between a run file (.h5) and python-can logs",
+    "simulate": "simulate a scene: write its run, or play it on a CAN bus in real time",
+    "scenes": "list the shipped scenes of the simulated stand",
+    "calibrate": "identify the stand (or a new rotor type) from runs with test masses",
+    "influence": "influence coefficients (field balancing): corrections from trial runs",
+    "advise": "natural frequencies and the recommended balancing speed range",
+    "evaluate": "ISO 21940-21 evaluation of stand + software on a simulated scene",
+    "forward": "support accelerations for given unbalances, and the natural frequencies",
+}
+"""Each subcommand and its one-line help; its module ``stand.cli.<name>`` is imported only
+when it is the one chosen, so ``stand --help`` and ``stand --version`` import none."""
 
-    return {
-        "balance": balance,
-        "advise": advise,
-        "calibrate": calibrate,
-        "evaluate": evaluate,
-        "forward": forward,
-        "influence": influence,
-        "solve": solve,
-        "measure": measure,
-        "simulate": simulate,
-        "scenes": scenes,
-        "record": record,
-        "inspect": inspect,
-        "convert": convert,
-        "report": report,
-    }
+BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+"""One BLAS thread: the arrays here are long and thin, and threads only spin."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The whole argument parser (subcommands included)."""
+def _chosen(argv: Sequence[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first word that is not an option)."""
+    for a in argv:
+        if not a.startswith("-"):
+            return a if a in SUBCOMMANDS else None
+    return None
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser; with ``command``, that subcommand's arguments too."""
     common = _Parser(add_help=False)
     common.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     parser = _Parser(
@@ -77,11 +74,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"stand {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name, module in _subcommands().items():
-        doc = (module.__doc__ or "").strip().splitlines()[0].replace("%", "%%")  # argparse
-        p = sub.add_parser(name, help=doc, description=doc, parents=[common])
-        module.add_arguments(p)
-        p.set_defaults(handler_=module.run)  # not `run`: a subcommand may take a RUN
+    for name, doc in SUBCOMMANDS.items():
+        help_text = doc.replace("%", "%%")  # argparse
+        p = sub.add_parser(name, help=help_text, description=help_text, parents=[common])
+        if name == command:
+            module = importlib.import_module(f"stand.cli.{name}")
+            module.add_arguments(p)
+            p.set_defaults(handler_=module.run)  # not `run`: a subcommand may take a RUN
     return parser
 
 
@@ -89,8 +88,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``stand`` command with ``argv`` (default ``sys.argv[1:]``); return the exit code."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args_list
+    for var in BLAS_THREADS:
+        os.environ.setdefault(var, "1")
     try:
-        parser = build_parser()
+        parser = build_parser(_chosen(args_list))
         args = parser.parse_args(args_list)
         run: Callable[[argparse.Namespace], int] | None = getattr(args, "handler_", None)
         if run is None:
@@ -102,6 +103,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             traceback.print_exc()
         print(f"stand: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except BrokenPipeError:  # `stand inspect RUN | head -1`: the reader left; end quietly
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_OK
     except KeyboardInterrupt:
         print("stand: interrupted", file=sys.stderr)
         return 130

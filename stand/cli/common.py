@@ -6,10 +6,12 @@ import argparse
 import math
 import sys
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from stand.core import Diagnostic
 from stand.errors import UsageError
+
+if TYPE_CHECKING:
+    from stand.core import Diagnostic
 
 
 def parse_rpm(text: str) -> float:
