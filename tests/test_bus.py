@@ -37,6 +37,7 @@ def _drain(reader: BusReader) -> tuple[Frames, BaseException]:
             return Frames.concat(blocks), exc
 
 
+@pytest.mark.realtime
 def test_reader_receives_every_frame_in_order_in_real_time(pair: tuple[Any, Any]) -> None:
     tx, rx = pair
     f = sine_run(seconds=1.5)

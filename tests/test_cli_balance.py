@@ -17,6 +17,7 @@ def _balance(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
+@pytest.mark.realtime
 def test_balance_demo_gives_the_correction_and_the_verdict(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -42,6 +43,7 @@ def test_balance_demo_gives_the_correction_and_the_verdict(
     assert out["stopped_by"] == "precision"
 
 
+@pytest.mark.realtime
 def test_check_after_a_correction_gives_the_reduction_ratio(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -75,11 +77,20 @@ def test_check_after_a_correction_gives_the_reduction_ratio(
     assert [p["pass"] for p in out["tolerance"]["planes"]] == [True, True]
 
 
-def test_ctrl_c_stops_cleanly_keeps_the_recording_and_still_answers(tmp_path: Path) -> None:
+@pytest.mark.realtime
+@pytest.mark.parametrize("how", ["SIGINT", "SIGTERM", "SIGINT ignored at start (nohup)"])
+def test_a_signal_stops_cleanly_keeps_the_recording_and_still_answers(
+    tmp_path: Path, how: str
+) -> None:
     import signal
     import subprocess
     import sys
     import time
+
+    sig = signal.SIGTERM if how == "SIGTERM" else signal.SIGINT
+
+    def ignore_sigint() -> None:  # what nohup, a shell script's background job, a service do
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
     from stand.drivers.recording import read_run
 
@@ -102,12 +113,13 @@ def test_ctrl_c_stops_cleanly_keeps_the_recording_and_still_answers(tmp_path: Pa
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        preexec_fn=ignore_sigint if "ignored" in how else None,
     )
     deadline = time.monotonic() + 20
     while not run.exists() and time.monotonic() < deadline:  # recording has begun
         time.sleep(0.05)
     time.sleep(2.5)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     out, err = proc.communicate(timeout=30)
     assert proc.returncode == 0, err
     res = json.loads(out)

@@ -52,6 +52,7 @@ def test_solve_needs_a_config_for_a_plain_log(
     )
 
 
+@pytest.mark.realtime
 def test_measure_stops_when_precise_and_says_so(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -84,6 +85,7 @@ def test_measure_stops_when_precise_and_says_so(
     )
 
 
+@pytest.mark.realtime
 def test_measure_stops_at_the_time_limit_and_says_so(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

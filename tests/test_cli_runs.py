@@ -130,6 +130,7 @@ def _record_while_playing(argv: list[str], channel: str, frames: Frames) -> int:
         tx.shutdown()
 
 
+@pytest.mark.realtime
 def test_record_from_the_config_bus_with_an_override(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -163,6 +164,7 @@ def test_record_from_the_config_bus_with_an_override(
     assert rec.meta["complete"]
 
 
+@pytest.mark.realtime
 def test_record_keeps_what_came_when_the_frames_stop(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

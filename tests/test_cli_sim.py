@@ -57,6 +57,7 @@ def test_simulate_seed_and_refusals(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert "no such scene" in capsys.readouterr().err
 
 
+@pytest.mark.realtime
 def test_simulate_on_the_bus_is_what_record_receives(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

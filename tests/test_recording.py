@@ -195,6 +195,7 @@ KILL_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("after_s", [1.3, 2.15, 3.4])
 def test_killing_a_recording_loses_at_most_the_last_second(tmp_path: Path, after_s: float) -> None:
     out, stamp = tmp_path / "run.h5", tmp_path / "t0"

@@ -48,6 +48,7 @@ def test_report_of_a_bad_run_writes_nothing(
     assert not out.exists() and not (tmp_path / "report.html.part").exists()
 
 
+@pytest.mark.realtime
 def test_balance_writes_its_report_beside_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
