@@ -27,7 +27,7 @@ Everything is vectorised per node; nodes are few (1..15).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -72,10 +72,17 @@ class NodeStream:
         Scale from STATUS [µm/s² per count] (the latest one if it changed).
     index : ndarray of int64
         Sample index of every valid sample, within its segment.
-    segment : ndarray of int32
-        Segment (node restart count) of every valid sample.
-    accel_m_s2 : ndarray of float64 or None
-        Acceleration of every valid sample [m/s²]; None without STATUS.
+    counts : ndarray of int16
+        The count of every valid sample.
+    segment_start : ndarray of int64
+        Where each segment (node restart) begins in ``index``: segment ``k``
+        is ``index[segment_start[k]:segment_start[k + 1]]`` (samples arrive in
+        segment order).  ``segment`` gives it per sample.
+    scale_start, scale_m_s2 : ndarray or None
+        The scale in force, as runs: from ``counts[scale_start[j]]`` on, one
+        count is ``scale_m_s2[j]`` [m/s²].  None without STATUS.
+        ``accel_m_s2`` and :meth:`accel` apply it; nothing else stores the
+        accelerations, so a long run costs 10 bytes per sample.
     mark_position : ndarray of float64
         Reference edges, as sample positions (sub-sample) within their segment.
     mark_segment : ndarray of int32
@@ -97,9 +104,10 @@ class NodeStream:
     rate_hz: float | None
     scale_um_s2: float | None
     index: NDArray[np.int64]
-    segment: NDArray[np.int32]
-    accel_m_s2: NDArray[np.float64] | None
     counts: NDArray[np.int16]
+    segment_start: NDArray[np.int64]
+    scale_start: NDArray[np.int64] | None
+    scale_m_s2: NDArray[np.float64] | None
     mark_position: NDArray[np.float64]
     mark_segment: NDArray[np.int32]
     mark_rev: NDArray[np.int64]
@@ -119,6 +127,42 @@ class NodeStream:
     def marks(self) -> int:
         """Number of reference edges received."""
         return len(self.mark_position)
+
+    @property
+    def segment(self) -> NDArray[np.int32]:
+        """Segment (node restart count) of every valid sample."""
+        sizes = np.diff(np.append(self.segment_start, len(self.index)))
+        return np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
+
+    def segment_bounds(self, k: int) -> tuple[int, int]:
+        """``(lo, hi)``: segment ``k``'s samples are ``index[lo:hi]``."""
+        lo = int(self.segment_start[k])
+        hi = int(self.segment_start[k + 1]) if k + 1 < len(self.segment_start) else len(self.index)
+        return lo, hi
+
+    @property
+    def accel_m_s2(self) -> NDArray[np.float64] | None:
+        """Acceleration of every valid sample [m/s²]; None without STATUS."""
+        return None if self.scale_m_s2 is None else self.accel(0, len(self.counts))
+
+    def accel(self, lo: int, hi: int) -> NDArray[np.float64]:
+        """Acceleration of the valid samples ``lo:hi`` [m/s²] (scaled as they came)."""
+        assert self.scale_start is not None and self.scale_m_s2 is not None, "no STATUS"
+        starts = np.clip(self.scale_start, lo, hi) - lo
+        sizes = np.diff(np.append(starts, hi - lo))
+        scale = np.repeat(self.scale_m_s2, sizes)
+        return self.counts[lo:hi] * scale
+
+    def take(self, keep: NDArray[np.bool_]) -> NodeStream:
+        """The same node with only the samples where ``keep`` is true (edges unchanged)."""
+        pos = np.concatenate(([0], np.cumsum(keep)))
+        return replace(
+            self,
+            index=self.index[keep],
+            counts=self.counts[keep],
+            segment_start=pos[self.segment_start],
+            scale_start=None if self.scale_start is None else pos[self.scale_start],
+        )
 
     def rpm(self) -> float | None:
         """Mean shaft speed from the reference edges [rpm] (None: < 2 edges or no rate).
@@ -290,15 +334,19 @@ def _rebuild_node(
 
     # --- samples
     index = (SAMPLES_PER_FRAME * F[:, None] + np.arange(SAMPLES_PER_FRAME)).reshape(-1)
-    seg_s = np.repeat(seg, SAMPLES_PER_FRAME)
     flat = counts.reshape(-1)
     valid = flat != INVALID_COUNT
-    accel = None
+    # where each kept frame's valid samples begin in the valid-sample arrays
+    frame_start = np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
+    seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
+    segment_start = frame_start[seg_first].astype(np.int64)
+    scale_start = scale_m_s2 = None
     if len(st_frame):
         k = np.searchsorted(st_frame, s_frame_k) - 1  # latest STATUS before the frame
-        k = np.maximum(k, 0)
-        m_s2_per_count = np.repeat(scale[k] * 1e-6, SAMPLES_PER_FRAME)
-        accel = (flat * m_s2_per_count)[valid]
+        per_frame = scale[np.maximum(k, 0)] * 1e-6  # the first STATUS for frames before it
+        first = np.flatnonzero(np.diff(per_frame, prepend=np.nan) != 0)  # runs of one scale
+        scale_start = frame_start[first].astype(np.int64)
+        scale_m_s2 = per_frame[first]
 
     # --- marks: unwrap seq against the nearest SAMPLES frame of the node (by arrival)
     m_pos = np.zeros(0)
@@ -346,9 +394,10 @@ def _rebuild_node(
         rate_hz=float(rate[0]) if len(rate) else None,
         scale_um_s2=float(scale[-1]) if len(scale) else None,
         index=index[valid],
-        segment=seg_s[valid],
-        accel_m_s2=accel,
         counts=flat[valid],
+        segment_start=segment_start,
+        scale_start=scale_start,
+        scale_m_s2=scale_m_s2,
         mark_position=m_pos,
         mark_segment=m_seg,
         mark_rev=m_rev,

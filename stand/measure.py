@@ -3,12 +3,23 @@
 Every path that computes unbalance (offline ``stand solve``, the live
 measurement, the simulated stand) goes through :func:`measure`:
 
-1. **gate** (:func:`steady_window`): the part of the run where the speed is
-   steady and the supports have settled;
-2. **1x phasor per support** (:func:`stand.core.dsp.fit_1x`) over that
-   window, with its covariance;
+1. **gate** (:func:`steady_revolutions`, :func:`settled_block`): the part of
+   the run where the speed is steady and the supports have settled;
+2. **1x phasor per support** over that window, with its covariance: the
+   estimator of :func:`stand.core.dsp.fit_1x`, built from sums
+   (:mod:`stand.core.fitsums`);
 3. **inverse** (:func:`stand.core.solve_unbalance`), the covariance
    propagated to each plane's unbalance, and each plane's 95 % radius.
+
+**Long runs in bounded memory.**  A node's samples are read in chunks of
+:data:`CHUNK` samples.  The first pass computes each chunk's shaft angle
+once, and from the same cos and sin it adds up the sums the gate and the
+block check need (per block of :data:`BLOCK_REVS` revolutions) and the fit's
+normal equations (per chunk; a chunk holds whole blocks, so a window that
+starts at any block is a sum of chunks, and of one chunk redone).  A second
+pass over the window adds the residual's side bands (the noise at 1x) once
+the coefficients are known.  Nothing of the length of the run is allocated
+besides the stream itself (10 bytes a sample).
 """
 
 from __future__ import annotations
@@ -19,7 +30,23 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stand.core import Diagnostic, StandParameters, solve_unbalance
-from stand.core.dsp import Phasor, fit_1x, radius_factor, shaft_angle
+from stand.core.dsp import (
+    SIDE_BANDS,
+    SPEED_SPAN_SLOPE,
+    Phasor,
+    angle_at,
+    angle_knots,
+    radius_factor,
+)
+from stand.core.fitsums import (
+    WindowSums,
+    base_columns,
+    block_fits,
+    block_sums,
+    model_transform,
+    model_values,
+    side_band_sums,
+)
 from stand.core.inverse import UnbalanceSolution
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.errors import MeasurementError
@@ -41,6 +68,8 @@ SCATTER_LIMIT = 4.0
 something moves the 1x reading: a neighbour within the 1x bin, unsteady conditions."""
 MIN_REVS = 30
 """A steady, settled window shorter than this many revolutions draws a warning."""
+CHUNK = 1 << 16
+"""Samples per chunk (about): a chunk holds whole blocks of revolutions."""
 
 
 @dataclass(frozen=True)
@@ -82,101 +111,30 @@ class Measurement:
     warnings: list[Diagnostic] = field(default_factory=list)
 
 
-def _segment(s: NodeStream) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The node's longest clock segment: sample index, accel, edge positions and revs."""
-    if s.accel_m_s2 is None:
-        raise MeasurementError(f"node {s.node}: no STATUS, its samples cannot be scaled")
-    if len(s.accel_m_s2) == 0:
+def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """The node's longest clock segment: its samples ``lo:hi``, edge positions and revs."""
+    if s.scale_m_s2 is None:
+        raise MeasurementError("no STATUS, its samples cannot be scaled")
+    if len(s.index) == 0:
         raise MeasurementError(
-            f"node {s.node}: all {s.samples} samples are invalid (count -32768: sensor fault "
-            "or overrange)"
+            f"all {s.samples} samples are invalid (count -32768: sensor fault or overrange)"
             if s.samples
-            else f"node {s.node}: no samples, only "
-            f"{s.status_frames} STATUS and {s.marks} MARK frames"
+            else f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames"
         )
     if len(s.mark_segment) == 0:
         raise MeasurementError(
-            f"node {s.node}: no reference edges: is the reference sensor "
-            "wired and the mark passing it?"
+            "no reference edges: is the reference sensor wired and the mark passing it?"
         )
     seg = int(np.bincount(s.mark_segment).argmax())
     m = s.mark_segment == seg
-    keep = s.segment == seg
-    return s.index[keep], s.accel_m_s2[keep], s.mark_position[m], s.mark_rev[m]
+    lo, hi = s.segment_bounds(seg)
+    return lo, hi, s.mark_position[m], s.mark_rev[m]
 
 
-def block_fits(
-    theta: np.ndarray, accel: np.ndarray, at: np.ndarray, edges: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Least-squares 1x of every block between consecutive ``edges`` (sample positions).
+def steady_revolutions(pos: np.ndarray, rev: np.ndarray) -> tuple[int, int, list[str]]:
+    """The longest run of steady-speed revolutions: its edges ``(a, b)``, and notes.
 
-    Each block is fitted on ``cos theta, sin theta, 1`` over the samples it
-    has (lost ones simply absent), all blocks at once from cumulative sums.
-
-    Returns
-    -------
-    A : ndarray of complex
-        The blocks' 1x phasors.
-    n : ndarray
-        Samples per block.
-    var : ndarray
-        Residual variance per sample in each block (noise, plus 2x and 3x:
-        conservative).
-    """
-    cut = np.searchsorted(at, edges)
-    lo, hi = int(cut[0]), int(cut[-1])
-    th, a = theta[lo:hi], accel[lo:hi]
-    c, s = np.cos(th), np.sin(th)
-    starts = cut[:-1] - lo
-    n = np.diff(cut).astype(float)
-
-    def sums(x: np.ndarray) -> np.ndarray:  # per block, in one pass
-        out = np.add.reduceat(x, starts) if len(x) else np.zeros(len(starts))
-        return np.where(n > 0, out, 0.0)
-
-    ac, as_ = a * c, a * s
-    cc, cs = sums(c * c), sums(c * s)
-    ss = n - cc
-    c1, s1, a1 = sums(c), sums(s), sums(a)
-    aa = sums(a * a)
-    ac, as_ = sums(ac), sums(as_)
-    M = np.stack(
-        [np.stack([cc, cs, c1], -1), np.stack([cs, ss, s1], -1), np.stack([c1, s1, n], -1)], -2
-    )  # (blocks, 3, 3)
-    rhs = np.stack([ac, as_, a1], -1)
-    ok = n >= 8
-    coef = np.zeros((len(n), 3))
-    coef[ok] = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
-    resid = aa - np.einsum("bi,bi->b", coef, rhs)  # sum r^2 = sum a^2 - coef . X^T a
-    var = np.where(ok, np.maximum(resid, 0) / np.maximum(n - 3, 1), np.inf)
-    return coef[:, 0] - 1j * coef[:, 1], n, var
-
-
-def _std(ph: Phasor) -> float:
-    """Standard error of the phasor along its worst axis [m/s^2]."""
-    return math.sqrt(float(np.max(np.linalg.eigvalsh(ph.cov_m2_s4))))
-
-
-def steady_window(
-    theta: np.ndarray,
-    omega: np.ndarray,
-    accel: np.ndarray,
-    at: np.ndarray,
-    pos: np.ndarray,
-    rev: np.ndarray,
-) -> tuple[tuple[int, int], list[str]]:
-    """The longest run of steady-speed revolutions, from where the supports have settled.
-
-    Parameters are one node's samples between its first and last edge: shaft
-    angle, speed, acceleration and sample position ``at``; and its edges.
-    Returns the edges ``(first, last)`` that bound the window.
-
-    Speed steady: each revolution within :data:`SPEED_TOLERANCE` of the
-    median.  Settled: blocks of :data:`BLOCK_REVS` revolutions are fitted on
-    their own; the window starts at the first block from which every block's
-    1x agrees with the last half's to within 4 of its standard errors, or
-    :data:`SETTLED`, or 3 times the scatter of the last half's blocks (a beat
-    with a neighbour near 1x is not a transient).
+    Each revolution within :data:`SPEED_TOLERANCE` of the median speed.
     """
     notes: list[str] = []
     if len(pos) < 3:
@@ -198,51 +156,244 @@ def steady_window(
         raise MeasurementError("the speed is never steady for two revolutions in a row")
     if a > 0 or b < len(steady):
         notes.append(f"speed steady over revolutions {a}..{b} of {len(steady)}")
-    settled = a
-    n_blocks = (b - a) // BLOCK_REVS
-    if n_blocks >= 4:
-        edges = pos[a + BLOCK_REVS * np.arange(n_blocks + 1)]
-        A_blocks, n, var = block_fits(theta, accel, at, edges)
-        std = np.sqrt(2 * var / np.maximum(n, 1))  # per component of each block's 1x
-        tail = slice(n_blocks // 2, n_blocks)
-        A_tail = np.sum(A_blocks[tail] * n[tail]) / np.sum(n[tail])
-        # a decaying transient leaves a tight tail; a beat (a neighbour near 1x) does not:
-        # blocks are unsettled only if they stand out from the tail's own scatter
-        spread = float(np.sqrt(np.mean(np.abs(A_blocks[tail] - A_tail) ** 2)))
-        ok = np.abs(A_blocks - A_tail) <= np.maximum.reduce(
-            [4 * std, np.full(n_blocks, SETTLED * abs(A_tail)), np.full(n_blocks, 3 * spread)]
-        )
-        first_good = n_blocks
-        for k in range(n_blocks - 1, -1, -1):
-            if not ok[k]:
-                break
-            first_good = k
-        settled = a + first_good * BLOCK_REVS
-        if first_good > 0:
-            notes.append(f"supports settled after {first_good * BLOCK_REVS} revolutions")
-    return (settled, b), notes
+    return a, b, notes
 
 
-def block_scatter(
-    theta: np.ndarray, accel: np.ndarray, at: np.ndarray, pos: np.ndarray, noise: float
-) -> float:
+def settled_block(sums: np.ndarray) -> int:
+    """The first block from which every block's 1x agrees with the last half's.
+
+    Within 4 of its standard errors, or :data:`SETTLED`, or 3 times the
+    scatter of the last half's blocks (a beat with a neighbour near 1x is not
+    a transient).  ``sums``: :func:`~stand.core.fitsums.block_sums` rows.
+    """
+    n_blocks = len(sums)
+    if n_blocks < 4:
+        return 0
+    A_blocks, n, var = block_fits(sums)
+    std = np.sqrt(2 * var / np.maximum(n, 1))  # per component of each block's 1x
+    tail = slice(n_blocks // 2, n_blocks)
+    A_tail = np.sum(A_blocks[tail] * n[tail]) / np.sum(n[tail])
+    spread = float(np.sqrt(np.mean(np.abs(A_blocks[tail] - A_tail) ** 2)))
+    ok = np.abs(A_blocks - A_tail) <= np.maximum.reduce(
+        [4 * std, np.full(n_blocks, SETTLED * abs(A_tail)), np.full(n_blocks, 3 * spread)]
+    )
+    first_good = n_blocks
+    for k in range(n_blocks - 1, -1, -1):
+        if not ok[k]:
+            break
+        first_good = k
+    return first_good
+
+
+def block_scatter(sums: np.ndarray, noise: float) -> float:
     """How much blocks of whole revolutions scatter, against what the noise explains.
 
-    The window is cut at every :data:`BLOCK_REVS`-th edge; each block's 1x is
-    fitted (:func:`block_fits`).  Returns the scatter of the block values around their mean
-    over its expectation from ``noise`` (about 1 when only noise moves them;
-    0 when there are fewer than 3 blocks, which cannot tell).
+    Returns the scatter of the blocks' 1x around their mean over its
+    expectation from ``noise`` (about 1 when only noise moves them; 0 with
+    fewer than 3 blocks, which cannot tell).
     """
-    n_blocks = (len(pos) - 1) // BLOCK_REVS
+    n_blocks = len(sums)
     if n_blocks < 3 or noise <= 0:
         return 0.0
-    A, n, _ = block_fits(theta, accel, at, pos[::BLOCK_REVS][: n_blocks + 1])
+    A, n, _ = block_fits(sums)
     mean = np.sum(A * n) / np.sum(n)
     dev2 = np.abs(A - mean) ** 2
     if np.sqrt(np.mean(dev2)) < SCATTER_FLOOR * abs(mean):
         return 0.0  # immaterial, however many standard errors it is
     expected = 4 * noise**2 / np.maximum(n, 1)  # E|A_b - A|^2 from noise: 2 sigma^2/n per part
     return float(np.sum(dev2 / expected) / (n_blocks - 1))
+
+
+class _NodeRun:
+    """One node's longest segment, read in chunks: the passes of :func:`_node_phasor`."""
+
+    def __init__(self, s: NodeStream, gamma: float) -> None:
+        self.s = s
+        self.lo, self.hi, self.pos, self.rev = _segment(s)
+        self.knots = angle_knots(self.pos, self.rev)
+        self.gamma = gamma
+
+    def find(self, positions: np.ndarray, side: str = "left") -> np.ndarray:
+        """The first sample at or after each position (``side="right"``: after), absolute.
+
+        Sample indices are integers: searching for ``ceil`` (``floor``) of a
+        position needs no conversion of the whole index array.
+        """
+        seg = self.s.index[self.lo : self.hi]
+        key = np.ceil(positions) if side == "left" else np.floor(positions)
+        found = np.searchsorted(seg, key.astype(np.int64), side=side)  # type: ignore[call-overload]
+        return self.lo + np.asarray(found, dtype=np.int64)
+
+    def chunk(self, i0: int, i1: int) -> tuple[np.ndarray, ...]:
+        """Samples ``i0:i1``: shaft angle, speed, acceleration, cos and sin of the angle."""
+        at = self.s.index[i0:i1].astype(np.float64)
+        th, w = angle_at(self.knots, at)
+        th += self.gamma
+        return th, w, self.s.accel(i0, i1), np.cos(th), np.sin(th)
+
+    def angle(self, i: int) -> float:
+        """The shaft angle at sample ``i`` [rad]."""
+        th, _ = angle_at(self.knots, self.s.index[i : i + 1].astype(np.float64))
+        return float(th[0]) + self.gamma
+
+
+def _first_pass(
+    run: _NodeRun, starts: np.ndarray, end: int, n_full: int, w0: float
+) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]]]:
+    """Block sums of the ``n_full`` full blocks, and the fit's sums per chunk of blocks.
+
+    ``starts``: the first sample of each block (the last one is the tail up to
+    ``end``).  Returns the block sums and ``(first block, last block + 1, sums)``
+    per chunk.
+    """
+    blocks = np.zeros((n_full, 9))
+    chunks: list[tuple[int, int, WindowSums]] = []
+    bounds = np.append(starts, end)
+    j0 = 0
+    while j0 < len(starts):
+        j1 = int(np.searchsorted(bounds, bounds[j0] + CHUNK, side="right"))
+        j1 = min(max(j1 - 1, j0 + 1), len(starts))
+        i0, i1 = int(bounds[j0]), int(bounds[j1])
+        _, w, a, c, s = run.chunk(i0, i1)
+        full = min(j1, n_full)
+        if full > j0:
+            upto = int(bounds[full]) - i0
+            blocks[j0:full] = block_sums(
+                c[:upto], s[:upto], a[:upto], starts[j0:full] - i0, full - j0
+            )
+        sums = WindowSums.zero()
+        sums.add(base_columns(c, s, w, w0), a, w)
+        chunks.append((j0, j1, sums))
+        j0 = j1
+    return blocks, chunks
+
+
+def _window_sums(
+    run: _NodeRun, chunks: list[tuple[int, int, WindowSums]], starts: np.ndarray, end: int,
+    first: int, w0: float,
+) -> WindowSums:  # fmt: skip
+    """The fit's sums from block ``first`` to the end (one chunk redone if it starts inside)."""
+    total = WindowSums.zero()
+    for j0, j1, sums in chunks:
+        if j0 >= first:
+            total += sums
+        elif j1 > first:  # the window starts inside this chunk: redo its part
+            i1 = int(starts[j1]) if j1 < len(starts) else end
+            _, w, a, c, s = run.chunk(int(starts[first]), i1)
+            total.add(base_columns(c, s, w, w0), a, w)
+    return total
+
+
+def _second_pass(
+    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
+    th0: float, span: float, taper: bool,
+) -> tuple[np.ndarray, float, float, float]:  # fmt: skip
+    """Side-band sums of the residual over the window, sum r^2, sum wt^2 and sum wt."""
+    revs = span / (2 * math.pi)
+    bands = np.zeros((2, SIDE_BANDS), complex)
+    rr = wt2 = wt1 = 0.0
+    for k0 in range(i0, i1, CHUNK):
+        k1 = min(k0 + CHUNK, i1)
+        th, w, a, c, s = run.chunk(k0, k1)
+        r = a - model_values(c, s, w, w0, T @ coef)
+        rr += float(r @ r)
+        if taper and span > 0:
+            wt = np.sin(math.pi * (th - th0) / span) ** 2
+            wt2 += float(wt @ wt)
+            wt1 += float(np.sum(wt))
+            r = wt * r
+        else:
+            wt2 += k1 - k0
+            wt1 += k1 - k0
+        bands += side_band_sums(r, c, s, (th - th0) / max(revs, 1e-12), SIDE_BANDS)
+    return bands, rr, wt2, wt1
+
+
+def _tapered_normal_equations(
+    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, th0: float, span: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``X'WX``, ``X'Wa`` and ``X'W^2 X`` with Hann weights over the window."""
+    m = T.shape[1]
+    XtWX, XtWa, XtW2X = np.zeros((m, m)), np.zeros(m), np.zeros((m, m))
+    for k0 in range(i0, i1, CHUNK):
+        k1 = min(k0 + CHUNK, i1)
+        th, w, a, c, s = run.chunk(k0, k1)
+        X = base_columns(c, s, w, w0) @ T
+        wt = np.sin(math.pi * (th - th0) / span) ** 2
+        Xw = X * wt[:, None]
+        XtWX += X.T @ Xw
+        XtWa += Xw.T @ a
+        XtW2X += Xw.T @ Xw
+    return XtWX, XtWa, XtW2X
+
+
+def _node_phasor(
+    s: NodeStream, gamma: float, taper: bool, gate: bool
+) -> tuple[Phasor, Window, np.ndarray, list[str]]:
+    """One node's 1x phasor over its steady, settled window (in chunks).
+
+    Returns the phasor, the window, the block sums over the window (for the
+    block check) and the gate's notes.
+    """
+    run = _NodeRun(s, gamma)
+    pos, rev = run.pos, run.rev
+    if gate:
+        a, b, notes = steady_revolutions(pos, rev)
+    else:
+        if len(pos) < 2:
+            raise MeasurementError(f"only {len(pos)} reference edges: need at least 2")
+        a, b, notes = 0, len(pos) - 1, []
+    n_full = (b - a) // BLOCK_REVS
+    edges = pos[a + BLOCK_REVS * np.arange(n_full + 1)]
+    starts = run.find(edges)  # the first sample of the n_full blocks and of the tail
+    end = int(run.find(pos[b : b + 1], "right")[0])
+    per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
+    w0 = 2 * math.pi / float(np.median(per_rev))  # a fixed speed for the base columns
+    blocks, chunks = _first_pass(run, starts, end, n_full, w0)
+    first = settled_block(blocks) if gate else 0
+    if first > 0:
+        notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
+    e0 = a + BLOCK_REVS * first
+    window = Window(
+        start=float(pos[e0]),
+        end=float(pos[b]),
+        revolutions=int(rev[b] - rev[e0]),
+        settled_from=float(pos[e0]),
+    )
+    sums = _window_sums(run, chunks, starts, end, first, w0)
+    i0 = int(starts[first])
+    if sums.n < 8:
+        raise MeasurementError(f"only {sums.n} samples in the steady window: measure longer")
+    w_ref = sums.w_sum / sums.n
+    sloped = (sums.w_max - sums.w_min) / w_ref > SPEED_SPAN_SLOPE
+    T = model_transform(w0, w_ref, sloped)
+    th0, th1 = run.angle(i0), run.angle(end - 1)
+    span = th1 - th0
+    tapered = taper and span > 0
+    if tapered:
+        XtWX, XtWa, XtW2X = _tapered_normal_equations(run, i0, end, w0, T, th0, span)
+    else:
+        XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
+    coef = np.linalg.solve(XtWX, XtWa)
+    bands, rr, wt2, wt1 = _second_pass(run, i0, end, w0, T, coef, th0, span, tapered)
+    sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
+    bread = np.linalg.inv(XtWX)
+    cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
+    cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
+    j = 5 if sloped else 3
+    ph = Phasor(
+        A_m_s2=complex(coef[0], -coef[1]),
+        cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
+        harmonics_m_s2={2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])},
+        omega_ref_rad_s=w_ref * float(s.rate_hz or 0.0),
+        samples=sums.n,
+        revolutions=span / (2 * math.pi),
+        noise_m_s2=math.sqrt(sigma2),
+        residual_m_s2=math.sqrt(max(rr, 0.0) / sums.n),
+        noise_cost=wt2 * sums.n / wt1**2 if tapered else 1.0,
+        noise_dof=4.0 * SIDE_BANDS,
+    )
+    return ph, window, blocks[first:], notes
 
 
 def measure(
@@ -273,24 +424,12 @@ def measure(
                 f"node {node} sent nothing: need nodes 1 and 2 (one per "
                 f"support), got {sorted(streams.nodes) or 'none'}"
             )
-        index, accel, pos, rev = _segment(s)
-        assert s.rate_hz is not None
-        inside, th, w = shaft_angle(index, pos, rev, gamma)  # once, for the gate and the fit
-        at, acc = index[inside], accel[inside]
-        e0, e1 = 0, len(pos) - 1
-        if gate:
-            try:
-                (e0, e1), notes = steady_window(th, w, acc, at, pos, rev)
-            except MeasurementError as exc:
-                raise MeasurementError(f"node {node}: {exc}") from None
-            for note in notes:
-                warnings.append(Diagnostic("gate", f"node {node}: {note}", 0.0))
-        window = Window(
-            start=float(pos[e0]),
-            end=float(pos[e1]),
-            revolutions=int(rev[e1] - rev[e0]),
-            settled_from=float(pos[e0]),
-        )
+        try:
+            ph, window, blocks, notes = _node_phasor(s, gamma, taper, gate)
+        except MeasurementError as exc:
+            raise MeasurementError(f"node {node}: {exc}") from None
+        for note in notes:
+            warnings.append(Diagnostic("gate", f"node {node}: {note}"))
         if window.revolutions < MIN_REVS:
             warnings.append(
                 Diagnostic(
@@ -300,16 +439,13 @@ def measure(
                     float(window.revolutions),
                 )
             )
-        i0, i1 = np.searchsorted(at, [pos[e0], pos[e1]], side="left")
-        i1 = int(np.searchsorted(at, pos[e1], side="right"))
-        ph = fit_1x(th[i0:i1], acc[i0:i1], w[i0:i1], rate_hz=s.rate_hz, taper=taper)
         k = node - 1
         if sensor_gain[k] != 1.0 or sensor_delay_s[k] != 0.0:
             # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
             turn = sensor_gain[k] * np.exp(-1j * ph.omega_ref_rad_s * sensor_delay_s[k])
             R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
             ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
-        ratio = block_scatter(th[i0:i1], acc[i0:i1], at[i0:i1], pos[e0 : e1 + 1], ph.noise_m_s2)
+        ratio = block_scatter(blocks, ph.noise_m_s2)
         if ratio > SCATTER_LIMIT:
             warnings.append(
                 Diagnostic(

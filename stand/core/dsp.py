@@ -123,30 +123,57 @@ def shaft_angle(
     ([True, True, True, True, True], [0.0, 1.0, 2.0, 3.0, 4.0])
     """
     n = np.asarray(sample_index, dtype=float)
-    x = np.asarray(edge_position, dtype=float)
-    y = 2 * math.pi * (np.asarray(edge_rev, dtype=float) - float(np.asarray(edge_rev)[0]))
+    knots = angle_knots(edge_position, edge_rev)
+    x = knots[0]
     if len(x) < 2:
         return np.zeros(len(n), bool), np.zeros(0), np.zeros(0)
     inside = (n >= x[0]) & (n <= x[-1])
-    s = n[inside]
-    m = _hermite_slopes(x, y)
-    k = np.clip(np.searchsorted(x, s, side="right") - 1, 0, len(x) - 2)
-    h = x[k + 1] - x[k]
-    t = (s - x[k]) / h
-    t2, t3 = t * t, t * t * t
-    theta = (
-        (2 * t3 - 3 * t2 + 1) * y[k]
-        + (t3 - 2 * t2 + t) * h * m[k]
-        + (-2 * t3 + 3 * t2) * y[k + 1]
-        + (t3 - t2) * h * m[k + 1]
-    )
-    dtheta = (
-        (6 * t2 - 6 * t) * y[k]
-        + (3 * t2 - 4 * t + 1) * h * m[k]
-        + (-6 * t2 + 6 * t) * y[k + 1]
-        + (3 * t2 - 2 * t) * h * m[k + 1]
-    ) / h
+    theta, dtheta = angle_at(knots, n[inside])
     return inside, gamma_rad + theta, dtheta
+
+
+def angle_knots(
+    edge_position: ArrayLike, edge_rev: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The shaft angle's knots: edge positions, their angles [rad] and slopes [rad per sample]."""
+    x = np.asarray(edge_position, dtype=float)
+    rev = np.asarray(edge_rev, dtype=float)
+    if len(x) < 2:
+        return x, np.zeros(len(x)), np.zeros(len(x))
+    y = 2 * math.pi * (rev - rev[0])
+    return x, y, _hermite_slopes(x, y)
+
+
+def angle_at(
+    knots: tuple[FloatArray, FloatArray, FloatArray], s: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Shaft angle [rad, from the first edge] and speed [rad per sample] at positions ``s``
+    (increasing) between the first and the last knot (cubic Hermite, :func:`shaft_angle`)."""
+    x, y, m = knots
+    # the interval of each sample: s increases, so count the inner knots passed
+    passed = np.bincount(np.searchsorted(s, x[1:-1], side="right"), minlength=len(s) + 1)
+    k = np.minimum(np.cumsum(passed[: len(s)]), len(x) - 2)
+    h = np.diff(x)
+    hm0, hm1 = h * m[:-1], h * m[1:]
+    dy = np.diff(y)
+    c2 = 3 * dy - 2 * hm0 - hm1  # the cubic per interval: y + hm0 t + c2 t^2 + c3 t^3
+    c3 = hm0 + hm1 - 2 * dy
+    hk = h[k]
+    t = s - x[k]
+    t /= hk
+    a1, a2, a3 = hm0[k], c2[k], c3[k]
+    theta = a3 * t
+    theta += a2
+    theta *= t
+    theta += a1
+    dtheta = a3 * (3 * t)
+    dtheta += 2 * a2
+    dtheta *= t
+    dtheta += a1
+    dtheta /= hk
+    theta *= t
+    theta += y[k]
+    return theta, dtheta
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,227 @@
+"""The 1x fit from sums: a run of any length in chunks, in bounded memory.
+
+Pure numerics (arrays in, arrays out).  :func:`stand.core.dsp.fit_1x` fits
+the samples it is given at once; here the same estimator is built from
+sums that chunks of samples add up, so a one-hour run never holds more than
+a chunk of temporaries:
+
+* **Base columns.**  With ``u = w / w0 - 1`` for a fixed speed ``w0``
+  (the run's median, known from the edges before any sample is touched),
+  ``P = (1 + u)^2`` and ``Q = P u``, every column the fit may use is a
+  fixed combination of ``B = [P c, P s, 1, Q c, Q s, c2, s2, c3, s3]``
+  (``c, s = cos, sin theta``; ``c2 ... s3`` the 2x and 3x): with
+  ``k = w0 / w_ref``, ``g c = k^2 P c`` and ``g delta c = k^3 (P + Q) c -
+  k^2 P c``.  So the normal equations of any window are ``T' (B'B) T`` and
+  ``T' B'a`` (:func:`model_transform`), whatever ``w_ref`` the window has.
+* **Block sums** of ``cos, sin, 1`` per block of whole revolutions give the
+  gate's and the block check's fits (:func:`block_sums`).
+* **Side bands** need the fitted coefficients, so they take a second pass
+  over the window (:func:`side_band_sums`).
+
+The results equal :func:`~stand.core.dsp.fit_1x` on the same samples to
+rounding (tested to 1e-12 relative).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+N_BASE = 9
+"""Base columns: P c, P s, 1, Q c, Q s, c2, s2, c3, s3."""
+
+
+def base_columns(c: FloatArray, s: FloatArray, w: FloatArray, w0: float) -> FloatArray:
+    """The base columns of samples with ``cos, sin theta = c, s`` and speed ``w`` (n, 9)."""
+    n = len(c)
+    u = w / w0 - 1.0
+    P = (1.0 + u) ** 2
+    Q = P * u
+    B = np.empty((n, N_BASE))
+    B[:, 0] = P * c
+    B[:, 1] = P * s
+    B[:, 2] = 1.0
+    B[:, 3] = Q * c
+    B[:, 4] = Q * s
+    c2 = c * c - s * s
+    s2 = 2.0 * s * c
+    B[:, 5] = c2
+    B[:, 6] = s2
+    B[:, 7] = c2 * c - s2 * s
+    B[:, 8] = s2 * c + c2 * s
+    return B
+
+
+def model_transform(w0: float, w_ref: float, sloped: bool) -> FloatArray:
+    """``T`` with model columns ``X = B T``: ``g c, g s, 1, [g d c, g d s], c2, s2, c3, s3``.
+
+    ``g = (w / w_ref)^2`` and ``d = w / w_ref - 1``, as in :func:`~stand.core.dsp.fit_1x`.
+    """
+    k = w0 / w_ref
+    k2, k3 = k * k, k * k * k
+    cols = []
+    for j in (0, 1):  # g c, g s
+        t = np.zeros(N_BASE)
+        t[j] = k2
+        cols.append(t)
+    t = np.zeros(N_BASE)
+    t[2] = 1.0
+    cols.append(t)
+    if sloped:
+        for j in (0, 1):  # g d c = k^3 (P + Q) c - k^2 P c
+            t = np.zeros(N_BASE)
+            t[j] = k3 - k2
+            t[j + 3] = k3
+            cols.append(t)
+    for j in (5, 6, 7, 8):
+        t = np.zeros(N_BASE)
+        t[j] = 1.0
+        cols.append(t)
+    return np.column_stack(cols)
+
+
+@dataclass
+class WindowSums:
+    """What a set of samples adds to the 1x fit (sums of base columns and speeds).
+
+    Attributes
+    ----------
+    G : ndarray (9, 9)
+        ``B' B``.
+    Ba : ndarray (9,)
+        ``B' a``.
+    n : int
+        Samples.
+    w_sum : float
+        Sum of the speeds [rad per sample].
+    w_min, w_max : float
+        Lowest and highest speed.
+    """
+
+    G: FloatArray
+    Ba: FloatArray
+    n: int = 0
+    w_sum: float = 0.0
+    w_min: float = math.inf
+    w_max: float = -math.inf
+
+    @classmethod
+    def zero(cls) -> WindowSums:
+        return cls(np.zeros((N_BASE, N_BASE)), np.zeros(N_BASE))
+
+    def add(self, B: FloatArray, a: FloatArray, w: FloatArray) -> None:
+        """Add samples (their base columns, accelerations and speeds)."""
+        if not len(a):
+            return
+        self.G += B.T @ B
+        self.Ba += B.T @ a
+        self.n += len(a)
+        self.w_sum += float(np.sum(w))
+        self.w_min = min(self.w_min, float(np.min(w)))
+        self.w_max = max(self.w_max, float(np.max(w)))
+
+    def __iadd__(self, other: WindowSums) -> WindowSums:
+        self.G = self.G + other.G
+        self.Ba = self.Ba + other.Ba
+        self.n += other.n
+        self.w_sum += other.w_sum
+        self.w_min = min(self.w_min, other.w_min)
+        self.w_max = max(self.w_max, other.w_max)
+        return self
+
+
+def block_sums(
+    c: FloatArray, s: FloatArray, a: FloatArray, starts: NDArray[np.int64], n_blocks: int
+) -> FloatArray:
+    """Per-block sums for a fit on ``cos, sin, 1``: rows ``cc cs c s n aa ac as a`` (n_blocks, 9).
+
+    ``starts``: where each of ``n_blocks`` blocks begins in the chunk (sorted;
+    a block may be empty).
+    """
+    out = np.zeros((n_blocks, 9))
+    if not len(a):
+        return out
+    sizes = np.diff(np.append(starts, len(a)))
+    has = sizes > 0
+    at = starts[has]
+    for j, x in enumerate((c * c, c * s, c, s, np.ones(len(a)), a * a, a * c, a * s, a)):
+        out[has, j] = np.add.reduceat(x, at)
+    return out
+
+
+def block_fits(sums: FloatArray) -> tuple[NDArray[np.complex128], FloatArray, FloatArray]:
+    """1x phasor, sample count and residual variance per sample of each block.
+
+    The same least squares as fitting ``cos theta, sin theta, 1`` on each
+    block's samples (blocks with fewer than 8 samples get an infinite variance).
+    """
+    cc, cs, c1, s1, n, aa, ac, as_, a1 = sums.T
+    ss = n - cc
+    M = np.stack(
+        [np.stack([cc, cs, c1], -1), np.stack([cs, ss, s1], -1), np.stack([c1, s1, n], -1)], -2
+    )
+    rhs = np.stack([ac, as_, a1], -1)
+    ok = n >= 8
+    coef = np.zeros((len(n), 3))
+    if ok.any():
+        coef[ok] = np.linalg.solve(M[ok], rhs[ok][..., None])[..., 0]
+    resid = aa - np.einsum("bi,bi->b", coef, rhs)
+    var = np.where(ok, np.maximum(resid, 0) / np.maximum(n - 3, 1), np.inf)
+    return coef[:, 0] - 1j * coef[:, 1], n, var
+
+
+def side_band_sums(
+    residual: FloatArray,
+    c: FloatArray,
+    s: FloatArray,
+    phase: FloatArray,
+    side_bands: int,
+) -> NDArray[np.complex128]:
+    """Side-band sums of one chunk: ``sum r e^{-i theta} e^{-+ i k phase}``, ``k = 2 .. K+1``.
+
+    ``phase = (theta - theta_first) / R`` for the window's first angle and its
+    revolutions ``R``: one DFT bin next to 1x is one unit of it.  Single
+    precision is ample for a noise level (1e-7 relative); the chunks' sums are
+    added in double.  Returns shape (2, side_bands): the upper and lower bands.
+    """
+    n = len(residual)
+    base = np.empty(n, np.complex64)  # the residual with 1x moved to 0: r e^{-i theta}
+    base.real = residual * c
+    base.imag = residual * s
+    np.negative(base.imag, out=base.imag)
+    ph = phase.astype(np.float32)
+    step = np.empty(n, np.complex64)  # e^{-i phase}
+    step.real = np.cos(ph)
+    step.imag = np.sin(ph)
+    np.negative(step.imag, out=step.imag)
+    bins = np.empty((side_bands, n), dtype=np.complex64)
+    bins[0] = step * step
+    for k in range(1, side_bands):
+        np.multiply(bins[k - 1], step, out=bins[k])
+    out: NDArray[np.complex128] = (np.stack((base, np.conj(base))) @ bins.T).astype(np.complex128)
+    return out
+
+
+def model_values(
+    c: FloatArray, s: FloatArray, w: FloatArray, w0: float, coef_base: FloatArray
+) -> FloatArray:
+    """``B coef_base`` without forming ``B``: the fitted signal at each sample."""
+    u = w / w0 - 1.0
+    P = (1.0 + u) ** 2
+    b = coef_base
+    c2 = c * c - s * s
+    s2 = 2.0 * s * c
+    out: FloatArray = (b[0] + b[3] * u) * c
+    out += (b[1] + b[4] * u) * s
+    out *= P
+    out += b[2]
+    out += b[5] * c2
+    out += b[6] * s2
+    out += b[7] * (c2 * c - s2 * s)
+    out += b[8] * (s2 * c + c2 * s)
+    return out

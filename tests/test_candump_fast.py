@@ -1,0 +1,82 @@
+"""The candump fast path (byte columns) reads exactly what the regular expression reads."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from stand.drivers import logs
+from stand.errors import RecordingError
+
+FIELDS = ("t_s", "can_id", "dlc", "data", "flags")
+
+
+def same(a: object, b: object) -> bool:
+    return all(np.array_equal(getattr(a, f), getattr(b, f)) for f in FIELDS)
+
+
+line = st.builds(
+    lambda t, d, chan, ext, can_id, data, tail: (
+        f"({t}.{d}) {chan} "
+        + (f"{can_id & 0x1FFFFFFF:08X}" if ext else f"{can_id & 0x7FF:03X}")
+        + "#"
+        + data.hex().upper()
+        + tail
+    ),
+    st.integers(0, 2_000_000_000),
+    st.sampled_from(["000000", "5", "123456", "999999999"]),
+    st.sampled_from(["can0", "vcan1", "x"]),
+    st.booleans(),
+    st.integers(0, 0x1FFFFFFF),
+    st.binary(min_size=0, max_size=8),
+    st.sampled_from(["", " R", " T"]),
+)
+
+
+@settings(max_examples=200)
+@given(lines=st.lists(line, min_size=1, max_size=40), last_newline=st.booleans())
+def test_fast_and_regular_expression_agree(
+    tmp_path_factory: pytest.TempPathFactory, lines: list[str], last_newline: bool
+) -> None:
+    path = tmp_path_factory.mktemp("c") / "x.log"
+    path.write_text("\n".join(lines) + ("\n" if last_newline else ""))
+    fast = logs._fast_candump(np.fromfile(path, np.uint8))
+    slow = logs._read_candump_text(path)
+    digits = max(len(x.split(")")[0].replace(".", "")) - 1 for x in lines)
+    assert fast is not None or digits > 15  # more digits than a double holds: the slow path
+    assert fast is None or same(fast, slow)
+    assert same(logs.read_candump(path), slow)
+
+
+@settings(max_examples=200)
+@given(lines=st.lists(line, min_size=1, max_size=20), at=st.integers(0, 10_000),
+       junk=st.sampled_from([b"garbage", b"(1.0) can0 12#R", b"(x) can0 123#00", b"",
+                             b"  (1.0) can0 123#00", b"(1.0) can0 123##011", b"(-1.0) can0 1#0",
+                             b"(1.0)  can0 123#00", b"(1.0) can0 123#0"]))  # fmt: skip
+def test_an_unusual_line_takes_the_slow_path_with_the_same_answer(
+    tmp_path_factory: pytest.TempPathFactory, lines: list[str], at: int, junk: bytes
+) -> None:
+    raw = [x.encode() for x in lines]
+    raw.insert(at % (len(raw) + 1), junk)
+    path = tmp_path_factory.mktemp("c") / "x.log"
+    path.write_bytes(b"\n".join(raw) + b"\n")
+    try:
+        slow = logs._read_candump_text(path)
+    except RecordingError as exc:
+        with pytest.raises(RecordingError) as got:
+            logs.read_candump(path)
+        assert str(got.value) == str(exc)  # the same file and line named
+        return
+    assert same(logs.read_candump(path), slow)
+
+
+def test_blocks_split_at_line_ends(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    lines = [f"({k}.000100) can0 101#{k % 256:02X}00000000000000" for k in range(2000)]
+    path = tmp_path / "x.log"
+    path.write_text("\n".join(lines) + "\n")
+    monkeypatch.setattr(logs, "CANDUMP_BLOCK", 1000)  # many blocks, each cut mid-line
+    assert same(logs.read_candump(path), logs._read_candump_text(path))
