@@ -237,15 +237,35 @@ class _NodeRun:
         return float(th[0]) + self.gamma
 
 
+@dataclass
+class _Kept:
+    """What the first pass keeps for the side bands, in single precision (16 bytes a sample).
+
+    The side bands are a noise level (single precision already); the residual
+    from ``c, s, w`` in single precision is off by about 1e-7 of the 1x
+    amplitude, far below any noise.  ``phase`` is the angle from the first
+    sample kept [rad].
+    """
+
+    lo: int
+    phase: np.ndarray
+    c: np.ndarray
+    s: np.ndarray
+    w: np.ndarray
+
+
 def _first_pass(
     run: _NodeRun, starts: np.ndarray, end: int, n_full: int, w0: float
-) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]]]:
+) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]], _Kept]:
     """Block sums of the ``n_full`` full blocks, and the fit's sums per chunk of blocks.
 
     ``starts``: the first sample of each block (the last one is the tail up to
-    ``end``).  Returns the block sums and ``(first block, last block + 1, sums)``
-    per chunk.
+    ``end``).  Returns the block sums, ``(first block, last block + 1, sums)``
+    per chunk, and what the side bands need.
     """
+    lo = int(starts[0])
+    kept = _Kept(lo, *(np.empty(end - lo, np.float32) for _ in range(4)))
+    th_lo = run.angle(lo) if end > lo else 0.0
     blocks = np.zeros((n_full, 9))
     chunks: list[tuple[int, int, WindowSums]] = []
     bounds = np.append(starts, end)
@@ -254,7 +274,9 @@ def _first_pass(
         j1 = int(np.searchsorted(bounds, bounds[j0] + CHUNK, side="right"))
         j1 = min(max(j1 - 1, j0 + 1), len(starts))
         i0, i1 = int(bounds[j0]), int(bounds[j1])
-        _, w, a, c, s = run.chunk(i0, i1)
+        th, w, a, c, s = run.chunk(i0, i1)
+        k = slice(i0 - lo, i1 - lo)
+        kept.phase[k], kept.c[k], kept.s[k], kept.w[k] = th - th_lo, c, s, w
         full = min(j1, n_full)
         if full > j0:
             upto = int(bounds[full]) - i0
@@ -265,7 +287,7 @@ def _first_pass(
         sums.add(base_columns(c, s, w, w0), a, w)
         chunks.append((j0, j1, sums))
         j0 = j1
-    return blocks, chunks
+    return blocks, chunks, kept
 
 
 def _window_sums(
@@ -285,27 +307,30 @@ def _window_sums(
 
 
 def _second_pass(
-    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
-    th0: float, span: float, taper: bool,
+    run: _NodeRun, kept: _Kept, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
+    span: float, taper: bool,
 ) -> tuple[np.ndarray, float, float, float]:  # fmt: skip
     """Side-band sums of the residual over the window, sum r^2, sum wt^2 and sum wt."""
     revs = span / (2 * math.pi)
-    bands = np.zeros((2, SIDE_BANDS), complex)
+    bands: np.ndarray = np.zeros((2, SIDE_BANDS), complex)
     rr = wt2 = wt1 = 0.0
+    b = (T @ coef).astype(np.float32)
+    ph0 = float(kept.phase[i0 - kept.lo])
     for k0 in range(i0, i1, CHUNK):
         k1 = min(k0 + CHUNK, i1)
-        th, w, a, c, s = run.chunk(k0, k1)
-        r = a - model_values(c, s, w, w0, T @ coef)
+        k = slice(k0 - kept.lo, k1 - kept.lo)
+        c, s, phase = kept.c[k], kept.s[k], kept.phase[k] - np.float32(ph0)
+        r = run.s.accel(k0, k1) - model_values(c, s, kept.w[k], w0, b)
         rr += float(r @ r)
         if taper and span > 0:
-            wt = np.sin(math.pi * (th - th0) / span) ** 2
+            wt = np.sin(np.float32(math.pi / span) * phase) ** 2
             wt2 += float(wt @ wt)
             wt1 += float(np.sum(wt))
             r = wt * r
         else:
             wt2 += k1 - k0
             wt1 += k1 - k0
-        bands += side_band_sums(r, c, s, (th - th0) / max(revs, 1e-12), SIDE_BANDS)
+        bands += side_band_sums(r, c, s, phase / np.float32(max(revs, 1e-12)), SIDE_BANDS)
     return bands, rr, wt2, wt1
 
 
@@ -349,7 +374,7 @@ def _node_phasor(
     end = int(run.find(pos[b : b + 1], "right")[0])
     per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
     w0 = 2 * math.pi / float(np.median(per_rev))  # a fixed speed for the base columns
-    blocks, chunks = _first_pass(run, starts, end, n_full, w0)
+    blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
     first = settled_block(blocks) if gate else 0
     if first > 0:
         notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
@@ -375,7 +400,8 @@ def _node_phasor(
     else:
         XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
     coef = np.linalg.solve(XtWX, XtWa)
-    bands, rr, wt2, wt1 = _second_pass(run, i0, end, w0, T, coef, th0, span, tapered)
+    bands, rr, wt2, wt1 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
+    del kept
     sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)

@@ -3,7 +3,9 @@
 Tolerances: the unbalance and the phasors are the same least squares summed in
 another order: 1e-11 relative (observed up to 2e-13).  The noise level comes
 from single-precision side bands in both (1e-7 relative each, summed in
-different orders): 1e-5 relative, and so are the 95 % radii.
+different orders): 1e-5 relative, and so are the 95 % radii.  The residual's
+rms and the taper's cost come from the single-precision copy the first pass
+keeps for the side bands: 1e-6 relative.
 """
 
 from __future__ import annotations
@@ -45,8 +47,8 @@ def test_chunked_equals_all_at_once(
         assert abs(b.A_m_s2 - a.A_m_s2) < 1e-11 * abs(a.A_m_s2)
         assert b.samples == a.samples and b.revolutions == pytest.approx(a.revolutions, rel=1e-12)
         assert b.noise_m_s2 == pytest.approx(a.noise_m_s2, rel=1e-5)
-        assert b.residual_m_s2 == pytest.approx(a.residual_m_s2, rel=1e-9)
-        assert b.noise_cost == pytest.approx(a.noise_cost, rel=1e-9)
+        assert b.residual_m_s2 == pytest.approx(a.residual_m_s2, rel=1e-6)
+        assert b.noise_cost == pytest.approx(a.noise_cost, rel=1e-6)
         for k in (2, 3):
             assert abs(b.harmonics_m_s2[k] - a.harmonics_m_s2[k]) < 1e-9 * abs(a.A_m_s2)
     assert np.allclose(new.radius95_kg_m, old.radius95_kg_m, rtol=1e-5)
@@ -69,7 +71,7 @@ def test_a_window_starting_inside_a_chunk_sums_exactly_its_samples(first: int) -
     saved = measure.CHUNK
     try:
         measure.CHUNK = 5000
-        _, chunks = measure._first_pass(run, starts, end, n_full, w0)
+        _, chunks, _ = measure._first_pass(run, starts, end, n_full, w0)
     finally:
         measure.CHUNK = saved
     assert len(chunks) > 4

@@ -26,11 +26,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+AnyFloat = NDArray[np.floating[Any]]
+"""Single or double precision (the side bands run in single)."""
 
 N_BASE = 9
 """Base columns: P c, P s, 1, Q c, Q s, c2, s2, c3, s3."""
@@ -176,10 +179,10 @@ def block_fits(sums: FloatArray) -> tuple[NDArray[np.complex128], FloatArray, Fl
 
 
 def side_band_sums(
-    residual: FloatArray,
-    c: FloatArray,
-    s: FloatArray,
-    phase: FloatArray,
+    residual: AnyFloat,
+    c: AnyFloat,
+    s: AnyFloat,
+    phase: AnyFloat,
     side_bands: int,
 ) -> NDArray[np.complex128]:
     """Side-band sums of one chunk: ``sum r e^{-i theta} e^{-+ i k phase}``, ``k = 2 .. K+1``.
@@ -207,16 +210,14 @@ def side_band_sums(
     return out
 
 
-def model_values(
-    c: FloatArray, s: FloatArray, w: FloatArray, w0: float, coef_base: FloatArray
-) -> FloatArray:
+def model_values(c: AnyFloat, s: AnyFloat, w: AnyFloat, w0: float, coef_base: AnyFloat) -> AnyFloat:
     """``B coef_base`` without forming ``B``: the fitted signal at each sample."""
     u = w / w0 - 1.0
     P = (1.0 + u) ** 2
     b = coef_base
     c2 = c * c - s * s
     s2 = 2.0 * s * c
-    out: FloatArray = (b[0] + b[3] * u) * c
+    out: AnyFloat = (b[0] + b[3] * u) * c
     out += (b[1] + b[4] * u) * s
     out *= P
     out += b[2]

@@ -34,13 +34,28 @@ for _k, _c in enumerate(b"0123456789ABCDEF"):
     HEX[bytes([_c]).lower()[0]] = _k
 
 
-def parse_candump(path: str) -> tuple[np.ndarray, np.ndarray]:
+def parse_candump(path: str, block: int = 1 << 23) -> tuple[np.ndarray, np.ndarray]:
     """Vectorised candump parse: (can_id, data (n, 8)) of ``(ts) iface ID#DATA`` lines.
 
-    Lines are grouped by length; within a group every line has the same
-    layout (checked), so each field is a column slice of one 2-D byte array.
+    In blocks of whole lines (bounded memory).  Lines are grouped by length;
+    within a group every line has the same layout (checked), so each field is
+    a column slice of one 2-D byte array.
     """
     raw = np.fromfile(path, np.uint8)
+    ids, datas = [], []
+    at = 0
+    while at < raw.size:
+        cut = min(at + block, raw.size)
+        if cut < raw.size:
+            cut += int(np.flatnonzero(raw[cut - 1 :] == 10)[0])
+        i, d = _parse_block(raw[at:cut])
+        ids.append(i)
+        datas.append(d)
+        at = cut
+    return np.concatenate(ids), np.concatenate(datas)
+
+
+def _parse_block(raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     nl = np.flatnonzero(raw == 10)
     starts = np.concatenate(([0], nl[:-1] + 1))
     lens = nl - starts
