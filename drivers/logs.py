@@ -134,9 +134,11 @@ def _fast_candump(raw: np.ndarray) -> Frames | None:
     for length in np.unique(lens).tolist():
         rows = np.flatnonzero(lens == length)
         block = raw[starts[rows].astype(np.int64)[:, None] + np.arange(length)]
-        # lines of one length may still differ in layout: sort them by where '.', ')', '#' are
-        layout = (np.argmax(block == 41, axis=1) * 4096 + np.argmax(block == 35, axis=1)) * 4096
-        layout += np.argmax(block == 46, axis=1)
+        # lines of one length may still differ in layout: sort them by where '.', ')', '#'
+        # and the last space are
+        layout = np.argmax(block == 41, axis=1) * 4096 + np.argmax(block == 35, axis=1)
+        layout = layout * 4096 + np.argmax(block == 46, axis=1)
+        layout = layout * 4096 + np.argmax(block[:, ::-1] == 32, axis=1)
         for key in np.unique(layout).tolist():
             same = layout == key
             got = _group(block[same])
@@ -152,6 +154,30 @@ def _fast_candump(raw: np.ndarray) -> Frames | None:
     return Frames(t_s, (raw_id & CAN_EFF_MASK).astype(np.uint32), dlc, data, flags)
 
 
+def iter_candump(path: Path) -> Iterator[Frames]:
+    """A candump log in blocks of frames: byte columns, or all at once through the slow path."""
+    try:
+        raw = np.fromfile(path, np.uint8)
+    except OSError as exc:
+        raise RecordingError(f"cannot read ({exc.strerror or exc})", path=str(path)) from exc
+    blocks: list[Frames] = []
+    at = 0
+    while at < raw.size:
+        cut = min(at + CANDUMP_BLOCK, raw.size)
+        if cut < raw.size:
+            newline = np.flatnonzero(raw[cut - 1 : min(cut + 4096, raw.size)] == 10)
+            cut = cut + int(newline[0]) if len(newline) else raw.size
+        got = _fast_candump(raw[at:cut])
+        if got is None:  # something unusual: the whole file through the regular expression
+            del raw, blocks
+            yield _read_candump_text(path)
+            return
+        blocks.append(got)
+        at = cut
+    del raw
+    yield from blocks
+
+
 def read_candump(path: Path) -> Frames:
     """Read a candump ``.log`` (``candump -L`` format, as python-can writes it).
 
@@ -164,25 +190,7 @@ def read_candump(path: Path) -> Frames:
     RecordingError
         Naming the file and the first line that is not a frame.
     """
-    try:
-        raw = np.fromfile(path, np.uint8)
-    except OSError as exc:
-        raise RecordingError(f"cannot read ({exc.strerror or exc})", path=str(path)) from exc
-    blocks: list[Frames] = []
-    at = 0
-    while at < raw.size:
-        cut = min(at + CANDUMP_BLOCK, raw.size)
-        if cut < raw.size:
-            newline = np.flatnonzero(raw[cut - 1 : min(cut + 4096, raw.size)] == 10)
-            if not len(newline):
-                return _read_candump_text(path)
-            cut = cut + int(newline[0])
-        got = _fast_candump(raw[at:cut])
-        if got is None:
-            return _read_candump_text(path)
-        blocks.append(got)
-        at = cut
-    return Frames.concat(blocks)
+    return Frames.concat(list(iter_candump(path)))
 
 
 def _read_candump_text(path: Path) -> Frames:
@@ -287,6 +295,17 @@ def messages_from_frames(frames: Frames, channel: str | None = None) -> Iterator
             channel=channel,
             check=False,
         )
+
+
+def iter_log(path: str | Path) -> Iterator[Frames]:
+    """Any python-can log in blocks of frames (candump in blocks; other formats whole)."""
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError("no such file", path=str(path))
+    if path.suffix.lower() == ".log":
+        yield from iter_candump(path)
+    else:
+        yield read_log(path)
 
 
 def read_log(path: str | Path) -> Frames:

@@ -293,6 +293,47 @@ def write_streams(f: Any, streams: RunStreams) -> None:
     f.attrs["bad_frames"] = streams.bad_frames
 
 
+READ_ROWS = 1 << 20
+"""Frames read from a run file at a time by :func:`read_streams` (bounded memory)."""
+
+
+def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic, ...]]:
+    """Check an open run file; its committed frame count, attributes and warnings."""
+    if f.attrs.get("format") != RUN_FORMAT:
+        raise RecordingError(
+            f"an HDF5 file but not a run file (format attribute "
+            f"{f.attrs.get('format')!r}, expected {RUN_FORMAT!r})",
+            path=str(path),
+        )
+    version = int(f.attrs.get("format_version", -1))
+    if version > RUN_FORMAT_VERSION:
+        raise RecordingError(
+            f"run file format {version} is newer than this software reads ({RUN_FORMAT_VERSION})",
+            path=str(path),
+        )
+    g = f["frames"]
+    n = int(f.attrs["frames_committed"])
+    n = min([n, *(g[k].shape[0] for k in (*_FRAME_FIELDS, "data"))])
+    meta = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
+    w = f["warnings"]
+    m = min(w["code"].shape[0], w["message"].shape[0])
+    codes, msgs = w["code"].asstr()[:m], w["message"].asstr()[:m]
+    warnings = tuple(Diagnostic(str(c), str(s)) for c, s in zip(codes, msgs, strict=True))
+    return n, meta, warnings
+
+
+def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
+    g = f["frames"]
+    cols = {k: g[k][lo:hi] for k in _FRAME_FIELDS}
+    return Frames(
+        cols["t_s"].astype(np.float64),
+        cols["can_id"].astype(np.uint32),
+        cols["dlc"].astype(np.uint8),
+        np.ascontiguousarray(g["data"][lo:hi], dtype=np.uint8),
+        cols["flags"].astype(np.uint8),
+    )
+
+
 def read_run(path: str | Path) -> Recording:
     """Read an HDF5 run file (complete, or cut short by a crash).
 
@@ -308,42 +349,45 @@ def read_run(path: str | Path) -> Recording:
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
         with h5py.File(path, "r", locking=False) as f:
-            if f.attrs.get("format") != RUN_FORMAT:
-                raise RecordingError(
-                    f"an HDF5 file but not a run file (format attribute "
-                    f"{f.attrs.get('format')!r}, expected {RUN_FORMAT!r})",
-                    path=str(path),
-                )
-            version = int(f.attrs.get("format_version", -1))
-            if version > RUN_FORMAT_VERSION:
-                raise RecordingError(
-                    f"run file format {version} is newer than this software "
-                    f"reads ({RUN_FORMAT_VERSION})",
-                    path=str(path),
-                )
-            g = f["frames"]
-            n = int(f.attrs["frames_committed"])
-            n = min([n, *(g[k].shape[0] for k in (*_FRAME_FIELDS, "data"))])
-            cols = {k: g[k][:n] for k in _FRAME_FIELDS}
-            data = g["data"][:n]
-            meta = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
-            w = f["warnings"]
-            m = min(w["code"].shape[0], w["message"].shape[0])
-            codes = w["code"].asstr()[:m]
-            msgs = w["message"].asstr()[:m]
+            n, meta, warnings = _open_run(f, path)
+            frames = _frame_rows(f, 0, n)
     except RecordingError:
         raise
     except (OSError, KeyError, ValueError) as exc:
-        raise RecordingError(f"not a readable run file ({exc})", path=str(path)) from None
-    frames = Frames(
-        cols["t_s"].astype(np.float64),
-        cols["can_id"].astype(np.uint32),
-        cols["dlc"].astype(np.uint8),
-        np.ascontiguousarray(data, dtype=np.uint8),
-        cols["flags"].astype(np.uint8),
-    )
-    warnings = tuple(Diagnostic(str(c), str(s)) for c, s in zip(codes, msgs, strict=True))
+        raise RecordingError(f"not a readable run file ({exc})", path=str(path)) from exc
     return Recording(str(path), frames, meta, warnings)
+
+
+def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
+    """A recording's per-node streams, read and decoded in blocks (bounded memory).
+
+    The returned :class:`Recording` has the file's attributes and warnings but
+    no frames: they went into the streams block by block and were let go.
+    """
+    from stand.drivers.streams import StreamBuilder
+
+    builder = StreamBuilder()
+    if is_run_file(path):
+        p = Path(path)
+        if not p.is_file():
+            raise RecordingError("no such file", path=str(p))
+        try:
+            with _h5py().File(p, "r", locking=False) as f:
+                n, meta, warnings = _open_run(f, p)
+                for lo in range(0, n, READ_ROWS):
+                    builder.add(_frame_rows(f, lo, min(lo + READ_ROWS, n)))
+        except RecordingError:
+            raise
+        except (OSError, KeyError, ValueError) as exc:
+            raise RecordingError(f"not a readable run file ({exc})", path=str(p)) from exc
+        rec = Recording(str(p), Frames.empty(), meta, warnings)
+    else:
+        from stand.drivers.logs import iter_log
+
+        for block in iter_log(path):
+            builder.add(block)
+        rec = Recording(str(path), Frames.empty())
+    return rec, builder.streams(strict_status=strict_status)
 
 
 def is_run_file(path: str | Path) -> bool:

@@ -234,17 +234,15 @@ def solve_recording(
     StandError
         Bad input, naming the file and what is wrong.
     """
-    from stand.drivers.recording import read_recording
-    from stand.drivers.streams import rebuild
+    from stand.drivers.recording import read_streams
 
-    rec = read_recording(path)
+    rec, streams = read_streams(path)
     if config:
         cfg, params, text = load_config_text(config)
         source = config
     else:
         cfg, params, text = stored_config(rec.meta, rec.path)
         source = f"{rec.path} (stored)"
-    streams = rebuild(rec.frames)
     m = measure_streams(streams, cfg, params, options)
     prov = Provenance(
         software=SOFTWARE,
@@ -253,7 +251,7 @@ def solve_recording(
         config_source=source,
         start_time=str(rec.meta.get("start_time", "")),
         source=str(rec.meta.get("source", "")),
-        frames=len(rec.frames),
+        frames=streams.frames,
         duration_s=streams.duration_s,
         config_toml=text,
     )
@@ -265,11 +263,10 @@ def solve_recording(
 
 def check_against(previous: str, cfg: Any, params: StandParameters, after: Measurement) -> Check:
     """The run before the correction, measured with the same stand (this config)."""
-    from stand.drivers.recording import read_recording
-    from stand.drivers.streams import rebuild
+    from stand.drivers.recording import read_streams
 
-    rec = read_recording(previous)
-    before = measure_streams(rebuild(rec.frames), cfg, params, SolveOptions())
+    _, streams = read_streams(previous)
+    before = measure_streams(streams, cfg, params, SolveOptions())
     b, a = before.solution.U_kg_m, after.solution.U_kg_m
     return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
 
@@ -320,12 +317,10 @@ def measure_recording(
     ``raw_sensors``: the nodes' phasors as they read, without the config's
     ``[sensors]`` gains and delays (what a calibration identifies).
     """
-    from stand.drivers.recording import read_recording
-    from stand.drivers.streams import rebuild
+    from stand.drivers.recording import read_streams
 
-    rec = read_recording(path)
+    rec, streams = read_streams(path)
     cfg, params, _ = load_config_text(config) if config else stored_config(rec.meta, rec.path)
-    streams = rebuild(rec.frames)
     if raw_sensors:
         m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
     else:
