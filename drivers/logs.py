@@ -31,7 +31,7 @@ from stand.drivers.protocol import (
     FRAME_DLC,
     Frames,
 )
-from stand.errors import RecordingError
+from stand.errors import RecordingError, UnusualLogError
 
 CAN_ERR_FLAG = 0x20000000
 CAN_EFF_MASK = 0x1FFFFFFF
@@ -154,27 +154,42 @@ def _fast_candump(raw: np.ndarray) -> Frames | None:
     return Frames(t_s, (raw_id & CAN_EFF_MASK).astype(np.uint32), dlc, data, flags)
 
 
-def iter_candump(path: Path) -> Iterator[Frames]:
-    """A candump log in blocks of frames: byte columns, or all at once through the slow path."""
+def iter_candump_fast(path: Path) -> Iterator[Frames]:
+    """A candump log in blocks of frames, read :data:`CANDUMP_BLOCK` bytes at a time.
+
+    Each block of whole lines goes through :func:`_fast_candump`.  Raises
+    :class:`UnusualLogError` (perhaps after some blocks) when one holds anything
+    unusual: the caller then reads the file with :func:`_read_candump_text`.
+    """
     try:
-        raw = np.fromfile(path, np.uint8)
+        with path.open("rb") as f:
+            carry = b""
+            while True:
+                chunk = f.read(CANDUMP_BLOCK)
+                text = carry + chunk
+                if not text:
+                    return
+                cut = text.rfind(b"\n") + 1 if chunk else len(text)
+                if cut == 0:  # no line end in a whole block
+                    raise UnusualLogError(str(path))
+                carry = text[cut:]
+                got = _fast_candump(np.frombuffer(text[:cut], np.uint8))
+                if got is None:
+                    raise UnusualLogError(str(path))
+                yield got
+                if not chunk:
+                    return
     except OSError as exc:
         raise RecordingError(f"cannot read ({exc.strerror or exc})", path=str(path)) from exc
+
+
+def iter_candump(path: Path) -> Iterator[Frames]:
+    """A candump log in blocks (all at once, through the regular expression, if unusual)."""
     blocks: list[Frames] = []
-    at = 0
-    while at < raw.size:
-        cut = min(at + CANDUMP_BLOCK, raw.size)
-        if cut < raw.size:
-            newline = np.flatnonzero(raw[cut - 1 : min(cut + 4096, raw.size)] == 10)
-            cut = cut + int(newline[0]) if len(newline) else raw.size
-        got = _fast_candump(raw[at:cut])
-        if got is None:  # something unusual: the whole file through the regular expression
-            del raw, blocks
-            yield _read_candump_text(path)
-            return
-        blocks.append(got)
-        at = cut
-    del raw
+    try:
+        blocks.extend(iter_candump_fast(path))
+    except UnusualLogError:
+        blocks = [_read_candump_text(path)]
     yield from blocks
 
 
@@ -297,13 +312,17 @@ def messages_from_frames(frames: Frames, channel: str | None = None) -> Iterator
         )
 
 
-def iter_log(path: str | Path) -> Iterator[Frames]:
-    """Any python-can log in blocks of frames (candump in blocks; other formats whole)."""
+def iter_log(path: str | Path, *, fast: bool = False) -> Iterator[Frames]:
+    """Any python-can log in blocks of frames (candump in blocks; other formats whole).
+
+    ``fast``: a candump log block by block as it is read, raising
+    :class:`UnusualLogError` if a block needs the slow path (start again without).
+    """
     path = Path(path)
     if not path.is_file():
         raise RecordingError("no such file", path=str(path))
     if path.suffix.lower() == ".log":
-        yield from iter_candump(path)
+        yield from (iter_candump_fast(path) if fast else iter_candump(path))
     else:
         yield read_log(path)
 

@@ -272,6 +272,16 @@ def shift_decoded(dec: Decoded, offset: int) -> Decoded:
     )
 
 
+def node_records(dec: Decoded, node: int) -> Decoded:
+    """Only the records of one node (counts and bad frames are left out)."""
+
+    def pick(records: Any) -> Any:
+        sel = records.node == node
+        return type(records)(**{f.name: getattr(records, f.name)[sel] for f in fields(records)})
+
+    return Decoded(pick(dec.samples), pick(dec.status), pick(dec.marks), 0, 0)
+
+
 def concat_decoded(parts: Sequence[Decoded]) -> Decoded:
     """Decoded blocks one after the other (their ``frame`` indices already run on)."""
 

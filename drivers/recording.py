@@ -383,9 +383,15 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
         rec = Recording(str(p), Frames.empty(), meta, warnings)
     else:
         from stand.drivers.logs import iter_log
+        from stand.errors import UnusualLogError
 
-        for block in iter_log(path):
-            builder.add(block)
+        try:  # a candump log streams block by block; anything unusual: again, the slow way
+            for block in iter_log(path, fast=True):
+                builder.add(block)
+        except UnusualLogError:
+            builder = StreamBuilder()
+            for block in iter_log(path):
+                builder.add(block)
         rec = Recording(str(path), Frames.empty())
     return rec, builder.streams(strict_status=strict_status)
 

@@ -27,7 +27,9 @@ Everything is vectorised per node; nodes are few (1..15).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -43,6 +45,7 @@ from stand.drivers.protocol import (
     Frames,
     concat_decoded,
     decode,
+    node_records,
     shift_decoded,
 )
 from stand.errors import NoStatusError
@@ -203,25 +206,42 @@ class RunStreams:
         return len(self.bad)
 
 
+class _Triple:
+    """``frame_start`` when every sample is valid: frame ``j`` starts at ``3 j``."""
+
+    def __getitem__(self, j: Any) -> Any:
+        return SAMPLES_PER_FRAME * np.asarray(j, dtype=np.int64)
+
+
 def _unwrap_samples(
     seq: NDArray[np.int64], restart_at: NDArray[np.bool_]
 ) -> tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int32], int]:
-    """Keep-mask (duplicates dropped), unwrapped frame numbers, segments, lost frames."""
+    """Keep-mask (duplicates dropped), unwrapped frame numbers, segments, lost frames.
+
+    In place where it can: a node of a one-hour run has millions of frames.
+    """
     n = len(seq)
     d = np.empty(n, dtype=np.int64)
     d[0] = 0
-    d[1:] = (seq[1:] - seq[:-1]) % _WRAP
+    np.subtract(seq[1:], seq[:-1], out=d[1:])
+    d %= _WRAP
     keep = np.ones(n, dtype=bool)
     keep[1:] = (d[1:] != 0) | restart_at[1:]  # a repeated seq is a duplicate, unless a restart
-    seq, d, restart_at = seq[keep], d[keep], restart_at[keep]
+    all_kept = bool(keep.all())
+    if not all_kept:
+        seq, d, restart_at = seq[keep], d[keep], restart_at[keep]
     start = restart_at | (d >= _WRAP // 2)
     start[0] = True
-    step = np.where(start, 0, d)
-    seg = (np.cumsum(start) - 1).astype(np.int32)
-    cum = np.cumsum(step)
+    d[start] = 0  # now the step from the frame before (0 at a segment's start)
+    lost = int(np.sum(d[d > 0] - 1))
+    seg = np.cumsum(start, dtype=np.int32)
+    seg -= 1
     first = np.flatnonzero(start)
-    F = seq[first][seg] + cum - cum[first][seg]
-    lost = int(np.sum(step[step > 0] - 1))
+    del start
+    F = np.cumsum(d)  # the running frame count, then moved to each segment's first seq
+    del d
+    offset = seq[first] - F[first]
+    F += offset[seg] if len(first) > 1 else offset[0]
     return keep, F, seg, lost
 
 
@@ -292,6 +312,7 @@ def _rebuild_node(
         pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
     )
     after_silence = gap_before > SILENCE_S
+    del all_frames, pos_in_node, gap_before  # a long run's node: free as soon as done
     seq = dec.samples.seq[s_sel].astype(np.int64)
     restart_at = np.zeros(len(seq), dtype=bool)
     hit = np.searchsorted(s_frame, st_frame[after_silence])
@@ -308,10 +329,14 @@ def _rebuild_node(
         if len(seq)
         else (np.zeros(0, bool), np.zeros(0, np.int64), np.zeros(0, np.int32), 0)
     )
-    s_frame_k = s_frame[keep]
-    seq_k = seq[keep]
-    counts = dec.samples.counts[s_sel][keep]
+    kept_all = bool(keep.all())  # no duplicates: views, not copies
+    s_frame_k = s_frame if kept_all else s_frame[keep]
+    seq_k = seq if kept_all else seq[keep]
+    counts = dec.samples.counts
+    counts = counts if bool(s_sel.all()) else counts[s_sel]
+    counts = counts if kept_all else counts[keep]
     duplicates = int(len(seq) - len(seq_k))
+    del seq, s_frame, restart_at, keep
     n_seg = int(seg[-1]) + 1 if len(seg) else 0
     if n_seg > 1:
         warn.append(
@@ -333,20 +358,33 @@ def _rebuild_node(
         )
 
     # --- samples
-    index = (SAMPLES_PER_FRAME * F[:, None] + np.arange(SAMPLES_PER_FRAME)).reshape(-1)
+    index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
+    F *= SAMPLES_PER_FRAME  # F as the index of each frame's first sample, for a moment
+    np.add(F[:, None], np.arange(SAMPLES_PER_FRAME), out=index.reshape(-1, SAMPLES_PER_FRAME))
+    F //= SAMPLES_PER_FRAME
     flat = counts.reshape(-1)
     valid = flat != INVALID_COUNT
+    all_valid = bool(valid.all())  # the common case: no copies
     # where each kept frame's valid samples begin in the valid-sample arrays
-    frame_start = np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
+    frame_start: Any = (
+        _Triple()
+        if all_valid
+        else np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
+    )
     seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
     segment_start = frame_start[seg_first].astype(np.int64)
     scale_start = scale_m_s2 = None
     if len(st_frame):
-        k = np.searchsorted(st_frame, s_frame_k) - 1  # latest STATUS before the frame
-        per_frame = scale[np.maximum(k, 0)] * 1e-6  # the first STATUS for frames before it
-        first = np.flatnonzero(np.diff(per_frame, prepend=np.nan) != 0)  # runs of one scale
-        scale_start = frame_start[first].astype(np.int64)
-        scale_m_s2 = per_frame[first]
+        # each STATUS scales the frames from the first one after it (the first STATUS also
+        # those before it): runs of one scale, found per STATUS, not per frame
+        begins = np.searchsorted(s_frame_k, st_frame)
+        begins[0] = 0
+        runs = np.concatenate((begins[1:] > begins[:-1], [True]))  # the STATUS that got frames
+        runs[0] = True
+        begins, values = begins[runs], scale[runs] * 1e-6
+        new = np.concatenate(([True], values[1:] != values[:-1]))  # merge equal neighbours
+        scale_start = frame_start[begins[new]].astype(np.int64)
+        scale_m_s2 = values[new]
 
     # --- marks: unwrap seq against the nearest SAMPLES frame of the node (by arrival)
     m_pos = np.zeros(0)
@@ -393,8 +431,8 @@ def _rebuild_node(
         node=node,
         rate_hz=float(rate[0]) if len(rate) else None,
         scale_um_s2=float(scale[-1]) if len(scale) else None,
-        index=index[valid],
-        counts=flat[valid],
+        index=index if all_valid else index[valid],
+        counts=flat if all_valid else flat[valid],
         segment_start=segment_start,
         scale_start=scale_start,
         scale_m_s2=scale_m_s2,
@@ -437,17 +475,38 @@ def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
 
 
 def rebuild_decoded(
-    dec: Decoded, t_s: NDArray[np.float64], *, strict_status: bool = True
+    dec: Decoded | Sequence[Decoded], t_s: NDArray[np.float64], *, strict_status: bool = True
 ) -> RunStreams:
-    """:func:`rebuild` from frames already decoded (``t_s``: every frame's host time [s])."""
+    """:func:`rebuild` from frames already decoded (``t_s``: every frame's host time [s]).
+
+    ``dec`` may be the decoded blocks one after the other: each node's records
+    are gathered from them on their own, so the blocks are never joined whole.
+    """
+    parts = [dec] if isinstance(dec, Decoded) else list(dec)
     t0 = float(t_s[0]) if len(t_s) else 0.0
-    present = np.union1d(np.union1d(dec.samples.node, dec.status.node), dec.marks.node)
+    present: NDArray[np.uint8] = np.zeros(0, np.uint8)
+    for p in parts:
+        present = np.union1d(
+            present, np.union1d(np.union1d(p.samples.node, p.status.node), p.marks.node)
+        )
     nodes: dict[int, NodeStream] = {}
     warnings: list[Diagnostic] = []
     for node in present.tolist():
-        stream, w = _rebuild_node(int(node), dec, t_s, t0, strict_status)
+        mine = (
+            parts[0] if len(parts) == 1 else concat_decoded([node_records(p, node) for p in parts])
+        )
+        stream, w = _rebuild_node(int(node), mine, t_s, t0, strict_status)
+        del mine
         nodes[int(node)] = stream
         warnings.extend(w)
+    dec = Decoded(
+        parts[0].samples if parts else decode(Frames.empty()).samples,
+        parts[0].status if parts else decode(Frames.empty()).status,
+        parts[0].marks if parts else decode(Frames.empty()).marks,
+        unknown_frames=sum(p.unknown_frames for p in parts),
+        error_frames=sum(p.error_frames for p in parts),
+        bad=tuple(b for p in parts for b in p.bad),
+    )
     if dec.bad:
         b = dec.bad[0]
         warnings.append(
@@ -507,10 +566,13 @@ class StreamBuilder:
         """Everything decoded so far, as one block, and every frame's host time [s]."""
         if len(self._parts) != 1:
             self._parts = [concat_decoded(self._parts)]
+        return self._parts[0], self._times_joined()
+
+    def _times_joined(self) -> NDArray[np.float64]:
+        if len(self._times) != 1:
             self._times = [np.concatenate(self._times) if self._times else np.zeros(0)]
-        return self._parts[0], self._times[0]
+        return self._times[0]
 
     def streams(self, *, strict_status: bool = True) -> RunStreams:
-        """The node streams of every frame added so far."""
-        dec, t_s = self.decoded()
-        return rebuild_decoded(dec, t_s, strict_status=strict_status)
+        """The node streams of every frame added so far (the blocks are not joined whole)."""
+        return rebuild_decoded(self._parts, self._times_joined(), strict_status=strict_status)

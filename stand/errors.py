@@ -151,6 +151,14 @@ class RecordingError(StandError, ValueError):
         super().__init__(f"{where}: {message}")
 
 
+class UnusualLogError(RecordingError):
+    """A candump block the fast reader cannot take (caught inside: the file is then read
+    the slow way, which names any bad line)."""
+
+    def __init__(self, path: str):
+        super().__init__("unusual lines for the fast reader", path=path)
+
+
 class BusError(StandError, ConnectionError):
     """The CAN interface failed: cannot open, bus-off, interface gone.
 

@@ -80,3 +80,26 @@ def test_blocks_split_at_line_ends(tmp_path: Path, monkeypatch: pytest.MonkeyPat
     path.write_text("\n".join(lines) + "\n")
     monkeypatch.setattr(logs, "CANDUMP_BLOCK", 1000)  # many blocks, each cut mid-line
     assert same(logs.read_candump(path), logs._read_candump_text(path))
+
+
+def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Blocks already decoded are dropped and the whole file is read the slow way."""
+    from stand.drivers.recording import read_streams
+    from stand.drivers.streams import rebuild
+    from stand.sim import load_scene, simulate
+
+    sc, p, _ = load_scene("demo")
+    frames = simulate(sc, p).frames
+    path = tmp_path / "x.log"
+    logs.write_log(frames, path)
+    with path.open("a") as f:
+        f.write("(99.000000) can0 123#R\n")  # a remote frame: only the slow path reads it
+    monkeypatch.setattr(logs, "CANDUMP_BLOCK", 50_000)
+    _, got = read_streams(path, strict_status=False)
+    want = rebuild(logs.read_log(path), strict_status=False)
+    assert got.frames == want.frames == len(frames) + 1
+    for n in (1, 2):
+        assert np.array_equal(got.nodes[n].index, want.nodes[n].index)
+        assert np.array_equal(got.nodes[n].counts, want.nodes[n].counts)
