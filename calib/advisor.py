@@ -29,7 +29,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stand.core import StandParameters, forward, natural_frequencies, solve_unbalance
+from stand.core import (
+    StandParameters,
+    forward,
+    natural_frequencies,
+    rad_s_to_rpm,
+    rpm_to_rad_s,
+    solve_unbalance,
+)
 from stand.core.inverse import RESONANCE_BAND
 
 C_ERROR = 0.05
@@ -71,7 +78,7 @@ def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int =
     """The advice for a stand + rotor; speeds from 1.1x the lowest mode to 8x the highest."""
     wn = natural_frequencies(p)
     top = float(np.max(wn))
-    hi = max_speed_rpm * 2 * math.pi / 60 if max_speed_rpm else 8 * top
+    hi = float(rpm_to_rad_s(max_speed_rpm)) if max_speed_rpm else 8 * top
     grid = np.geomspace(1.1 * float(np.min(wn)), max(hi, 1.2 * top), points)
     rows = []
     for w in grid:
@@ -82,7 +89,7 @@ def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int =
             sens = _sensitivity(p, float(w))
         except (ValueError, ArithmeticError):  # exactly at an undamped mode
             gain, sens = math.inf, math.inf
-        rows.append(SpeedRow(float(w) * 60 / (2 * math.pi), float(w) / top, gain, sens, near))
+        rows.append(SpeedRow(float(rad_s_to_rpm(w)), float(w) / top, gain, sens, near))
     good = [
         r
         for r in rows

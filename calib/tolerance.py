@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import StandParameters, solve_unbalance
-from stand.core.dsp import radius_factor
+from stand.core.dsp import radius95
 
 
 @dataclass(frozen=True)
@@ -77,16 +77,7 @@ def _solve(
 
 
 def _radius(cov: NDArray[np.float64]) -> NDArray[np.float64]:
-    k = radius_factor(math.inf)
-    return np.array(
-        [
-            k
-            * math.sqrt(
-                float(np.max(np.linalg.eigvalsh(cov[2 * i : 2 * i + 2, 2 * i : 2 * i + 2])))
-            )
-            for i in range(2)
-        ]
-    )
+    return np.array([radius95(cov[2 * i : 2 * i + 2, 2 * i : 2 * i + 2]) for i in range(2)])
 
 
 def parameter_uncertainty(

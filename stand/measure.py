@@ -36,7 +36,8 @@ from stand.core.dsp import (
     Phasor,
     angle_at,
     angle_knots,
-    radius_factor,
+    radius95,
+    sensor_response,
 )
 from stand.core.fitsums import (
     WindowSums,
@@ -468,7 +469,7 @@ def measure(
         k = node - 1
         if sensor_gain[k] != 1.0 or sensor_delay_s[k] != 0.0:
             # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
-            turn = sensor_gain[k] * np.exp(-1j * ph.omega_ref_rad_s * sensor_delay_s[k])
+            turn = sensor_response(sensor_gain[k], sensor_delay_s[k], ph.omega_ref_rad_s)
             R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
             ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
         ratio = block_scatter(blocks, ph.noise_m_s2)
@@ -506,13 +507,7 @@ def measure(
     dof = min(ph.noise_dof for ph in supports)
     cov_U = np.asarray(sol.cov_U).real if sol.cov_U is not None else np.zeros((4, 4))
     radius = np.array(
-        [
-            radius_factor(dof)
-            * math.sqrt(
-                float(np.max(np.linalg.eigvalsh(cov_U[2 * i : 2 * i + 2, 2 * i : 2 * i + 2])))
-            )
-            for i in range(2)
-        ]
+        [radius95(cov_U[2 * i : 2 * i + 2, 2 * i : 2 * i + 2], dof) for i in range(2)]
     )
     warnings.extend(sol.diagnostics)
     return Measurement(

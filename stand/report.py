@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.core import rad_s_to_rpm
 from stand.result import Result, Traces, to_json
 
 
@@ -92,7 +93,7 @@ def _spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
 
     fig, ax = plt.subplots(figsize=(9, 2.6))
     for n, (t, w) in sorted((traces.speeds if traces else {}).items()):
-        ax.plot(t, w * 60 / (2 * np.pi), lw=1, label=f"node {n}")
+        ax.plot(t, rad_s_to_rpm(w), lw=1, label=f"node {n}")
     ax.set_xlabel("time [s] (node clock)")
     ax.set_ylabel("speed [rpm]")
     ax.ticklabel_format(axis="y", useOffset=False, style="plain")

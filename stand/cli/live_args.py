@@ -92,6 +92,8 @@ def run_path(args: argparse.Namespace) -> str:
 
 def progress_line(p: Any) -> str:
     """One line of the live display."""
+    from stand.core import rad_s_to_rpm
+
     m = p.measurement
     planes = "  ".join(
         f"plane {i + 1}: {abs(m.solution.U_kg_m[i]) * 1e6:.1f} "
@@ -99,7 +101,7 @@ def progress_line(p: Any) -> str:
         for i in range(2)
     )
     amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
-    rpm = m.omega_rad_s * 60 / (2 * 3.141592653589793)
+    rpm = float(rad_s_to_rpm(m.omega_rad_s))
     return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}"
 
 

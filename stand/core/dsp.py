@@ -68,7 +68,31 @@ def radius_factor(dof: float, p: float = 0.95) -> float:
     return math.sqrt(2.0 * (dof / 2) * ((1 - p) ** (-2.0 / dof) - 1))
 
 
-"""Side bands each side of 1x used to estimate the noise at 1x."""
+def radius95(cov: ArrayLike, dof: float = float("inf")) -> float:
+    """Radius of the 95 % circle of a complex error with covariance ``cov`` (2 x 2).
+
+    Taken on the largest axis of the error ellipse (conservative), with
+    :func:`radius_factor` for a noise level estimated with ``dof`` degrees of
+    freedom.
+
+    >>> round(radius95([[1.0, 0.0], [0.0, 4.0]]), 4)
+    4.8955
+    """
+    var = float(np.max(np.linalg.eigvalsh(np.asarray(cov, dtype=float))))
+    return radius_factor(dof) * math.sqrt(max(var, 0.0))
+
+
+def sensor_response(gain: float, delay_s: float, omega_rad_s: float) -> complex:
+    """What a sensor does to a phasor at ``omega``: it reads ``gain * a(t - delay)``.
+
+    The node's phasor is the support's times ``gain e^{-i omega delay}``.
+
+    >>> sensor_response(2.0, 0.0, 100.0)
+    (2+0j)
+    """
+    return complex(gain * np.exp(-1j * omega_rad_s * delay_s))
+
+
 HANN_NOISE_COST = 1.5
 SPEED_SPAN_SLOPE = 0.03
 """Speed span (max - min over mean) beyond which the 1x amplitude also gets a free
@@ -219,8 +243,7 @@ class Phasor:
     @property
     def radius95_m_s2(self) -> float:
         """Radius of the 95 % circle around ``A`` (on the largest axis of the error ellipse)."""
-        var = float(np.max(np.linalg.eigvalsh(self.cov_m2_s4)))
-        return radius_factor(self.noise_dof) * math.sqrt(var)
+        return radius95(self.cov_m2_s4, self.noise_dof)
 
 
 def fit_1x(

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
+from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.drivers.protocol import Frames
@@ -164,7 +165,9 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     blocks: list[Frames] = []
     truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
     w0 = speed.omega0_rad_s
-    A_true = forward(p, w0, U) * np.array(gain) * np.exp(-1j * w0 * np.array(delay))
+    A_true = forward(p, w0, U) * np.array(
+        [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
+    )
     truth["A_m_s2"] = A_true
     scale = scene.nodes.scale_um_s2 * 1e-6
     for i in range(2):
