@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import enum
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -303,10 +304,47 @@ def concat_decoded(parts: Sequence[Decoded]) -> Decoded:
     )
 
 
-def _field(d8: NDArray[np.uint8], rows: NDArray[np.int64], kind: str, name: str) -> NDArray:  # type: ignore[type-arg]
+class BadReason(enum.IntEnum):
+    """Why a frame of a protocol id cannot be decoded (0: it can)."""
+
+    FINE = 0
+    REMOTE = 1
+    CAN_FD = 2
+    WRONG_LENGTH = 3
+    SLOT = 4
+    VERSION = 5
+
+    def describe(self, dlc: int, d8: NDArray[np.uint8]) -> str:
+        """The reason in words, with the figure from the frame (its DLC and 8 bytes)."""
+        if self is BadReason.WRONG_LENGTH:
+            return f"wrong length: DLC {dlc}, expected {FRAME_DLC}"
+        if self is BadReason.SLOT:
+            return f"MARK slot {_field(d8[None], None, 'MARK', 'slot')[0]}, expected 0..2"
+        if self is BadReason.VERSION:
+            got = _field(d8[None], None, "STATUS", "version")[0]
+            return f"STATUS protocol version {got}, expected {PROTOCOL_VERSION}"
+        return {
+            BadReason.REMOTE: "remote frame on a protocol id",
+            BadReason.CAN_FD: "CAN FD frame, expected classic CAN",
+        }.get(self, "")
+
+
+def _field(d8: NDArray[np.uint8], rows: NDArray[np.int64] | None, kind: str, name: str) -> NDArray:  # type: ignore[type-arg]
+    """Field ``name`` of message ``kind`` in the frames ``rows`` of ``d8`` (None: all), by
+    :data:`LAYOUT`: the decoder and the encoders read and write through it."""
     offset, dtype = LAYOUT[kind][name]
     size = np.dtype(dtype).itemsize
-    return np.ascontiguousarray(d8[rows, offset : offset + size]).view(dtype).reshape(-1)
+    cols = d8[:, offset : offset + size] if rows is None else d8[rows, offset : offset + size]
+    return np.ascontiguousarray(cols).view(dtype).reshape(-1)
+
+
+def _put(data: NDArray[np.uint8], kind: str, name: str, values: ArrayLike) -> None:
+    """Write field ``name`` of message ``kind`` into every row of ``data`` (by :data:`LAYOUT`)."""
+    offset, dtype = LAYOUT[kind][name]
+    n = len(data)
+    size = np.dtype(dtype).itemsize
+    v = np.ascontiguousarray(np.broadcast_to(np.asarray(values), (n,)).astype(dtype))
+    data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
 
 
 def decode(frames: Frames) -> Decoded:
@@ -330,25 +368,18 @@ def decode(frames: Frames) -> Decoded:
     protocol = standard & np.isin(base, (SAMPLES_BASE, STATUS_BASE, MARK_BASE))
     protocol &= (node >= 1) & (node <= MAX_NODE)
 
-    reason = np.zeros(len(frames), dtype=np.int8)  # 0 = fine
-    reasons = [
-        "",
-        "remote frame on a protocol id",
-        "CAN FD frame, expected classic CAN",
-        "wrong length",
-        "MARK slot out of range 0..2",
-        "other protocol version",
-    ]
+    reason = np.zeros(len(frames), dtype=np.int8)  # BadReason.FINE
     remote = (frames.flags & FLAG_REMOTE) != 0
     fd = (frames.flags & FLAG_FD) != 0
-    reason[protocol & (frames.dlc != FRAME_DLC)] = 3
-    reason[protocol & fd] = 2
-    reason[protocol & remote] = 1
+    reason[protocol & (frames.dlc != FRAME_DLC)] = BadReason.WRONG_LENGTH
+    reason[protocol & fd] = BadReason.CAN_FD
+    reason[protocol & remote] = BadReason.REMOTE
     d8 = frames.data[:, :FRAME_DLC]
     is_mark = protocol & (base == MARK_BASE) & (reason == 0)
-    reason[is_mark & (d8[:, 2] > SAMPLES_PER_FRAME - 1)] = 4
+    reason[is_mark & (_field(d8, None, "MARK", "slot") > SAMPLES_PER_FRAME - 1)] = BadReason.SLOT
     is_status = protocol & (base == STATUS_BASE) & (reason == 0)
-    reason[is_status & (d8[:, 5] != PROTOCOL_VERSION)] = 5
+    version = _field(d8, None, "STATUS", "version")
+    reason[is_status & (version != PROTOCOL_VERSION)] = BadReason.VERSION
 
     good = protocol & (reason == 0)
     rows = {
@@ -361,7 +392,7 @@ def decode(frames: Frames) -> Decoded:
         frame=r,
         node=node[r].astype(np.uint8),
         seq=_field(d8, r, "SAMPLES", "seq"),
-        counts=np.ascontiguousarray(d8[r, 2:8]).view("<i2").reshape(-1, 3).astype(np.int16),
+        counts=np.stack([_field(d8, r, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(np.int16),
     )
     r = rows["STATUS"]
     status = StatusRecords(
@@ -381,17 +412,14 @@ def decode(frames: Frames) -> Decoded:
         frac=_field(d8, r, "MARK", "frac"),
         rev=_field(d8, r, "MARK", "rev"),
     )
-    bad_rows = np.flatnonzero(reason)
-    bad = []
-    for i in bad_rows.tolist():
-        why = reasons[reason[i]]
-        if reason[i] == 3:
-            why = f"wrong length: DLC {frames.dlc[i]}, expected {FRAME_DLC}"
-        elif reason[i] == 4:
-            why = f"MARK slot {d8[i, 2]}, expected 0..2"
-        elif reason[i] == 5:
-            why = f"STATUS protocol version {d8[i, 5]}, expected {PROTOCOL_VERSION}"
-        bad.append(BadFrame(frame=i, can_id=int(cid[i]), reason=why))
+    bad = [
+        BadFrame(
+            frame=i,
+            can_id=int(cid[i]),
+            reason=BadReason(int(reason[i])).describe(int(frames.dlc[i]), d8[i]),
+        )
+        for i in np.flatnonzero(reason).tolist()
+    ]
     return Decoded(
         samples=samples,
         status=status,
@@ -405,22 +433,14 @@ def decode(frames: Frames) -> Decoded:
 # --- encoding: what a node sends (the simulator and the tests use it) ---
 
 
-def _pack(n: int, fields: dict[int, tuple[str, ArrayLike]]) -> NDArray[np.uint8]:
-    data = np.zeros((n, FRAME_DLC), dtype=np.uint8)
-    for offset, (dtype, values) in fields.items():
-        v = np.broadcast_to(np.asarray(values), (n,)).astype(dtype)
-        size = np.dtype(dtype).itemsize
-        data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
-    return data
-
-
 def encode_samples(node: int, seq: ArrayLike, counts: ArrayLike, t_s: ArrayLike) -> Frames:
     """SAMPLES frames of one node: ``seq`` (u16, wrapped here), ``counts`` (n, 3) int16."""
     seq_a = np.asarray(seq, dtype=np.int64).reshape(-1)
     c = np.asarray(counts, dtype=np.int16).reshape(len(seq_a), SAMPLES_PER_FRAME)
     data = np.zeros((len(seq_a), FRAME_DLC), dtype=np.uint8)
-    data[:, :2] = (seq_a % 65536).astype("<u2").view(np.uint8).reshape(-1, 2)
-    data[:, 2:] = np.ascontiguousarray(c.astype("<i2")).view(np.uint8).reshape(-1, 6)
+    _put(data, "SAMPLES", "seq", seq_a % 65536)
+    for k in range(SAMPLES_PER_FRAME):
+        _put(data, "SAMPLES", f"s{k}", c[:, k])
     return Frames.build(t_s, SAMPLES_BASE + node, data)
 
 
@@ -434,9 +454,9 @@ def encode_status(
 ) -> Frames:
     """STATUS frames of one node (``rate`` Hz, ``scale`` µm/s² per count, ``flags`` bits)."""
     t = np.asarray(t_s, dtype=np.float64).reshape(-1)
-    data = _pack(
-        len(t), {0: ("<u2", rate), 2: ("<u2", scale), 4: ("u1", flags), 5: ("u1", version)}
-    )
+    data = np.zeros((len(t), FRAME_DLC), dtype=np.uint8)
+    for name, values in (("rate", rate), ("scale", scale), ("flags", flags), ("version", version)):
+        _put(data, "STATUS", name, values)
     return Frames.build(t, STATUS_BASE + node, data)
 
 
@@ -445,15 +465,11 @@ def encode_marks(
 ) -> Frames:
     """MARK frames of one node; ``seq`` and ``rev`` are wrapped to u16 here."""
     t = np.asarray(t_s, dtype=np.float64).reshape(-1)
-    data = _pack(
-        len(t),
-        {
-            0: ("<u2", np.asarray(seq, dtype=np.int64) % 65536),
-            2: ("u1", slot),
-            3: ("<u2", frac),
-            5: ("<u2", np.asarray(rev, dtype=np.int64) % 65536),
-        },
-    )
+    data = np.zeros((len(t), FRAME_DLC), dtype=np.uint8)
+    _put(data, "MARK", "seq", np.asarray(seq, dtype=np.int64) % 65536)
+    _put(data, "MARK", "slot", slot)
+    _put(data, "MARK", "frac", frac)
+    _put(data, "MARK", "rev", np.asarray(rev, dtype=np.int64) % 65536)
     return Frames.build(t, MARK_BASE + node, data)
 
 

@@ -37,13 +37,14 @@ from pydantic import (
 from stand.core.model import STAND_KEYS, StandParameters
 from stand.errors import ConfigError, ParameterError
 
-_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+"""Every table of every TOML file: unknown keys refused, no strings for numbers, frozen."""
 
 
 class StandTable(BaseModel):
     """``[stand]``: the supports (kg, N/m, N s/m) and the reference sensor (deg)."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     M1: FiniteFloat
     M2: FiniteFloat
@@ -57,7 +58,7 @@ class StandTable(BaseModel):
 class RotorTable(BaseModel):
     """``[rotor]``: mass (kg), inertia (kg m^2), lengths and radii (m)."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     M3: FiniteFloat
     J3: FiniteFloat
@@ -72,7 +73,7 @@ class RotorTable(BaseModel):
 class ToleranceTable(BaseModel):
     """``[tolerance]``: ISO 21940-11 balance quality grade and the maximum service speed."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     grade_mm_s: PositiveFloat
     """G, e.g. 6.3 for G 6.3 [mm/s]."""
@@ -82,7 +83,7 @@ class ToleranceTable(BaseModel):
 class CorrectionTable(BaseModel):
     """``[correction]``: how the rotor is corrected."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     mode: Literal["remove", "add"] = "remove"
     positions: NonNegativeInt = 0
@@ -98,7 +99,7 @@ class CorrectionTable(BaseModel):
 class SensorsTable(BaseModel):
     """``[sensors]``: each node's calibrated sensitivity (1 = as STATUS says) and delay [s]."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     gain: Annotated[list[PositiveFloat], Field(min_length=2, max_length=2)] = [1.0, 1.0]
     delay_s: Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)] = [0.0, 0.0]
@@ -107,7 +108,7 @@ class SensorsTable(BaseModel):
 class Config(BaseModel):
     """A whole configuration file."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     stand: StandTable
     rotor: RotorTable

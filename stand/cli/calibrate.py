@@ -9,28 +9,27 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.config import STRICT
 from stand.errors import ConfigError, RecordingError
-
-_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 
 
 class MassTable(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
     plane: Annotated[int, Field(ge=1, le=2)]
     mass_g: PositiveFloat
     angle_deg: FiniteFloat
 
 
 class CalibRun(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
     file: str
     masses: list[MassTable] = []
 
 
 class CalibFile(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
     runs: Annotated[list[CalibRun], Field(min_length=1)]
 
 

@@ -9,16 +9,15 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, PositiveFloat
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.cli.common import print_warnings
+from stand.config import STRICT
 from stand.errors import ConfigError, UsageError
-
-_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 
 
 class TrialTable(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
     plane: Annotated[int, Field(ge=1)]
     mass_g: PositiveFloat
     angle_deg: FiniteFloat
@@ -27,7 +26,7 @@ class TrialTable(BaseModel):
 class RunEntry(BaseModel):
     """One run: readings typed in (``sensors``) or a recorded run (``file``)."""
 
-    model_config = _STRICT
+    model_config = STRICT
     sensors: list[Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]] | None = None
     file: str | None = None
     trial: TrialTable | None = None
@@ -35,7 +34,7 @@ class RunEntry(BaseModel):
 
 
 class RunsFile(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
     runs: Annotated[list[RunEntry], Field(min_length=1)]
 
 

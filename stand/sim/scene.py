@@ -20,9 +20,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, model_validator
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config import (
+    STRICT,
     Config,
     CorrectionTable,
     RotorTable,
@@ -35,7 +36,6 @@ from stand.config import (
 from stand.core.model import StandParameters
 from stand.errors import ConfigError
 
-_STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 NODES = 2
 
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -53,7 +53,7 @@ def per_node(value: float | list[float]) -> list[float]:
 
 
 class _Table(BaseModel):
-    model_config = _STRICT
+    model_config = STRICT
 
     @model_validator(mode="after")
     def _two_nodes(self) -> _Table:
@@ -236,7 +236,7 @@ class Effects(_Table):
 class Scene(BaseModel):
     """A whole scene file."""
 
-    model_config = _STRICT
+    model_config = STRICT
 
     description: str = ""
     stand: StandTable
