@@ -10,6 +10,7 @@ keeps for the side bands: 1e-6 relative.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import astuple
 
 import numpy as np
@@ -21,6 +22,7 @@ from stand.drivers.streams import rebuild
 from stand.sim import load_scene, simulate
 
 
+@functools.cache
 def _streams(name: str, seconds: float | None = None) -> tuple[object, object]:
     sc, p, _ = load_scene(name)
     if seconds:
