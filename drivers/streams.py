@@ -549,6 +549,7 @@ class StreamBuilder:
     def __init__(self) -> None:
         self._parts: list[Decoded] = []
         self._times: list[NDArray[np.float64]] = []
+        self._sizes: list[int] = []
         self.frames = 0
         self.last_block = Frames.empty()
         """The block added last (for a display of what just came)."""
@@ -559,13 +560,22 @@ class StreamBuilder:
             return
         self.last_block = frames
         self._parts.append(shift_decoded(decode(frames), self.frames))
+        self._sizes.append(len(frames))
         self._times.append(frames.t_s)
         self.frames += len(frames)
+        # merge the newest blocks while they are as large as the one before them: like a
+        # binary counter, a run of n frames is held in about log2(n) parts, and each frame
+        # is copied about log2(n) times in all
+        while len(self._sizes) > 1 and self._sizes[-1] >= self._sizes[-2]:
+            self._parts[-2:] = [concat_decoded(self._parts[-2:])]
+            self._times[-2:] = [np.concatenate(self._times[-2:])]
+            self._sizes[-2:] = [self._sizes[-2] + self._sizes[-1]]
 
     def decoded(self) -> tuple[Decoded, NDArray[np.float64]]:
         """Everything decoded so far, as one block, and every frame's host time [s]."""
         if len(self._parts) != 1:
             self._parts = [concat_decoded(self._parts)]
+            self._sizes = [self.frames]
         return self._parts[0], self._times_joined()
 
     def _times_joined(self) -> NDArray[np.float64]:

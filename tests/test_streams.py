@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import functools
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -222,3 +225,33 @@ def test_samples_scale_by_the_latest_status() -> None:
 
 def test_samples_ids_are_the_protocol_ids() -> None:
     assert (SAMPLES_BASE, STATUS_BASE, MARK_BASE) == (0x100, 0x140, 0x180)
+
+
+@settings(max_examples=40, deadline=None)
+@given(cuts=st.lists(st.integers(0, 21_588), max_size=30))
+def test_a_builder_fed_in_any_blocks_gives_what_rebuild_gives(cuts: list[int]) -> None:
+    """Live, blocks are decoded as they come and merged; the streams are the same."""
+    from stand.drivers.streams import StreamBuilder
+
+    frames = _demo_frames()
+    bounds = sorted({0, len(frames), *cuts})
+    builder = StreamBuilder()
+    for lo, hi in itertools.pairwise(bounds):
+        builder.add(frames.take(slice(lo, hi)))
+    # merged like a binary counter: part sizes strictly fall (blocks of one size: log2 parts)
+    assert all(a > b for a, b in itertools.pairwise(builder._sizes))
+    got, want = builder.streams(), rebuild(frames)
+    assert got.frames == want.frames and got.warnings == want.warnings
+    for n in (1, 2):
+        a, b = got.nodes[n], want.nodes[n]
+        for name in ("index", "counts", "segment_start", "scale_start", "scale_m_s2",
+                     "mark_position", "mark_rev"):  # fmt: skip
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+
+
+@functools.cache
+def _demo_frames() -> Frames:
+    from stand.sim import load_scene, simulate
+
+    sc, p, _ = load_scene("demo")
+    return simulate(sc, p).frames
