@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import reference_measure
 
-from stand import measure
+from stand import measure, passes
 from stand.drivers.streams import rebuild
 from stand.sim import load_scene, simulate
 
@@ -32,7 +32,7 @@ def _streams(name: str, seconds: float | None = None) -> tuple[object, object]:
     return rebuild(simulate(sc, p).frames), p
 
 
-@pytest.mark.parametrize("chunk", [measure.CHUNK, 997])
+@pytest.mark.parametrize("chunk", [passes.CHUNK, 997])
 @pytest.mark.parametrize("name", ["demo", "run-up", "near-resonance", "small-fast"])
 @pytest.mark.parametrize("taper", [False, True])
 @pytest.mark.parametrize("gate", [True, False])
@@ -40,7 +40,7 @@ def test_chunked_equals_all_at_once(
     name: str, taper: bool, gate: bool, chunk: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     streams, p = _streams(name)
-    monkeypatch.setattr(measure, "CHUNK", chunk)  # 997: many chunks, windows starting inside one
+    monkeypatch.setattr(passes, "CHUNK", chunk)  # 997: many chunks, windows starting inside one
     new = measure.measure(streams, p, taper=taper, gate=gate)  # type: ignore[arg-type]
     old = reference_measure.measure(streams, p, taper=taper, gate=gate)  # type: ignore[arg-type]
     U0, U1 = old.solution.U_kg_m, new.solution.U_kg_m
@@ -64,20 +64,20 @@ def test_a_window_starting_inside_a_chunk_sums_exactly_its_samples(first: int) -
     from stand.core.fitsums import WindowSums, base_columns
 
     streams, _ = _streams("demo")
-    run = measure._NodeRun(streams.nodes[1], 0.0)  # type: ignore[attr-defined]
+    run = passes._NodeRun(streams.nodes[1], 0.0)  # type: ignore[attr-defined]
     pos = run.pos
-    n_full = (len(pos) - 1) // measure.BLOCK_REVS
-    starts = run.find(pos[measure.BLOCK_REVS * np.arange(n_full + 1)])
+    n_full = (len(pos) - 1) // passes.BLOCK_REVS
+    starts = run.find(pos[passes.BLOCK_REVS * np.arange(n_full + 1)])
     end = int(run.find(pos[-1:], "right")[0])
     w0 = 2 * np.pi / float(np.median(np.diff(pos)))
-    saved = measure.CHUNK
+    saved = passes.CHUNK
     try:
-        measure.CHUNK = 5000
-        _, chunks, _ = measure._first_pass(run, starts, end, n_full, w0)
+        passes.CHUNK = 5000
+        _, chunks, _ = passes._first_pass(run, starts, end, n_full, w0)
     finally:
-        measure.CHUNK = saved
+        passes.CHUNK = saved
     assert len(chunks) > 4
-    got = measure._window_sums(run, chunks, starts, end, first, w0)
+    got = passes._window_sums(run, chunks, starts, end, first, w0)
     want = WindowSums.zero()
     _, w, a, c, s = run.chunk(int(starts[first]), end)
     want.add(base_columns(c, s, w, w0), a, w)

@@ -1,0 +1,370 @@
+"""One node's stream read in chunks: the gate and the passes of the 1x fit.
+
+:func:`node_phasor` is what :func:`stand.measure.measure` does per node.  A
+node's samples are read in chunks of :data:`CHUNK` samples.  The first pass
+computes each chunk's shaft angle once, and from the same cos and sin it adds
+up the sums the gate and the block check need (per block of
+:data:`BLOCK_REVS` revolutions) and the fit's normal equations (per chunk; a
+chunk holds whole blocks, so a window that starts at any block is a sum of
+chunks, and of one chunk redone).  A second pass over the window adds the
+residual's side bands (the noise at 1x) once the coefficients are known, from
+a single-precision copy the first pass kept.  Nothing of the length of the
+run is allocated besides the stream itself (10 bytes a sample) and that copy
+(16 bytes a sample of the node being measured).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from stand.core.dsp import SIDE_BANDS, SPEED_SPAN_SLOPE, Phasor, angle_at, angle_knots
+from stand.core.fitsums import (
+    WindowSums,
+    base_columns,
+    block_fits,
+    block_sums,
+    model_transform,
+    model_values,
+    side_band_sums,
+)
+from stand.drivers.streams import NodeStream
+from stand.errors import MeasurementError
+
+SPEED_TOLERANCE = 0.03
+"""A revolution is at steady speed within 3 % of the steady part's median."""
+BLOCK_REVS = 8
+"""Revolutions per block when checking that the supports have settled."""
+SETTLED = 0.02
+"""A block agrees with the settled response within 2 % (or 4 standard errors).  A speed
+ripple moves the 1x amplitude quasi-steadily by about its own size; a run-up's transient
+decays through 2 % within a few damping times, and what is left averages out."""
+SCATTER_FLOOR = 1e-3
+"""Block scatter under 0.1 % of the 1x reading is never flagged."""
+MIN_REVS = 30
+"""A steady, settled window shorter than this many revolutions draws a warning."""
+CHUNK = 1 << 16
+"""Samples per chunk (about): a chunk holds whole blocks of revolutions."""
+
+
+@dataclass(frozen=True)
+class Window:
+    """The gated part of one node's run, in its own sample positions."""
+
+    start: float
+    end: float
+    revolutions: int
+    settled_from: float
+
+
+def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """The node's longest clock segment: its samples ``lo:hi``, edge positions and revs."""
+    if s.scale_m_s2 is None:
+        raise MeasurementError("no STATUS, its samples cannot be scaled")
+    if len(s.index) == 0:
+        raise MeasurementError(
+            f"all {s.samples} samples are invalid (count -32768: sensor fault or overrange)"
+            if s.samples
+            else f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames"
+        )
+    if len(s.mark_segment) == 0:
+        raise MeasurementError(
+            "no reference edges: is the reference sensor wired and the mark passing it?"
+        )
+    seg = int(np.bincount(s.mark_segment).argmax())
+    m = s.mark_segment == seg
+    lo, hi = s.segment_bounds(seg)
+    return lo, hi, s.mark_position[m], s.mark_rev[m]
+
+
+def steady_revolutions(pos: np.ndarray, rev: np.ndarray) -> tuple[int, int, list[str]]:
+    """The longest run of steady-speed revolutions: its edges ``(a, b)``, and notes.
+
+    Each revolution within :data:`SPEED_TOLERANCE` of the median speed.
+    """
+    notes: list[str] = []
+    if len(pos) < 3:
+        raise MeasurementError(f"only {len(pos)} reference edges: need at least 3")
+    period = np.diff(pos) / np.maximum(np.diff(rev), 1)  # samples per revolution
+    speed = 1.0 / period
+    steady = np.abs(speed / np.median(speed) - 1) < SPEED_TOLERANCE
+    best: tuple[int, int] = (0, 0)
+    start: int | None = None
+    for k, ok in enumerate([*steady.tolist(), False]):  # revolution k: edges k .. k+1
+        if ok and start is None:
+            start = k
+        elif not ok and start is not None:
+            if k - start > best[1] - best[0]:
+                best = (start, k)
+            start = None
+    a, b = best  # revolutions a .. b-1, edges a .. b
+    if b - a < 2:
+        raise MeasurementError("the speed is never steady for two revolutions in a row")
+    if a > 0 or b < len(steady):
+        notes.append(f"speed steady over revolutions {a}..{b} of {len(steady)}")
+    return a, b, notes
+
+
+def settled_block(sums: np.ndarray) -> int:
+    """The first block from which every block's 1x agrees with the last half's.
+
+    Within 4 of its standard errors, or :data:`SETTLED`, or 3 times the
+    scatter of the last half's blocks (a beat with a neighbour near 1x is not
+    a transient).  ``sums``: :func:`~stand.core.fitsums.block_sums` rows.
+    """
+    n_blocks = len(sums)
+    if n_blocks < 4:
+        return 0
+    A_blocks, n, var = block_fits(sums)
+    std = np.sqrt(2 * var / np.maximum(n, 1))  # per component of each block's 1x
+    tail = slice(n_blocks // 2, n_blocks)
+    A_tail = np.sum(A_blocks[tail] * n[tail]) / np.sum(n[tail])
+    spread = float(np.sqrt(np.mean(np.abs(A_blocks[tail] - A_tail) ** 2)))
+    ok = np.abs(A_blocks - A_tail) <= np.maximum.reduce(
+        [4 * std, np.full(n_blocks, SETTLED * abs(A_tail)), np.full(n_blocks, 3 * spread)]
+    )
+    first_good = n_blocks
+    for k in range(n_blocks - 1, -1, -1):
+        if not ok[k]:
+            break
+        first_good = k
+    return first_good
+
+
+def block_scatter(sums: np.ndarray, noise: float) -> float:
+    """How much blocks of whole revolutions scatter, against what the noise explains.
+
+    Returns the scatter of the blocks' 1x around their mean over its
+    expectation from ``noise`` (about 1 when only noise moves them; 0 with
+    fewer than 3 blocks, which cannot tell).
+    """
+    n_blocks = len(sums)
+    if n_blocks < 3 or noise <= 0:
+        return 0.0
+    A, n, _ = block_fits(sums)
+    mean = np.sum(A * n) / np.sum(n)
+    dev2 = np.abs(A - mean) ** 2
+    if np.sqrt(np.mean(dev2)) < SCATTER_FLOOR * abs(mean):
+        return 0.0  # immaterial, however many standard errors it is
+    expected = 4 * noise**2 / np.maximum(n, 1)  # E|A_b - A|^2 from noise: 2 sigma^2/n per part
+    return float(np.sum(dev2 / expected) / (n_blocks - 1))
+
+
+class _NodeRun:
+    """One node's longest segment, read in chunks: the passes of :func:`_node_phasor`."""
+
+    def __init__(self, s: NodeStream, gamma: float) -> None:
+        self.s = s
+        self.lo, self.hi, self.pos, self.rev = _segment(s)
+        self.knots = angle_knots(self.pos, self.rev)
+        self.gamma = gamma
+
+    def find(self, positions: np.ndarray, side: str = "left") -> np.ndarray:
+        """The first sample at or after each position (``side="right"``: after), absolute.
+
+        Sample indices are integers: searching for ``ceil`` (``floor``) of a
+        position needs no conversion of the whole index array.
+        """
+        seg = self.s.index[self.lo : self.hi]
+        key = np.ceil(positions) if side == "left" else np.floor(positions)
+        found = np.searchsorted(seg, key.astype(np.int64), side=side)  # type: ignore[call-overload]
+        return self.lo + np.asarray(found, dtype=np.int64)
+
+    def chunk(self, i0: int, i1: int) -> tuple[np.ndarray, ...]:
+        """Samples ``i0:i1``: shaft angle, speed, acceleration, cos and sin of the angle."""
+        at = self.s.index[i0:i1].astype(np.float64)
+        th, w = angle_at(self.knots, at)
+        th += self.gamma
+        return th, w, self.s.accel(i0, i1), np.cos(th), np.sin(th)
+
+    def angle(self, i: int) -> float:
+        """The shaft angle at sample ``i`` [rad]."""
+        th, _ = angle_at(self.knots, self.s.index[i : i + 1].astype(np.float64))
+        return float(th[0]) + self.gamma
+
+
+@dataclass
+class _Kept:
+    """What the first pass keeps for the side bands, in single precision (16 bytes a sample).
+
+    The side bands are a noise level (single precision already); the residual
+    from ``c, s, w`` in single precision is off by about 1e-7 of the 1x
+    amplitude, far below any noise.  ``phase`` is the angle from the first
+    sample kept [rad].
+    """
+
+    lo: int
+    phase: np.ndarray
+    c: np.ndarray
+    s: np.ndarray
+    w: np.ndarray
+
+
+def _first_pass(
+    run: _NodeRun, starts: np.ndarray, end: int, n_full: int, w0: float
+) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]], _Kept]:
+    """Block sums of the ``n_full`` full blocks, and the fit's sums per chunk of blocks.
+
+    ``starts``: the first sample of each block (the last one is the tail up to
+    ``end``).  Returns the block sums, ``(first block, last block + 1, sums)``
+    per chunk, and what the side bands need.
+    """
+    lo = int(starts[0])
+    kept = _Kept(lo, *(np.empty(end - lo, np.float32) for _ in range(4)))
+    th_lo = run.angle(lo) if end > lo else 0.0
+    blocks = np.zeros((n_full, 9))
+    chunks: list[tuple[int, int, WindowSums]] = []
+    bounds = np.append(starts, end)
+    j0 = 0
+    while j0 < len(starts):
+        j1 = int(np.searchsorted(bounds, bounds[j0] + CHUNK, side="right"))
+        j1 = min(max(j1 - 1, j0 + 1), len(starts))
+        i0, i1 = int(bounds[j0]), int(bounds[j1])
+        th, w, a, c, s = run.chunk(i0, i1)
+        k = slice(i0 - lo, i1 - lo)
+        kept.phase[k], kept.c[k], kept.s[k], kept.w[k] = th - th_lo, c, s, w
+        full = min(j1, n_full)
+        if full > j0:
+            upto = int(bounds[full]) - i0
+            blocks[j0:full] = block_sums(
+                c[:upto], s[:upto], a[:upto], starts[j0:full] - i0, full - j0
+            )
+        sums = WindowSums.zero()
+        sums.add(base_columns(c, s, w, w0), a, w)
+        chunks.append((j0, j1, sums))
+        j0 = j1
+    return blocks, chunks, kept
+
+
+def _window_sums(
+    run: _NodeRun, chunks: list[tuple[int, int, WindowSums]], starts: np.ndarray, end: int,
+    first: int, w0: float,
+) -> WindowSums:  # fmt: skip
+    """The fit's sums from block ``first`` to the end (one chunk redone if it starts inside)."""
+    total = WindowSums.zero()
+    for j0, j1, sums in chunks:
+        if j0 >= first:
+            total += sums
+        elif j1 > first:  # the window starts inside this chunk: redo its part
+            i1 = int(starts[j1]) if j1 < len(starts) else end
+            _, w, a, c, s = run.chunk(int(starts[first]), i1)
+            total.add(base_columns(c, s, w, w0), a, w)
+    return total
+
+
+def _second_pass(
+    run: _NodeRun, kept: _Kept, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
+    span: float, taper: bool,
+) -> tuple[np.ndarray, float, float, float]:  # fmt: skip
+    """Side-band sums of the residual over the window, sum r^2, sum wt^2 and sum wt."""
+    revs = span / (2 * math.pi)
+    bands: np.ndarray = np.zeros((2, SIDE_BANDS), complex)
+    rr = wt2 = wt1 = 0.0
+    b = (T @ coef).astype(np.float32)
+    ph0 = float(kept.phase[i0 - kept.lo])
+    for k0 in range(i0, i1, CHUNK):
+        k1 = min(k0 + CHUNK, i1)
+        k = slice(k0 - kept.lo, k1 - kept.lo)
+        c, s, phase = kept.c[k], kept.s[k], kept.phase[k] - np.float32(ph0)
+        r = run.s.accel(k0, k1) - model_values(c, s, kept.w[k], w0, b)
+        rr += float(r @ r)
+        if taper and span > 0:
+            wt = np.sin(np.float32(math.pi / span) * phase) ** 2
+            wt2 += float(wt @ wt)
+            wt1 += float(np.sum(wt))
+            r = wt * r
+        else:
+            wt2 += k1 - k0
+            wt1 += k1 - k0
+        bands += side_band_sums(r, c, s, phase / np.float32(max(revs, 1e-12)), SIDE_BANDS)
+    return bands, rr, wt2, wt1
+
+
+def _tapered_normal_equations(
+    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, th0: float, span: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``X'WX``, ``X'Wa`` and ``X'W^2 X`` with Hann weights over the window."""
+    m = T.shape[1]
+    XtWX, XtWa, XtW2X = np.zeros((m, m)), np.zeros(m), np.zeros((m, m))
+    for k0 in range(i0, i1, CHUNK):
+        k1 = min(k0 + CHUNK, i1)
+        th, w, a, c, s = run.chunk(k0, k1)
+        X = base_columns(c, s, w, w0) @ T
+        wt = np.sin(math.pi * (th - th0) / span) ** 2
+        Xw = X * wt[:, None]
+        XtWX += X.T @ Xw
+        XtWa += Xw.T @ a
+        XtW2X += Xw.T @ Xw
+    return XtWX, XtWa, XtW2X
+
+
+def node_phasor(
+    s: NodeStream, gamma: float, taper: bool, gate: bool
+) -> tuple[Phasor, Window, np.ndarray, list[str]]:
+    """One node's 1x phasor over its steady, settled window (in chunks).
+
+    Returns the phasor, the window, the block sums over the window (for the
+    block check) and the gate's notes.
+    """
+    run = _NodeRun(s, gamma)
+    pos, rev = run.pos, run.rev
+    if gate:
+        a, b, notes = steady_revolutions(pos, rev)
+    else:
+        if len(pos) < 2:
+            raise MeasurementError(f"only {len(pos)} reference edges: need at least 2")
+        a, b, notes = 0, len(pos) - 1, []
+    n_full = (b - a) // BLOCK_REVS
+    edges = pos[a + BLOCK_REVS * np.arange(n_full + 1)]
+    starts = run.find(edges)  # the first sample of the n_full blocks and of the tail
+    end = int(run.find(pos[b : b + 1], "right")[0])
+    per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
+    w0 = 2 * math.pi / float(np.median(per_rev))  # a fixed speed for the base columns
+    blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
+    first = settled_block(blocks) if gate else 0
+    if first > 0:
+        notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
+    e0 = a + BLOCK_REVS * first
+    window = Window(
+        start=float(pos[e0]),
+        end=float(pos[b]),
+        revolutions=int(rev[b] - rev[e0]),
+        settled_from=float(pos[e0]),
+    )
+    sums = _window_sums(run, chunks, starts, end, first, w0)
+    i0 = int(starts[first])
+    if sums.n < 8:
+        raise MeasurementError(f"only {sums.n} samples in the steady window: measure longer")
+    w_ref = sums.w_sum / sums.n
+    sloped = (sums.w_max - sums.w_min) / w_ref > SPEED_SPAN_SLOPE
+    T = model_transform(w0, w_ref, sloped)
+    th0, th1 = run.angle(i0), run.angle(end - 1)
+    span = th1 - th0
+    tapered = taper and span > 0
+    if tapered:
+        XtWX, XtWa, XtW2X = _tapered_normal_equations(run, i0, end, w0, T, th0, span)
+    else:
+        XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
+    coef = np.linalg.solve(XtWX, XtWa)
+    bands, rr, wt2, wt1 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
+    del kept
+    sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
+    bread = np.linalg.inv(XtWX)
+    cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
+    cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
+    j = 5 if sloped else 3
+    ph = Phasor(
+        A_m_s2=complex(coef[0], -coef[1]),
+        cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
+        harmonics_m_s2={2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])},
+        omega_ref_rad_s=w_ref * float(s.rate_hz or 0.0),
+        samples=sums.n,
+        revolutions=span / (2 * math.pi),
+        noise_m_s2=math.sqrt(sigma2),
+        residual_m_s2=math.sqrt(max(rr, 0.0) / sums.n),
+        noise_cost=wt2 * sums.n / wt1**2 if tapered else 1.0,
+        noise_dof=4.0 * SIDE_BANDS,
+    )
+    return ph, window, blocks[first:], notes
