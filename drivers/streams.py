@@ -206,6 +206,14 @@ class RunStreams:
         return len(self.bad)
 
 
+def _most_common(values: NDArray[np.float64]) -> float | None:
+    """The value most STATUS frames say (a corrupt first STATUS is outvoted); None if none."""
+    if not len(values):
+        return None
+    uniq, counts = np.unique(values, return_counts=True)
+    return float(uniq[np.argmax(counts)])
+
+
 class _Triple:
     """``frame_start`` when every sample is valid: frame ``j`` starts at ``3 j``."""
 
@@ -429,7 +437,7 @@ def _rebuild_node(
     warn.extend(flag_warn)
     stream = NodeStream(
         node=node,
-        rate_hz=float(rate[0]) if len(rate) else None,
+        rate_hz=_most_common(rate),
         scale_um_s2=float(scale[-1]) if len(scale) else None,
         index=index if all_valid else index[valid],
         counts=flat if all_valid else flat[valid],

@@ -53,6 +53,8 @@ class StandTable(BaseModel):
     H1: FiniteFloat = 0.0
     H2: FiniteFloat = 0.0
     reference_angle_deg: FiniteFloat = 0.0
+    clock_tolerance_pct: PositiveFloat = 0.1
+    """How far the speeds two nodes measure of one shaft may differ [%]."""
 
 
 class RotorTable(BaseModel):
@@ -121,6 +123,7 @@ class Config(BaseModel):
         """What :func:`stand.measure.measure` needs from the configuration."""
         return {
             "reference_angle_deg": self.stand.reference_angle_deg,
+            "clock_tolerance": self.stand.clock_tolerance_pct / 100,
             "sensor_gain": tuple(self.sensors.gain),
             "sensor_delay_s": tuple(self.sensors.delay_s),
         }
@@ -128,7 +131,7 @@ class Config(BaseModel):
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
-        del values["reference_angle_deg"]
+        del values["reference_angle_deg"], values["clock_tolerance_pct"]
         return StandParameters(**values)
 
 

@@ -31,6 +31,8 @@ from stand.passes import BLOCK_REVS, MIN_REVS, Window, block_scatter, node_phaso
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 
+CLOCK_TOLERANCE = 1e-3
+"""Two nodes' speeds of one shaft agree within 0.1 % (crystal clocks are good to 1e-4)."""
 HARMONIC_WARN = 0.10
 """3x above 10 % of 1x draws a warning: linear supports make almost none."""
 SCATTER_LIMIT = 4.0
@@ -76,8 +78,13 @@ def measure(
     gate: bool = True,
     sensor_gain: tuple[float, float] = (1.0, 1.0),
     sensor_delay_s: tuple[float, float] = (0.0, 0.0),
+    clock_tolerance: float = CLOCK_TOLERANCE,
 ) -> Measurement:
     """The unbalance of both planes from a run's streams (nodes 1 and 2).
+
+    Both nodes see one shaft: the speeds they measure (their edges against
+    their own sample clocks) must agree within ``clock_tolerance`` (relative),
+    else a node's sample rate or clock is wrong and the run is refused.
 
     Raises
     ------
@@ -130,7 +137,7 @@ def measure(
             )
             ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
         odd = abs(ph.harmonics_m_s2.get(3, 0j)) / max(abs(ph.A_m_s2), 1e-300)
-        if odd > HARMONIC_WARN:
+        if odd > HARMONIC_WARN and abs(ph.A_m_s2) > ph.radius95_m_s2:  # against a real 1x only
             warnings.append(
                 Diagnostic(
                     "strong_3x",
@@ -142,7 +149,16 @@ def measure(
             )
         supports.append(ph)
         windows.append(window)
-    omega = 0.5 * (supports[0].omega_ref_rad_s + supports[1].omega_ref_rad_s)
+    w1, w2 = supports[0].omega_ref_rad_s, supports[1].omega_ref_rad_s
+    if abs(w1 / w2 - 1) > clock_tolerance:
+        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in (1, 2))
+        raise MeasurementError(
+            f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
+            f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
+            f"+-{100 * clock_tolerance:g} %): a node's sample rate (STATUS says {rates} Hz) "
+            "or its clock is wrong"
+        )
+    omega = 0.5 * (w1 + w2)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
     cov = np.zeros((4, 4))
     cov[:2, :2] = supports[0].cov_m2_s4

@@ -76,6 +76,15 @@ def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
     seg = int(np.bincount(s.mark_segment).argmax())
     m = s.mark_segment == seg
     lo, hi = s.segment_bounds(seg)
+    assert s.scale_m_s2 is not None
+    if not np.any(s.scale_m_s2):
+        raise MeasurementError("its STATUS scale is 0: the samples mean nothing (sensor fault?)")
+    counts = s.counts[lo:hi]
+    if len(counts) and counts.min() == counts.max():
+        raise MeasurementError(
+            f"the sensor reads a constant {int(counts[0])} counts in all {len(counts)} samples: "
+            "dead, disconnected or stuck"
+        )
     return lo, hi, s.mark_position[m], s.mark_rev[m]
 
 

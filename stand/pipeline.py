@@ -23,8 +23,14 @@ from typing import Any
 import numpy as np
 
 from stand import __version__
-from stand.core import StandParameters, rpm_to_rad_s
-from stand.core.balance import correction, permissible_unbalance, plane_tolerances, static_couple
+from stand.core import Diagnostic, StandParameters, rpm_to_rad_s
+from stand.core.balance import (
+    Correction,
+    correction,
+    permissible_unbalance,
+    plane_tolerances,
+    static_couple,
+)
 from stand.errors import ConfigError, StandError
 from stand.measure import Measurement, measure
 from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
@@ -181,8 +187,11 @@ def build_result(
 ) -> Result:
     """Corrections, static and couple parts, tolerance and spread for a measurement."""
     c = cfg.correction
+    noise = [abs(U) <= m.radius95_kg_m[i] for i, U in enumerate(m.solution.U_kg_m)]
     corrections = tuple(
-        correction(
+        Correction((), c.mode == "remove", complex(U))  # inside its interval: no angle to act on
+        if noise[i]
+        else correction(
             complex(U),
             m.radius_m[i],
             remove=c.mode == "remove",
@@ -193,6 +202,17 @@ def build_result(
         )
         for i, U in enumerate(m.solution.U_kg_m)
     )
+    floor = [
+        Diagnostic(
+            "within_noise",
+            f"plane {i + 1}: {abs(U) * 1e6:.1f} g mm is inside its own 95 % interval "
+            f"(+-{m.radius95_kg_m[i] * 1e6:.1f} g mm): its angle is undefined, so no correction "
+            "is prescribed",
+            float(abs(U) / m.radius95_kg_m[i]),
+        )
+        for i, U in enumerate(m.solution.U_kg_m)
+        if noise[i]
+    ]
     static, couple = static_couple(params, m.solution.U_kg_m)
     return Result(
         measurement=m,
@@ -201,7 +221,8 @@ def build_result(
         static_kg_m=static,
         couple_kg_m=couple,
         tolerance=tolerance_of(cfg, params),
-        warnings=(*stream_warnings, *m.warnings),
+        warnings=(*stream_warnings, *m.warnings, *floor),
+        within_noise=(bool(noise[0]), bool(noise[1])),
         provenance=provenance,
         uncertainty=_uncertainty(m, params, options) if options.tolerances is not None else None,
         check=check,

@@ -201,10 +201,15 @@ def render(result: Result) -> str:
             )
         else:
             tol_cell = "<span class=muted>no [tolerance] set</span>"
+        action = (
+            "no correction: inside its own 95 % interval (angle undefined)"
+            if corr.get("within_noise")
+            else f"<b>{e(corr['action'])} {e(what)}</b> at radius {plane['radius_mm']:g} mm"
+        )
+        angle = "–" if corr.get("within_noise") else f"{plane['angle_deg']:.1f}°"
         rows.append(
             f"<tr><td>{i}</td><td>{plane['unbalance_g_mm']:.1f} ± {plane['uncertainty_g_mm']:.1f}"
-            f"</td><td>{plane['angle_deg']:.1f}°</td><td class=l big><b>{e(corr['action'])} "
-            f"{e(what)}</b> at radius {plane['radius_mm']:g} mm</td>"
+            f"</td><td>{angle}</td><td class=l big>{action}</td>"
             f"<td class=l>{tol_cell}</td></tr>"
         )
     supports = "".join(

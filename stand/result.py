@@ -136,6 +136,8 @@ class Result:
     uncertainty: Uncertainty | None = None
     check: Check | None = None
     live: LiveInfo | None = None
+    within_noise: tuple[bool, bool] = (False, False)
+    """Per plane: the unbalance is inside its own 95 % interval (no correction prescribed)."""
     traces: Traces | None = field(default=None, compare=False)
 
     @property
@@ -214,6 +216,7 @@ def _corrections(r: Result) -> list[dict[str, Any]]:
                 "action": r.correction_mode,
                 "weights": weights,
                 "residual_g_mm": _g_mm(abs(corr.residual_kg_m)),
+                "within_noise": r.within_noise[i],
             }
         )
     return out

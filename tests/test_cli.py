@@ -161,3 +161,26 @@ def test_help_pages_name_every_subcommand(capsys: pytest.CaptureFixture[str]) ->
     assert sorted(
         p.stem for p in (ROOT / "stand" / "cli").glob("*.py") if p.stem in SUBCOMMANDS
     ) == sorted(SUBCOMMANDS)
+
+
+def test_a_json_answer_with_nan_is_refused_not_printed(capsys: pytest.CaptureFixture[str]) -> None:
+    """1e300 rpm overflows the model: exit 2 naming the key, and no NaN on stdout."""
+    import warnings
+
+    argv = ["forward", "--config", CFG, "--rpm", "1e300"]
+    argv += ["--unbalance", "5000@30", "--unbalance", "3000@200", "--json"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the overflow itself
+        assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "not a finite number at supports[0].amplitude_m_s2" in err
+
+
+def test_finite_names_the_first_bad_key_and_passes_good_objects() -> None:
+    from stand.cli.format import finite
+    from stand.errors import ModelError
+
+    good = {"a": [1.0, {"b": 2}], "c": None, "d": "x"}
+    assert finite(good) is good
+    with pytest.raises(ModelError, match=r"a\[1\]\.b \(inf\)"):
+        finite({"a": [1.0, {"b": float("inf")}]})

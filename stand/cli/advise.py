@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 
 from stand.cli.common import parse_rpm
+from stand.cli.format import dump_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -43,8 +42,7 @@ def run(args: argparse.Namespace) -> int:
         ],
     }
     if args.json:
-        json.dump(out, sys.stdout)
-        print()
+        dump_json(out)
         return 0
     rec = a.recommended_rpm
     print("balance between " + (f"{rec[0]:.0f} and {rec[1]:.0f} rpm" if rec else "- (none found)"))

@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.cli.format import dump_json
 from stand.config import STRICT
 from stand.errors import ConfigError, RecordingError
 
@@ -127,8 +126,7 @@ def run(args: argparse.Namespace) -> int:
         "reference_angle_deg": stand.reference_angle_deg,
     }
     if args.json:
-        json.dump(out, sys.stdout)
-        print()
+        dump_json(out)
     else:
         print("\n".join(line[2:] for line in header))
         print(f"wrote {args.out}")
@@ -158,17 +156,15 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
         new,
     )
     if args.json:
-        json.dump(
+        dump_json(
             {
                 "values": v,
                 "std_errors": se,
                 "residual_rms_m_s2": res.residual_rms_m_s2,
                 "runs": res.runs,
                 "config": args.out,
-            },
-            sys.stdout,
+            }
         )
-        print()
     else:
         print("\n".join(line[2:] for line in header))
         print(f"wrote {args.out}")

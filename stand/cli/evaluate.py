@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
-import sys
+
+from stand.cli.format import dump_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,8 +33,7 @@ def run(args: argparse.Namespace) -> int:
         "u_mar_readings_g_mm": [list(r) for r in e.readings_g_mm],
     }
     if args.json:
-        json.dump(out, sys.stdout)
-        print()
+        dump_json(out)
         return 0
     print("unbalance reduction ratio (correct what was measured, measure again):")
     for i in range(2):

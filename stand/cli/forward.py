@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 
 import numpy as np
 
 from stand.cli.common import parse_rpm, parse_unbalance, print_warnings
+from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.core import (
     forward,
@@ -48,22 +48,20 @@ def run(args: argparse.Namespace) -> int:
     fn_hz = natural_frequencies(params) / (2 * math.pi)
     warnings = speed_diagnostics(params, omega)
     if args.json:
-        print(
-            json.dumps(
-                {
-                    "rpm": args.rpm,
-                    "supports": [
-                        {
-                            "node": i + 1,
-                            "amplitude_m_s2": float(amp[i]),
-                            "phase_deg": float(phase[i]),
-                        }
-                        for i in range(2)
-                    ],
-                    "natural_frequencies_hz": [float(f) for f in fn_hz],
-                    "warnings": [{"code": w.code, "message": w.message} for w in warnings],
-                }
-            )
+        dump_json(
+            {
+                "rpm": args.rpm,
+                "supports": [
+                    {
+                        "node": i + 1,
+                        "amplitude_m_s2": float(amp[i]),
+                        "phase_deg": float(phase[i]),
+                    }
+                    for i in range(2)
+                ],
+                "natural_frequencies_hz": [float(f) for f in fn_hz],
+                "warnings": [{"code": w.code, "message": w.message} for w in warnings],
+            }
         )
         return 0
     print(f"speed {args.rpm:g} rpm ({omega / (2 * math.pi):.4g} Hz)")

@@ -5,13 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.cli.common import print_warnings
+from stand.cli.format import dump_json, json_text
 from stand.config import STRICT
 from stand.errors import ConfigError, UsageError
 
@@ -152,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     }
     if args.save:
         Path(args.save).write_text(
-            json.dumps(
+            json_text(
                 {
                     "influence": [[[z.real, z.imag] for z in row] for row in res.alpha],
                     "units": "reading per kg",
@@ -162,8 +162,7 @@ def run(args: argparse.Namespace) -> int:
             )
         )
     if args.json:
-        json.dump(out, sys.stdout)
-        print()
+        dump_json(out)
         return 0
     print("correction to ADD (to the rotor as in the first run, every trial mass off);")
     print("angles in the same sense and from the same zero as the trial angles:")

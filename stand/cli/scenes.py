@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import json
+
+from stand.cli.format import dump_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -18,7 +19,7 @@ def run(args: argparse.Namespace) -> int:
         scene, _, path = load_scene(name)
         out[name] = {**describe(scene), "file": path}
     if args.json:
-        print(json.dumps(out))
+        dump_json(out)
         return 0
     for name, d in out.items():
         effects = ", ".join(d["effects"]) or "none"

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -50,7 +49,7 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-    from stand.cli.format import dump_json
+    from stand.cli.format import dump_json, json_text
     from stand.pipeline import solve_many
     from stand.result import to_json
 
@@ -74,7 +73,7 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     if args.summary:
         dest = Path(args.summary)
         if dest.suffix.lower() == ".json":
-            dest.write_text(json.dumps({p: results[p] for p in runs}, indent=1, allow_nan=False))
+            dest.write_text(json_text({p: results[p] for p in runs}, indent=1))
         else:
             with dest.open("w", newline="") as handle:
                 w = csv.DictWriter(handle, fieldnames=COLUMNS)

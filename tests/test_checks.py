@@ -1,0 +1,114 @@
+"""Faults the data reveals are refused or flagged: each check, its failing input and its twin.
+
+The demo run (5000 g mm at 30 deg, 3000 g mm at 200 deg) with one fault put
+into its frames; the twin is the same run without it.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+
+from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
+from stand.drivers.streams import rebuild
+from stand.errors import MeasurementError
+from stand.measure import measure
+from stand.sim import load_scene, simulate
+
+
+@functools.cache
+def _demo() -> tuple[Frames, object]:
+    sc, p, _ = load_scene("demo")
+    return simulate(sc, p).frames, p
+
+
+def _with(change: str) -> Frames:
+    """The demo's frames with one fault in node 2's frames."""
+    f, _ = _demo()
+    data = f.data.copy()
+    samples = f.can_id == SAMPLES_BASE + 2
+    status = np.flatnonzero(f.can_id == STATUS_BASE + 2)
+    if change == "dead":
+        data[samples, 2:8] = 0
+    elif change == "stuck":
+        data[samples, 2:8] = np.array([0x10, 0x00] * 3, np.uint8)  # 16 counts, always
+    elif change == "scale 0":
+        data[status, 2:4] = 0
+    elif change == "rate 4096":
+        data[status, 0:2] = np.frombuffer(np.uint16(4096).tobytes(), np.uint8)
+    elif change == "first status 8608":
+        data[status[0], 0:2] = np.frombuffer(np.uint16(8608).tobytes(), np.uint8)
+    return Frames(f.t_s, f.can_id, f.dlc, data, f.flags)
+
+
+@pytest.mark.parametrize(
+    ("fault", "says"),
+    [
+        ("dead", "node 2: the sensor reads a constant 0 counts"),
+        ("stuck", "node 2: the sensor reads a constant 16 counts"),
+        ("scale 0", "node 2: its STATUS scale is 0"),
+        ("rate 4096", "nodes 1 and 2 see one shaft at different speeds"),
+    ],
+)
+def test_a_fault_is_refused_naming_the_node_and_the_figure(fault: str, says: str) -> None:
+    _, p = _demo()
+    with pytest.raises(MeasurementError, match=says):
+        measure(rebuild(_with(fault)), p)  # type: ignore[arg-type]
+
+
+def test_the_twin_without_a_fault_solves_to_the_truth() -> None:
+    f, p = _demo()
+    m = measure(rebuild(f), p)  # type: ignore[arg-type]
+    assert abs(abs(m.solution.U_kg_m[0]) - 5000e-6) <= m.radius95_kg_m[0]
+
+
+def test_a_corrupt_first_status_is_outvoted_by_the_others() -> None:
+    """Node 2's first STATUS says 8608 Hz, the next seven 4000: the rate is 4000."""
+    _, p = _demo()
+    streams = rebuild(_with("first status 8608"))
+    assert streams.nodes[2].rate_hz == 4000
+    m = measure(streams, p)  # type: ignore[arg-type]
+    assert abs(abs(m.solution.U_kg_m[0]) - 5000e-6) <= m.radius95_kg_m[0]
+    assert any(w.code == "rate_changed" for w in streams.warnings)  # and it is said
+
+
+def test_the_clock_tolerance_is_configurable() -> None:
+    """4096 against 4000 Hz is 2.4 %: accepted when the tolerance allows it (and then wrong)."""
+    _, p = _demo()
+    m = measure(rebuild(_with("rate 4096")), p, clock_tolerance=0.05)  # type: ignore[arg-type]
+    assert m.omega_rad_s > 0
+
+
+@pytest.mark.parametrize("unbalanced", [True, False])
+def test_3x_is_judged_only_against_a_1x_that_is_there(unbalanced: bool) -> None:
+    """A strong 3x warns; after a perfect correction (1x in the noise) it does not."""
+    sc, p, _ = load_scene("demo")
+    data = sc.model_dump()
+    data["effects"]["harmonics"] = {"x3_m_s2": 0.5}
+    if not unbalanced:
+        data["unbalance"] = {"plane1": {"g_mm": 0.0, "angle_deg": 0.0},
+                             "plane2": {"g_mm": 0.0, "angle_deg": 0.0}}  # fmt: skip
+    scene = type(sc).model_validate(data, strict=False)
+    m = measure(rebuild(simulate(scene, p).frames), p)
+    assert any(w.code == "strong_3x" for w in m.warnings) is unbalanced
+
+
+@pytest.mark.parametrize("g_mm", [0.0, 5000.0])
+def test_at_the_noise_floor_no_correction_is_prescribed(g_mm: float) -> None:
+    """A plane whose unbalance is inside its own interval gets no weight and no angle."""
+    from stand.pipeline import SolveOptions, build_result, measure_streams
+    from stand.result import Provenance, to_json
+
+    sc, p, _ = load_scene("demo")
+    data = sc.model_dump()
+    data["unbalance"]["plane1"] = {"g_mm": g_mm, "angle_deg": 30.0}
+    scene = type(sc).model_validate(data, strict=False)
+    cfg = scene.config()
+    m = measure_streams(rebuild(simulate(scene, p).frames), cfg, p, SolveOptions())
+    r = build_result(m, cfg, p, provenance=Provenance("t", None, "", ""))
+    c1, c2 = to_json(r)["corrections"]
+    assert c1["within_noise"] is (g_mm == 0.0) and c2["within_noise"] is False
+    assert (c1["weights"] == []) is (g_mm == 0.0) and c2["weights"]
+    assert any(w.code == "within_noise" for w in r.warnings) is (g_mm == 0.0)
