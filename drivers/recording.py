@@ -5,7 +5,9 @@ A run file holds everything needed to reprocess a run::
     /                attrs: format = "rotor-stand-run", format_version = 1,
                      software, start_time (ISO 8601, UTC), source (the bus),
                      config_toml (the configuration text used, or ""),
+                     config_sha256 (its digest, checked on every read),
                      frames_committed, complete, end_time
+    /frames/...      every dataset chunked, with HDF5's Fletcher32 checksum
     /frames/t_s      float64 (n,)     host receive time [s]
     /frames/can_id   uint32  (n,)
     /frames/dlc      uint8   (n,)
@@ -87,6 +89,13 @@ def _h5py() -> Any:
     return h5py
 
 
+def config_digest(text: str) -> str:
+    """SHA-256 of a configuration's text (hex): stored beside it, checked on every read."""
+    import hashlib
+
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
 def _utc_now() -> str:
     return _dt.datetime.now(_dt.UTC).isoformat(timespec="milliseconds")
 
@@ -147,13 +156,19 @@ class RunWriter:
                     start_time=self.start_time,
                     source=source,
                     config_toml=config_toml,
+                    config_sha256=config_digest(config_toml),
                     frames_committed=0,
                     complete=False,
                 )
                 g = f.create_group("frames")
                 for name, dtype in _FRAME_FIELDS.items():
                     g.create_dataset(
-                        name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(_CHUNK_ROWS,)
+                        name,
+                        shape=(0,),
+                        maxshape=(None,),
+                        dtype=dtype,
+                        chunks=(_CHUNK_ROWS,),
+                        fletcher32=True,
                     )
                 g.create_dataset(
                     "data",
@@ -161,6 +176,7 @@ class RunWriter:
                     maxshape=(None, _MAX_WIDTH),
                     dtype=np.uint8,
                     chunks=(_CHUNK_ROWS, FRAME_DLC),
+                    fletcher32=True,
                 )
                 w = f.create_group("warnings")
                 for name in ("code", "message"):
@@ -311,6 +327,13 @@ def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic
             f"run file format {version} is newer than this software reads ({RUN_FORMAT_VERSION})",
             path=str(path),
         )
+    stored = f.attrs.get("config_sha256")
+    if stored is not None and stored != config_digest(str(f.attrs.get("config_toml", ""))):
+        raise RecordingError(
+            "the stored configuration does not match its SHA-256 digest: the file was "
+            "altered or damaged (solve it with --config CFG)",
+            path=str(path),
+        )
     g = f["frames"]
     n = int(f.attrs["frames_committed"])
     n = min([n, *(g[k].shape[0] for k in (*_FRAME_FIELDS, "data"))])
@@ -320,6 +343,16 @@ def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic
     codes, msgs = w["code"].asstr()[:m], w["message"].asstr()[:m]
     warnings = tuple(Diagnostic(str(c), str(s)) for c, s in zip(codes, msgs, strict=True))
     return n, meta, warnings
+
+
+def _unreadable(exc: Exception, path: Path) -> RecordingError:
+    """A run file HDF5 cannot read, in one line (a failed checksum said as such)."""
+    if "filter" in str(exc).lower():
+        return RecordingError(
+            "a block of frames fails its Fletcher32 checksum: the file was altered or damaged",
+            path=str(path),
+        )
+    return RecordingError(f"not a readable run file ({exc})", path=str(path))
 
 
 def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
@@ -354,7 +387,7 @@ def read_run(path: str | Path) -> Recording:
     except RecordingError:
         raise
     except (OSError, KeyError, ValueError) as exc:
-        raise RecordingError(f"not a readable run file ({exc})", path=str(path)) from exc
+        raise _unreadable(exc, path) from exc
     return Recording(str(path), frames, meta, warnings)
 
 
@@ -379,7 +412,7 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
         except RecordingError:
             raise
         except (OSError, KeyError, ValueError) as exc:
-            raise RecordingError(f"not a readable run file ({exc})", path=str(p)) from exc
+            raise _unreadable(exc, p) from exc
         rec = Recording(str(p), Frames.empty(), meta, warnings)
     else:
         from stand.drivers.logs import iter_log

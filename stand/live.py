@@ -25,8 +25,9 @@ from types import FrameType
 from typing import Any
 
 from stand.core import Diagnostic
+from stand.drivers.recording import config_digest
 from stand.errors import BusError, MeasurementError, NoStatusError, StandError
-from stand.pipeline import SOFTWARE, SolveOptions, build_result, config_digest, measure_streams
+from stand.pipeline import SOFTWARE, SolveOptions, build_result, measure_streams
 from stand.result import LiveInfo, Provenance, Result
 
 FIRST_CHECK_S = 1.0

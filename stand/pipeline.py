@@ -14,7 +14,6 @@ CLI modules parse arguments and format; none of them repeats a step here.
 
 from __future__ import annotations
 
-import hashlib
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -31,6 +30,7 @@ from stand.core.balance import (
     plane_tolerances,
     static_couple,
 )
+from stand.drivers.recording import config_digest
 from stand.errors import ConfigError, StandError
 from stand.measure import Measurement, measure
 from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
@@ -63,11 +63,6 @@ class SolveOptions:
     tolerances: Any = None
     draws: int = 1000
     traces: bool = False
-
-
-def config_digest(text: str) -> str:
-    """SHA-256 of a configuration's text (hex)."""
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
 def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:

@@ -7,6 +7,7 @@ into its frames; the twin is the same run without it.
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -112,3 +113,49 @@ def test_at_the_noise_floor_no_correction_is_prescribed(g_mm: float) -> None:
     assert c1["within_noise"] is (g_mm == 0.0) and c2["within_noise"] is False
     assert (c1["weights"] == []) is (g_mm == 0.0) and c2["weights"]
     assert any(w.code == "within_noise" for w in r.warnings) is (g_mm == 0.0)
+
+
+def test_a_stored_config_altered_by_one_character_is_refused(
+    demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """C1 45000 -> 95000 in the stored config: refused, naming the file (twin: untouched)."""
+    import shutil
+
+    import h5py
+
+    from stand.cli import main
+
+    run = tmp_path / "altered.h5"
+    shutil.copy(demo_run, run)
+    with h5py.File(run, "a") as f:
+        text = str(f.attrs["config_toml"])
+        assert "C1 = 45000.0" in text
+        f.attrs["config_toml"] = text.replace("C1 = 45000.0", "C1 = 95000.0")
+    assert main(["solve", str(demo_run)]) == 0
+    capsys.readouterr()
+    assert main(["solve", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert str(run) in err and "does not match its SHA-256 digest" in err
+
+
+def test_a_damaged_block_of_frames_fails_its_checksum(
+    demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import shutil
+
+    import h5py
+
+    from stand.cli import main
+
+    run = tmp_path / "damaged.h5"
+    shutil.copy(demo_run, run)
+    with h5py.File(run, "r") as f:
+        info = f["frames/data"].id.get_chunk_info(0)
+    with run.open("r+b") as handle:  # flip one byte inside the first chunk of payloads
+        handle.seek(info.byte_offset + 100)
+        byte = handle.read(1)
+        handle.seek(info.byte_offset + 100)
+        handle.write(bytes([byte[0] ^ 0x01]))
+    assert main(["solve", str(run)]) == 2
+    err = capsys.readouterr().err
+    assert str(run) in err and "fails its Fletcher32 checksum" in err
