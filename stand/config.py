@@ -79,7 +79,8 @@ class ToleranceTable(BaseModel):
 
     grade_mm_s: PositiveFloat
     """G, e.g. 6.3 for G 6.3 [mm/s]."""
-    max_speed_rpm: PositiveFloat
+    max_speed_rpm: Annotated[FiniteFloat, Field(ge=1.0)]
+    """The rotor's maximum service speed [rpm]: at least 1 (U_per grows as its inverse)."""
 
 
 class CorrectionTable(BaseModel):

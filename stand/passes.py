@@ -347,6 +347,13 @@ def node_phasor(
     if sums.n < 8:
         raise MeasurementError(f"only {sums.n} samples in the steady window: measure longer")
     w_ref = sums.w_sum / sums.n
+    if w_ref > math.pi / 3:  # 3x beyond half the sample rate: the fit's columns alias
+        rate = float(s.rate_hz or 0.0)
+        raise MeasurementError(
+            f"the shaft turns at {w_ref * rate * 30 / math.pi:.0f} rpm: its 3x "
+            f"({3 * w_ref * rate / (2 * math.pi):.0f} Hz) is beyond half the node's sample rate "
+            f"({rate / 2:g} Hz); it cannot be measured at this rate"
+        )
     sloped = (sums.w_max - sums.w_min) / w_ref > SPEED_SPAN_SLOPE
     T = model_transform(w0, w_ref, sloped)
     th0, th1 = run.angle(i0), run.angle(end - 1)

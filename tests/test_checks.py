@@ -159,3 +159,18 @@ def test_a_damaged_block_of_frames_fails_its_checksum(
     assert main(["solve", str(run)]) == 2
     err = capsys.readouterr().err
     assert str(run) in err and "fails its Fletcher32 checksum" in err
+
+
+@pytest.mark.parametrize(("rpm", "refused"), [(45_000.0, True), (30_000.0, False)])
+def test_a_speed_beyond_the_sample_rate_s_band_is_refused(rpm: float, refused: bool) -> None:
+    """At 4 kHz, 3x passes half the sample rate above 40,000 rpm."""
+    sc, p, _ = load_scene("demo")
+    data = sc.model_dump()
+    data["run"].update(rpm=rpm, seconds=2.0)
+    scene = type(sc).model_validate(data, strict=False)
+    streams = rebuild(simulate(scene, p).frames)
+    if refused:
+        with pytest.raises(MeasurementError, match=r"node 1: the shaft turns at 45000 rpm"):
+            measure(streams, p)
+    else:
+        assert measure(streams, p).omega_rad_s > 0

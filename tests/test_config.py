@@ -133,3 +133,13 @@ def test_a_bus_value_that_is_not_a_plain_value_is_refused(tmp_path: Path) -> Non
         ConfigError, match=r"\[bus\.channel\]: expected text, a number or true/false"
     ):
         load_config(write(tmp_path, MINIMAL + "\n[bus]\nchannel = { x = 1 }\n"))
+
+
+@pytest.mark.parametrize(("speed", "ok"), [("5e-324", False), ("0.5", False), ("1.0", True)])
+def test_a_tolerance_speed_under_one_rpm_is_refused(tmp_path: Path, speed: str, ok: bool) -> None:
+    text = MINIMAL + f"\n[tolerance]\ngrade_mm_s = 6.3\nmax_speed_rpm = {speed}\n"
+    if ok:
+        assert load_config(write(tmp_path, text))[0].tolerance is not None
+    else:
+        with pytest.raises(ConfigError, match=r"\[tolerance.max_speed_rpm\]"):
+            load_config(write(tmp_path, text))
