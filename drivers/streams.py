@@ -206,6 +206,68 @@ class RunStreams:
         return len(self.bad)
 
 
+EDGE_SLACK = 0.25
+"""An edge is where its neighbours put it to within a quarter revolution (speed from the
+median of the nearby revolutions), or its position or counter is corrupt."""
+
+
+def _local_period(dp: NDArray[np.float64], dr: NDArray[np.int64], ok: NDArray[np.bool_]) -> Any:
+    """Samples per revolution around each interval: the median of up to 9 nearby good ones."""
+    per = np.where(ok, dp / np.maximum(dr, 1), np.nan)
+    half = 4
+    padded = np.concatenate((np.full(half, np.nan), per, np.full(half, np.nan)))
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1)
+    with np.errstate(all="ignore"):
+        counts = np.sum(np.isfinite(windows), axis=1)
+        T = np.full(len(per), np.nan)
+        has = counts > 0
+        if has.any():
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows
+                T[has] = np.nanmedian(windows[has], axis=1)
+    return T
+
+
+def consistent_edges(
+    pos: NDArray[np.float64], seg: NDArray[np.int32], rev: NDArray[np.int64]
+) -> NDArray[np.bool_]:
+    """Which reference edges agree with their neighbours (sorted by segment and position).
+
+    An interval between two edges is *wrong* when its length, in revolutions
+    of the local speed, differs from what the counters say by more than
+    :data:`EDGE_SLACK`.  An edge is dropped when both its intervals are wrong
+    and the interval that skips it is right (a corrupt counter or position
+    moves one edge; it spoils both its intervals and nothing else), or, at the
+    end of a segment, when its one interval is wrong and the next is right.
+    """
+    keep = np.ones(len(pos), dtype=bool)
+    for _ in range(3):  # rounds: two bad edges side by side may need a second look
+        idx = np.flatnonzero(keep)
+        p, s, r = pos[idx], seg[idx], rev[idx]
+        if len(p) < 4:
+            break
+        same = s[1:] == s[:-1]
+        dp = np.diff(p)
+        dr = np.diff(r) % _WRAP
+        T = _local_period(dp, dr, same & (dr >= 1) & (dr <= 8) & (dp > 0))
+        with np.errstate(all="ignore"):
+            wrong = same & ~(np.abs(dp / T - dr) <= EDGE_SLACK)
+            skip_dr = (r[2:] - r[:-2]) % _WRAP
+            skip_ok = np.abs((p[2:] - p[:-2]) / T[:-1] - skip_dr) <= EDGE_SLACK
+        bad = np.zeros(len(p), dtype=bool)
+        bad[1:-1] = wrong[:-1] & wrong[1:] & skip_ok & same[:-1] & same[1:]
+        first = np.concatenate(([True], ~same))[:-1]  # edge k starts its segment
+        bad[:-2] |= first[:-1] & wrong[:-1] & ~wrong[1:] & same[1:]
+        last = np.concatenate((~same, [True]))  # edge k ends its segment
+        bad[2:] |= last[2:] & wrong[1:] & ~wrong[:-1] & same[:-1]
+        if not bad.any():
+            break
+        keep[idx[bad]] = False
+    return keep
+
+
 def _most_common(values: NDArray[np.float64]) -> float | None:
     """The value most STATUS frames say (a corrupt first STATUS is outvoted); None if none."""
     if not len(values):
@@ -421,6 +483,18 @@ def _rebuild_node(
         uniq = np.ones(len(pos), dtype=bool)
         uniq[1:] = (pos[1:] != pos[:-1]) | (mseg[1:] != mseg[:-1])
         pos, mseg, rev = pos[uniq], mseg[uniq], rev[uniq]
+        good = consistent_edges(pos, mseg, rev)
+        if not good.all():
+            dropped = int(np.count_nonzero(~good))
+            warn.append(
+                Diagnostic(
+                    "edges_dropped",
+                    f"node {node}: {dropped} reference edge(s) dropped: their position or "
+                    "revolution counter disagrees with their neighbours (a corrupt MARK frame)",
+                    float(dropped),
+                )
+            )
+            pos, mseg, rev = pos[good], mseg[good], rev[good]
         new_seg = np.ones(len(pos), dtype=bool)
         new_seg[1:] = mseg[1:] != mseg[:-1]
         dr = np.zeros(len(rev), np.int64)
