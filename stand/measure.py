@@ -27,7 +27,14 @@ from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.inverse import UnbalanceSolution
 from stand.drivers.streams import RunStreams
 from stand.errors import MeasurementError
-from stand.passes import BLOCK_REVS, MIN_REVS, Window, block_scatter, node_phasor
+from stand.passes import (
+    BLOCK_REVS,
+    MIN_REVS,
+    Window,
+    block_scatter,
+    check_saturation,
+    node_phasor,
+)
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 
@@ -103,6 +110,7 @@ def measure(
                 f"support), got {sorted(streams.nodes) or 'none'}"
             )
         try:
+            check_saturation(s)
             ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
         except MeasurementError as exc:
             raise MeasurementError(f"node {node}: {exc}") from None

@@ -172,6 +172,11 @@ def test_a_speed_beyond_the_sample_rate_s_band_is_refused(rpm: float, refused: b
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()
     data["run"].update(rpm=rpm, seconds=2.0)
+    for plane in (
+        "plane1",
+        "plane2",
+    ):  # a small unbalance: at these speeds the sensor stays in range
+        data["unbalance"][plane]["g_mm"] /= 3000.0
     scene = type(sc).model_validate(data, strict=False)
     streams = rebuild(simulate(scene, p).frames)
     if refused:
@@ -218,3 +223,25 @@ def test_any_single_byte_of_a_mark_gives_a_refusal_or_an_answer_near_the_truth(
     except MeasurementError:
         return
     assert np.all(np.abs(m.solution.U_kg_m - TRUTH) <= 2 * m.radius95_kg_m + 1e-9)
+
+
+@pytest.mark.parametrize(
+    ("k", "clip", "refused"),
+    [(2.0, None, True), (1.0, 2.0, True), (1.0, None, False), (1.0, 3.0, False)],
+)
+def test_a_saturated_sensor_is_refused(k: float, clip: float | None, refused: bool) -> None:
+    """Twice the demo's unbalance overruns the counts (it read 8119.9 for 10,000); a sensor
+    range of 2 m/s^2 clips node 1 (2.39 m/s^2); the demo, and a range above its peaks, pass."""
+    sc, p, _ = load_scene("demo")
+    data = sc.model_dump()
+    data["unbalance"] = {"plane1": {"g_mm": 5000.0 * k, "angle_deg": 30.0},
+                         "plane2": {"g_mm": 3000.0 * k, "angle_deg": 200.0}}  # fmt: skip
+    if clip is not None:
+        data["effects"]["clipping"] = {"range_m_s2": clip}
+    streams = rebuild(simulate(type(sc).model_validate(data, strict=False), p).frames)
+    if refused:
+        with pytest.raises(MeasurementError, match=r"node 1: the sensor saturates: \d+ samples"):
+            measure(streams, p)
+    else:
+        m = measure(streams, p)
+        assert np.all(np.abs(m.solution.U_kg_m - k * TRUTH) <= m.radius95_kg_m)
