@@ -26,7 +26,7 @@ from typing import Any
 
 from stand.core import Diagnostic
 from stand.drivers.recording import config_digest
-from stand.errors import BusError, MeasurementError, NoStatusError, StandError
+from stand.errors import BusError, MeasurementError, NoStatusError, StandError, UsageError
 from stand.pipeline import SOFTWARE, SolveOptions, build_result, measure_streams
 from stand.result import LiveInfo, Provenance, Result
 
@@ -305,3 +305,83 @@ def measure_until_precise(
         streams=streams,
         live=LiveInfo(stopped_by, elapsed, goal),
     )
+
+
+@dataclass(frozen=True)
+class LiveSource:
+    """What a live measurement reads: the config, the parameters and the frames of a scene.
+
+    ``bus_table`` is the config's ``[bus]`` table (None for a scene, which
+    plays on a private virtual bus: ``scene_bus``); ``config_toml`` is stored
+    in the run.
+    """
+
+    cfg: Any
+    params: Any
+    config_toml: str
+    bus_table: dict[str, Any] | None = None
+    scene_frames: Any = None
+    scene_bus: dict[str, Any] | None = None
+
+
+def live_source(scene: str | None, config: str | None, command: str) -> LiveSource:
+    """A simulated scene (played in real time on a private virtual bus), or a config's bus."""
+    import os
+
+    from stand.pipeline import load_config_text
+
+    if scene:
+        from stand.config import config_toml
+        from stand.sim import load_scene, simulate
+
+        sc, params, _ = load_scene(scene)
+        cfg = sc.config()
+        channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
+        return LiveSource(
+            cfg,
+            params,
+            config_toml(cfg),
+            scene_frames=simulate(sc, params).frames,
+            scene_bus={"interface": "virtual", "channel": channel},
+        )
+    if not config:
+        raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
+    cfg, params, text = load_config_text(config)
+    return LiveSource(cfg, params, text, bus_table=cfg.bus)
+
+
+def measure_live(
+    source: LiveSource,
+    bus_kwargs: dict[str, Any],
+    run_path: str,
+    options: SolveOptions,
+    targets: Callable[[Any, Any, Any], tuple[float, float]],
+    *,
+    max_seconds: float,
+    silence_timeout_s: float,
+    on_start: Callable[[str], None] | None = None,
+    on_progress: Callable[[Progress], None] | None = None,
+    on_wait: Callable[[float, str], None] | None = None,
+) -> tuple[Result, LiveSession]:
+    """One live session measured until precise: the result, and the session (closed)."""
+    cfg, params = source.cfg, source.params
+    with LiveSession(
+        bus_kwargs,
+        run_path,
+        config_toml=source.config_toml,
+        scene_frames=source.scene_frames,
+        silence_timeout_s=silence_timeout_s,
+    ) as session:
+        if on_start:
+            on_start(session.where)
+        result = measure_until_precise(
+            session,
+            cfg,
+            params,
+            options,
+            lambda U: targets(cfg, params, U),
+            max_seconds=max_seconds,
+            on_progress=on_progress,
+            on_wait=on_wait,
+        )
+    return result, session

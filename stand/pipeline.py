@@ -14,6 +14,7 @@ CLI modules parse arguments and format; none of them repeats a step here.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -342,3 +343,51 @@ def measure_recording(
     else:
         m = measure_streams(streams, cfg, params, SolveOptions())
     return m, cfg, params
+
+
+def _number(x: float | None) -> float | int | None:
+    if x is None or not math.isfinite(x):
+        return None
+    return int(x) if float(x).is_integer() else x
+
+
+def recording_summary(rec: Any, streams: Any) -> dict[str, Any]:
+    """The inspect object of a recording and its rebuilt streams (JSON-ready)."""
+    nodes = []
+    for n, s in sorted(streams.nodes.items()):
+        rpm = s.rpm()
+        nodes.append(
+            {
+                "node": n,
+                "frames": s.frames,
+                "samples": s.samples,
+                "valid_samples": len(s.index),
+                "lost_frames": s.lost_frames,
+                "invalid_samples": s.invalid_samples,
+                "duplicate_frames": s.duplicate_frames,
+                "marks": s.marks,
+                "lost_marks": s.lost_marks,
+                "segments": s.segments,
+                "status_frames": s.status_frames,
+                "rate_hz": _number(s.rate_hz),
+                "scale_um_s2": _number(s.scale_um_s2),
+                "flags": list(s.flags),
+                "rpm": None if rpm is None else round(rpm, 4),
+            }
+        )
+    meta = {
+        k: rec.meta[k]
+        for k in ("software", "start_time", "end_time", "source", "complete")
+        if k in rec.meta
+    }
+    return {
+        "file": rec.path,
+        "frames": streams.frames,
+        "nodes": nodes,
+        "unknown_frames": streams.unknown_frames,
+        "bad_frames": streams.bad_frames,
+        "error_frames": streams.error_frames,
+        "duration_s": round(streams.duration_s, 6),
+        "run": meta,
+        "warnings": [w.message for w in (*rec.warnings, *streams.warnings)],
+    }

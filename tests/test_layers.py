@@ -92,13 +92,30 @@ def test_every_module_imports_only_what_its_layer_allows(path: Path) -> None:
     assert not bad, f"{path.relative_to(ROOT)} imports {bad}"
 
 
-def test_no_subcommand_imports_another() -> None:
+CLI_SHARED = {"stand.cli.common", "stand.cli.format"}
+"""What a subcommand may import of the CLI: argument handling and formatting, nothing that
+measures (that is the application layer's)."""
+
+
+def test_no_subcommand_imports_another_cli_module() -> None:
     from stand.cli import SUBCOMMANDS
 
     for name in SUBCOMMANDS:
-        mods = imported_modules(ROOT / "stand" / "cli" / f"{name}.py")
-        others = {m for m in mods if m.removeprefix("stand.cli.") in SUBCOMMANDS}
-        assert not others, f"stand/cli/{name}.py imports the subcommand(s) {sorted(others)}"
+        path = ROOT / "stand" / "cli" / f"{name}.py"
+        mods = imported_modules(path) | _from_package_imports(path)
+        others = {m for m in mods if m.startswith("stand.cli") and m not in CLI_SHARED}
+        assert not others, f"stand/cli/{name}.py imports {sorted(others)}"
+    helpers = {p.stem for p in (ROOT / "stand" / "cli").glob("*.py")} - set(SUBCOMMANDS)
+    assert helpers == {"__init__", "__main__", "common", "format"}, helpers
+
+
+def _from_package_imports(path: Path) -> set[str]:
+    """``from stand.cli import x`` as ``stand.cli.x``."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module == "stand.cli":
+            names.update(f"stand.cli.{a.name}" for a in node.names)
+    return names
 
 
 def test_importing_the_core_and_the_cli_loads_no_heavy_module() -> None:

@@ -7,17 +7,17 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from stand.cli import live_args
+from stand.cli.common import DEFAULT_TARGET_PCT, add_live_measure_arguments
 
 TOLERANCE_SHARE = 0.10
 """Default precision target: 95 % interval within 10 % of each plane's ISO tolerance."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    live_args.add_arguments(
+    add_live_measure_arguments(
         p,
         default_target=f"{100 * TOLERANCE_SHARE:g} %% of each plane's ISO tolerance, or "
-        f"{live_args.DEFAULT_TARGET_PCT:g} %% of the unbalance without a [tolerance] table",
+        f"{DEFAULT_TARGET_PCT:g} %% of the unbalance without a [tolerance] table",
     )
     p.add_argument(
         "--report",
@@ -33,15 +33,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import solve_options
+    from stand.cli.common import measure_live_from_args, solve_options, targets_from
     from stand.cli.format import show
     from stand.pipeline import check_against
     from stand.result import to_json
 
-    result, cfg, params = live_args.measure_live(
+    result, cfg, params = measure_live_from_args(
         args,
         "balance",
-        live_args.targets_from(args, TOLERANCE_SHARE),
+        targets_from(args, TOLERANCE_SHARE),
         solve_options(args, traces=True),
     )
     if args.check:

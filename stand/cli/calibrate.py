@@ -37,7 +37,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "runs",
         metavar="RUNS.toml",
         help="[[runs]] file = RUN, masses = [{plane, mass_g, angle_deg}, ...] (the test "
-        "masses on the proving rotor in that run; angles: the seed's phi)",
+        "masses on the proving rotor in that run; angles from the reference mark, "
+        "against the direction of rotation)",
     )
     p.add_argument(
         "--config",

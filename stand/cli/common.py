@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import math
 import sys
 from collections.abc import Iterable, Mapping
@@ -26,7 +27,8 @@ def parse_rpm(text: str) -> float:
 
 
 def parse_unbalance(text: str) -> tuple[float, float]:
-    """``G_MM@DEG``: unbalance ``q R`` [g mm] >= 0 at the seed's angle phi [deg]."""
+    """``G_MM@DEG``: unbalance ``q R`` [g mm] >= 0 at an angle [deg] from the reference mark,
+    against the direction of rotation (the model's ``phi``)."""
     parts = text.split("@")
     try:
         if len(parts) != 2:
@@ -176,3 +178,114 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
         draws=getattr(args, "draws", 1000),
         traces=traces,
     )
+
+
+DEFAULT_TARGET_PCT = 5.0
+"""Live precision target without a tolerance: 5 % of each plane's unbalance."""
+
+
+def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: str) -> None:
+    """``stand measure`` and ``stand balance``: the source, the precision target, the limits,
+    the run file."""
+    src = p.add_mutually_exclusive_group()
+    src.add_argument(
+        "--scene",
+        metavar="SCENE",
+        help="measure the simulated stand: a shipped scene or a scene file, "
+        "played in real time on a private virtual bus",
+    )
+    p.add_argument("--config", metavar="CFG", help="stand configuration with its [bus] table")
+    tgt = p.add_mutually_exclusive_group()
+    tgt.add_argument(
+        "--target-pct",
+        type=float,
+        help=f"stop when each plane's 95 %% interval is below this %% of its unbalance "
+        f"(default: {default_target})",
+    )
+    tgt.add_argument(
+        "--target-g-mm",
+        type=float,
+        help="stop when each plane's 95 %% interval is below this [g mm]",
+    )
+    p.add_argument(
+        "--max-seconds",
+        type=float,
+        default=60.0,
+        help="stop after this long in any case (default 60)",
+    )
+    p.add_argument(
+        "--out", metavar="RUN.h5", help="run file to record into (default run-YYYYmmdd-HHMMSS.h5)"
+    )
+    add_live_arguments(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_measure_arguments(p)
+    add_bus_arguments(p)
+
+
+def check_live_arguments(args: argparse.Namespace, command: str) -> None:
+    """Refuse targets and limits that are not positive."""
+    for name in ("target_pct", "target_g_mm", "max_seconds", "timeout"):
+        value = getattr(args, name)
+        if value is not None and not value > 0:
+            flag = "--" + name.replace("_", "-")
+            raise UsageError(f"stand {command}: {flag} must be > 0, got {value}")
+
+
+def targets_from(args: argparse.Namespace, tolerance_share: float | None = None) -> Any:
+    """``targets(cfg, params, U) -> (kg m, kg m)``: the precision the options ask for."""
+    from stand.pipeline import precision_targets
+
+    abs_kg_m = None if args.target_g_mm is None else args.target_g_mm * 1e-6
+
+    def targets(cfg: Any, params: Any, U: Any) -> tuple[float, float]:
+        return precision_targets(
+            cfg, params, U,
+            pct=args.target_pct,
+            abs_kg_m=abs_kg_m,
+            tolerance_share=tolerance_share,
+            default_pct=DEFAULT_TARGET_PCT,
+        )  # fmt: skip
+
+    return targets
+
+
+def run_path(args: argparse.Namespace) -> str:
+    """The run file: ``--out`` or a timestamped name."""
+    return str(args.out or f"run-{dt.datetime.now():%Y%m%d-%H%M%S}.h5")
+
+
+def measure_live_from_args(
+    args: argparse.Namespace, command: str, targets: Any, options: Any
+) -> tuple[Any, Any, Any]:
+    """``stand measure`` and ``stand balance``: the live run the options ask for, with its
+    progress on stderr; returns the :class:`stand.result.Result`, config and parameters."""
+    from stand.cli.format import progress_line
+    from stand.live import live_source, measure_live
+
+    check_live_arguments(args, command)
+    source = live_source(args.scene, args.config, command)
+    kwargs = source.scene_bus
+    if kwargs is None:
+        kwargs = bus_kwargs(args, source.bus_table)
+    path = run_path(args)
+    quiet = args.quiet
+
+    def say(text: str) -> None:
+        if not quiet:
+            print(text, file=sys.stderr)
+
+    result, session = measure_live(
+        source,
+        kwargs,
+        path,
+        options,
+        targets,
+        max_seconds=args.max_seconds,
+        silence_timeout_s=args.timeout,
+        on_start=lambda where: say(f"measuring on {where}, recording into {path} (Ctrl-C stops)"),
+        on_progress=lambda p: say(progress_line(p)),
+        on_wait=lambda elapsed, why: say(f"  {elapsed:5.1f} s  waiting: {why}"),
+    )
+    if session.failure is not None:
+        say(f"stand: {session.failure}")
+    return result, source.cfg, source.params

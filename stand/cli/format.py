@@ -171,3 +171,59 @@ def show(out: dict[str, Any], as_json: bool) -> None:
         dump_json(out)
     else:
         print_result(out)
+
+
+def progress_line(p: Any) -> str:
+    """One line of the live display."""
+    from stand.core import rad_s_to_rpm
+
+    m = p.measurement
+    planes = "  ".join(
+        f"plane {i + 1}: {abs(m.solution.U_kg_m[i]) * 1e6:.1f} "
+        f"+- {m.radius95_kg_m[i] * 1e6:.1f} g mm (precision goal +- {p.targets_kg_m[i] * 1e6:.1f})"
+        for i in range(2)
+    )
+    amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
+    rpm = float(rad_s_to_rpm(m.omega_rad_s))
+    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}"
+
+
+def print_summary(out: dict[str, Any]) -> None:
+    """The inspect object as a short table (stdout), warnings on stderr."""
+    print(
+        f"{out['file']}: {out['frames']} frames over {out['duration_s']:.3f} s, "
+        f"{out['unknown_frames']} with other ids, {out['bad_frames']} malformed"
+    )
+    if out["run"]:
+        r = out["run"]
+        print(
+            f"  recorded {r.get('start_time', '?')} by {r.get('software', '?')} from "
+            f"{r.get('source', '?')}{'' if r.get('complete', True) else ' (cut short)'}"
+        )
+    head = (
+        f"  {'node':>4} {'frames':>8} {'samples':>9} {'lost':>6} {'invalid':>7} {'marks':>6} "
+        f"{'rate Hz':>8} {'µm/s²':>6} {'rpm':>10}  flags"
+    )
+    print(head)
+    for n in out["nodes"]:
+        rpm = "-" if n["rpm"] is None else f"{n['rpm']:.2f}"
+        rate = "-" if n["rate_hz"] is None else f"{n['rate_hz']:g}"
+        scale = "-" if n["scale_um_s2"] is None else f"{n['scale_um_s2']:g}"
+        print(
+            f"  {n['node']:>4} {n['frames']:>8} {n['samples']:>9} {n['lost_frames']:>6} "
+            f"{n['invalid_samples']:>7} {n['marks']:>6} {rate:>8} {scale:>6} {rpm:>10}  "
+            f"{','.join(n['flags']) or '-'}"
+        )
+
+
+def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
+    """What a recording holds: one JSON object, or the table (and the warnings on stderr)."""
+    from stand.cli.common import print_warnings
+    from stand.pipeline import recording_summary
+
+    out = recording_summary(rec, streams)
+    if as_json:
+        dump_json(out)
+    else:
+        print_summary(out)
+        print_warnings((*rec.warnings, *streams.warnings))

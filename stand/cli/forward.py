@@ -30,7 +30,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=parse_unbalance,
         required=True,
         metavar="G_MM@DEG",
-        help="unbalance q R [g mm] @ seed angle phi [deg]; give it twice: plane 1, then plane 2",
+        help="unbalance q R [g mm] @ angle [deg] from the reference mark, against the direction "
+        "of rotation; give it twice: plane 1, then plane 2",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 

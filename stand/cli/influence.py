@@ -80,8 +80,9 @@ def _readings(entry: RunEntry, k: int, source: str, config: str | None) -> list[
     from stand.pipeline import measure_recording
 
     m, _, _ = measure_recording(str(Path(source).parent / str(entry.file)), config)
-    # conj: our phasors follow U = q R e^{-i phi}; conjugated, a trial at the seed's angle
-    # phi acts as e^{+i phi}, so trial and correction angles are the seed's phi
+    # conj: our phasors follow U = q R e^{-i phi}; conjugated, a trial at angle phi (from the
+    # reference mark, against the direction of rotation) acts as e^{+i phi}, so trial and
+    # correction angles are both counted that way
     return [complex(ph.A_m_s2).conjugate() for ph in m.supports]
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from stand.cli.inventory import report
+from stand.cli.format import print_recording
 from stand.errors import RecordingError
 
 
@@ -29,5 +29,5 @@ def run(args: argparse.Namespace) -> int:
             "(0x101-0x10F, 0x141-0x14F, 0x181-0x18F, DLC 8)",
             path=args.path,
         )
-    report(rec, streams, as_json=args.json)
+    print_recording(rec, streams, as_json=args.json)
     return 0

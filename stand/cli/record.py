@@ -57,7 +57,7 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
 def run(args: argparse.Namespace) -> int:
     import time
 
-    from stand.cli.inventory import report
+    from stand.cli.format import print_recording
     from stand.drivers.protocol import Frames
     from stand.drivers.recording import Recording
     from stand.live import LiveSession
@@ -104,7 +104,9 @@ def run(args: argparse.Namespace) -> int:
             "source": w.source,
             "complete": True,
         }
-        report(Recording(args.out, Frames.empty(), meta, w.warnings), streams, as_json=args.json)
+        print_recording(
+            Recording(args.out, Frames.empty(), meta, w.warnings), streams, as_json=args.json
+        )
     if session.failure is not None:
         if frames == 0:
             session.writer.discard()

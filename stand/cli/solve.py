@@ -1,11 +1,19 @@
-"""Solve recorded runs: the unbalance of both planes, with its 95 % interval."""
+"""Solve recorded runs: the unbalance of both planes, with its 95 % interval.
+
+Several runs (``--jobs N``, ``--summary FILE``) are one batch: a progress bar on
+stderr, a line per run on stdout, a ``.csv`` or ``.json`` summary.
+"""
 
 from __future__ import annotations
 
 import argparse
+import csv
+import sys
+from pathlib import Path
+from typing import Any
 
 from stand.cli.common import add_measure_arguments, add_uncertainty_arguments, solve_options
-from stand.errors import UsageError
+from stand.errors import StandError, UsageError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,12 +43,102 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
     options = solve_options(args)
     if len(args.runs) > 1 or args.summary:
-        from stand.cli.solve_batch import run_batch
-
         return run_batch(args, options)
     from stand.cli.format import show
     from stand.pipeline import solve_recording
     from stand.result import to_json
 
     show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
+    return 0
+
+
+COLUMNS = [
+    "run",
+    "rpm",
+    "plane1_g_mm",
+    "plane1_deg",
+    "plane1_uncertainty_g_mm",
+    "plane1_pass",
+    "plane2_g_mm",
+    "plane2_deg",
+    "plane2_uncertainty_g_mm",
+    "plane2_pass",
+    "warnings",
+    "error",
+]
+
+
+def _row(path: str, res: dict[str, Any]) -> dict[str, Any]:
+    row: dict[str, Any] = {k: "" for k in COLUMNS}
+    row["run"] = path
+    if "error" in res:
+        row["error"] = res["error"]
+        return row
+    row["rpm"] = res["rpm"]
+    verdict = {p["plane"]: p["pass"] for p in res.get("tolerance", {}).get("planes", [])}
+    for p in res["planes"]:
+        i = p["plane"]
+        row[f"plane{i}_g_mm"] = p["unbalance_g_mm"]
+        row[f"plane{i}_deg"] = p["angle_deg"]
+        row[f"plane{i}_uncertainty_g_mm"] = p["uncertainty_g_mm"]
+        row[f"plane{i}_pass"] = verdict.get(i, "")
+    row["warnings"] = len(res["warnings"])
+    return row
+
+
+def run_batch(args: argparse.Namespace, options: Any) -> int:
+    """Solve every run; a progress bar on stderr; a table on stdout; the summary file."""
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from stand.cli.format import dump_json, json_text
+    from stand.pipeline import solve_many
+    from stand.result import to_json
+
+    runs = list(args.runs)
+    results: dict[str, dict[str, Any]] = {}
+    progress = Progress(
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        transient=False,
+    )
+    with progress:
+        task = progress.add_task("solving", total=len(runs))
+        for path, res in solve_many(
+            runs, args.config, options, args.jobs, lambda: progress.advance(task)
+        ):
+            results[path] = {"error": str(res)} if isinstance(res, StandError) else to_json(res)
+    rows = [_row(path, results[path]) for path in runs]
+    if args.summary:
+        dest = Path(args.summary)
+        if dest.suffix.lower() == ".json":
+            dest.write_text(json_text({p: results[p] for p in runs}, indent=1))
+        else:
+            with dest.open("w", newline="") as handle:
+                w = csv.DictWriter(handle, fieldnames=COLUMNS)
+                w.writeheader()
+                w.writerows(rows)
+    if args.json:
+        dump_json({p: results[p] for p in runs})
+    else:
+        for r in rows:
+            if r["error"]:
+                print(f"{r['run']}: error: {r['error']}")
+            else:
+                print(
+                    f"{r['run']}: {r['rpm']:.1f} rpm  plane 1 {r['plane1_g_mm']:.1f} g mm at "
+                    f"{r['plane1_deg']:.1f} deg  plane 2 {r['plane2_g_mm']:.1f} g mm at "
+                    f"{r['plane2_deg']:.1f} deg"
+                )
+    failed = [r for r in rows if r["error"]]
+    if failed:
+        print(
+            f"stand: error: {len(failed)} of {len(rows)} runs could not be solved "
+            f"(first: {failed[0]['run']}: {failed[0]['error']})",
+            file=sys.stderr,
+        )
+        return 2
     return 0
