@@ -171,6 +171,8 @@ class Frames:
         blocks = [b for b in blocks if len(b)]
         if not blocks:
             return Frames.empty()
+        if len(blocks) == 1:
+            return blocks[0]  # nothing to join: no copy
         width = max(b.data.shape[1] for b in blocks)
         data = [
             b.data

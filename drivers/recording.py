@@ -36,7 +36,7 @@ import datetime as _dt
 import json
 import os
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -367,28 +367,39 @@ def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
     )
 
 
-def read_run(path: str | Path) -> Recording:
-    """Read an HDF5 run file (complete, or cut short by a crash).
+def _read_run_blocks(
+    path: str | Path, take: Callable[[Frames], None], rows: int | None = None
+) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
+    """Hand a run file's committed frames to ``take``, ``rows`` at a time (None: all at once);
+    return its attributes and warnings.
 
     Raises
     ------
     RecordingError
-        Not an HDF5 file, truncated beyond use, or not a run file.
+        Not an HDF5 file, truncated beyond use, not a run file, or a failed checksum.
     """
-    path = Path(path)
-    h5py = _h5py()
-    if not path.is_file():
-        raise RecordingError("no such file", path=str(path))
+    p = Path(path)
+    if not p.is_file():
+        raise RecordingError("no such file", path=str(p))
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
-        with h5py.File(path, "r", locking=False) as f:
-            n, meta, warnings = _open_run(f, path)
-            frames = _frame_rows(f, 0, n)
+        with _h5py().File(p, "r", locking=False) as f:
+            n, meta, warnings = _open_run(f, p)
+            step = max(n, 1) if rows is None else rows
+            for lo in range(0, n, step):
+                take(_frame_rows(f, lo, min(lo + step, n)))
     except RecordingError:
         raise
     except (OSError, KeyError, ValueError) as exc:
-        raise _unreadable(exc, path) from exc
-    return Recording(str(path), frames, meta, warnings)
+        raise _unreadable(exc, p) from exc
+    return meta, warnings
+
+
+def read_run(path: str | Path) -> Recording:
+    """Read an HDF5 run file (complete, or cut short by a crash)."""
+    blocks: list[Frames] = []
+    meta, warnings = _read_run_blocks(path, blocks.append)
+    return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 
 def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
@@ -401,19 +412,8 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
 
     builder = StreamBuilder()
     if is_run_file(path):
-        p = Path(path)
-        if not p.is_file():
-            raise RecordingError("no such file", path=str(p))
-        try:
-            with _h5py().File(p, "r", locking=False) as f:
-                n, meta, warnings = _open_run(f, p)
-                for lo in range(0, n, READ_ROWS):
-                    builder.add(_frame_rows(f, lo, min(lo + READ_ROWS, n)))
-        except RecordingError:
-            raise
-        except (OSError, KeyError, ValueError) as exc:
-            raise _unreadable(exc, p) from exc
-        rec = Recording(str(p), Frames.empty(), meta, warnings)
+        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
+        rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:
         from stand.drivers.logs import iter_log
         from stand.errors import UnusualLogError

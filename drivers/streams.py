@@ -581,39 +581,29 @@ def rebuild_decoded(
         del mine
         nodes[int(node)] = stream
         warnings.extend(w)
-    dec = Decoded(
-        parts[0].samples if parts else decode(Frames.empty()).samples,
-        parts[0].status if parts else decode(Frames.empty()).status,
-        parts[0].marks if parts else decode(Frames.empty()).marks,
-        unknown_frames=sum(p.unknown_frames for p in parts),
-        error_frames=sum(p.error_frames for p in parts),
-        bad=tuple(b for p in parts for b in p.bad),
-    )
-    if dec.bad:
-        b = dec.bad[0]
+    bad = tuple(b for p in parts for b in p.bad)
+    errors = sum(p.error_frames for p in parts)
+    if bad:
+        b = bad[0]
         warnings.append(
             Diagnostic(
                 "bad_frames",
-                f"{len(dec.bad)} malformed protocol frame(s) ignored; the first: frame {b.frame} "
+                f"{len(bad)} malformed protocol frame(s) ignored; the first: frame {b.frame} "
                 f"(id 0x{b.can_id:03X}): {b.reason}",
-                float(len(dec.bad)),
+                float(len(bad)),
             )
         )
-    if dec.error_frames:
+    if errors:
         warnings.append(
-            Diagnostic(
-                "error_frames",
-                f"{dec.error_frames} CAN error frame(s) on the bus",
-                float(dec.error_frames),
-            )
+            Diagnostic("error_frames", f"{errors} CAN error frame(s) on the bus", float(errors))
         )
     duration = float(t_s[-1] - t_s[0]) if len(t_s) else 0.0
     return RunStreams(
         nodes=nodes,
         frames=len(t_s),
-        unknown_frames=dec.unknown_frames,
-        error_frames=dec.error_frames,
-        bad=dec.bad,
+        unknown_frames=sum(p.unknown_frames for p in parts),
+        error_frames=errors,
+        bad=bad,
         duration_s=duration,
         warnings=tuple(warnings),
     )
@@ -653,18 +643,7 @@ class StreamBuilder:
             self._times[-2:] = [np.concatenate(self._times[-2:])]
             self._sizes[-2:] = [self._sizes[-2] + self._sizes[-1]]
 
-    def decoded(self) -> tuple[Decoded, NDArray[np.float64]]:
-        """Everything decoded so far, as one block, and every frame's host time [s]."""
-        if len(self._parts) != 1:
-            self._parts = [concat_decoded(self._parts)]
-            self._sizes = [self.frames]
-        return self._parts[0], self._times_joined()
-
-    def _times_joined(self) -> NDArray[np.float64]:
-        if len(self._times) != 1:
-            self._times = [np.concatenate(self._times) if self._times else np.zeros(0)]
-        return self._times[0]
-
     def streams(self, *, strict_status: bool = True) -> RunStreams:
         """The node streams of every frame added so far (the blocks are not joined whole)."""
-        return rebuild_decoded(self._parts, self._times_joined(), strict_status=strict_status)
+        t_s = np.concatenate(self._times) if self._times else np.zeros(0)
+        return rebuild_decoded(self._parts, t_s, strict_status=strict_status)
