@@ -40,6 +40,14 @@ class MeasurementError(StandError, ValueError):
     """The data cannot give an unbalance (a node missing, no reference edges ...)."""
 
 
+class SensorFaultError(MeasurementError):
+    """The data show a fault that more data will not cure: a dead, stuck or saturated
+    sensor, a scale of 0, two nodes whose clocks disagree, a shaft too fast for the
+    sample rate.  A live measurement stops at once on it (a plain
+    :class:`MeasurementError`, e.g. too few edges yet, is waited out).
+    """
+
+
 class ConfigError(StandError, ValueError):
     """A configuration file (or value) is missing, malformed or physically refused.
 

@@ -26,7 +26,14 @@ from typing import Any
 
 from stand.core import Diagnostic
 from stand.drivers.recording import config_digest
-from stand.errors import BusError, MeasurementError, NoStatusError, StandError, UsageError
+from stand.errors import (
+    BusError,
+    MeasurementError,
+    NoStatusError,
+    SensorFaultError,
+    StandError,
+    UsageError,
+)
 from stand.pipeline import SOFTWARE, SolveOptions, build_result, measure_streams
 from stand.result import LiveInfo, Provenance, Result
 
@@ -257,7 +264,12 @@ def measure_until_precise(
             continue
         try:
             m = measure_streams(session.streams(), cfg, params, options)
-        except StandError as exc:
+        except SensorFaultError as exc:  # more data will not cure it: stop now
+            session.close()
+            raise SensorFaultError(
+                f"{exc} (after {elapsed:.1f} s; the run so far is kept in {session.run_path})"
+            ) from exc
+        except StandError as exc:  # not yet (too few edges, no STATUS yet): wait
             if on_wait:
                 on_wait(elapsed, str(exc))
             next_check = elapsed + 1.0

@@ -26,7 +26,7 @@ from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.inverse import UnbalanceSolution
 from stand.drivers.streams import RunStreams
-from stand.errors import MeasurementError
+from stand.errors import MeasurementError, SensorFaultError
 from stand.passes import (
     BLOCK_REVS,
     MIN_REVS,
@@ -112,8 +112,8 @@ def measure(
         try:
             check_saturation(s)
             ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
-        except MeasurementError as exc:
-            raise MeasurementError(f"node {node}: {exc}") from None
+        except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)
+            raise type(exc)(f"node {node}: {exc}") from None
         for note in notes:
             warnings.append(Diagnostic("gate", f"node {node}: {note}"))
         if window.revolutions < MIN_REVS:
@@ -160,7 +160,7 @@ def measure(
     w1, w2 = supports[0].omega_ref_rad_s, supports[1].omega_ref_rad_s
     if abs(w1 / w2 - 1) > clock_tolerance:
         rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in (1, 2))
-        raise MeasurementError(
+        raise SensorFaultError(
             f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
             f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
             f"+-{100 * clock_tolerance:g} %): a node's sample rate (STATUS says {rates} Hz) "

@@ -31,7 +31,7 @@ from stand.core.fitsums import (
     side_band_sums,
 )
 from stand.drivers.streams import NodeStream
-from stand.errors import MeasurementError
+from stand.errors import MeasurementError, SensorFaultError
 
 SPEED_TOLERANCE = 0.03
 """A revolution is at steady speed within 3 % of the steady part's median."""
@@ -63,12 +63,12 @@ def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
     """The node's longest clock segment: its samples ``lo:hi``, edge positions and revs."""
     if s.scale_m_s2 is None:
         raise MeasurementError("no STATUS, its samples cannot be scaled")
-    if len(s.index) == 0:
-        raise MeasurementError(
+    if len(s.index) == 0 and s.samples:
+        raise SensorFaultError(
             f"all {s.samples} samples are invalid (count -32768: sensor fault or overrange)"
-            if s.samples
-            else f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames"
         )
+    if len(s.index) == 0:
+        raise MeasurementError(f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames")
     if len(s.mark_segment) == 0:
         raise MeasurementError(
             "no reference edges: is the reference sensor wired and the mark passing it?"
@@ -78,10 +78,10 @@ def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
     lo, hi = s.segment_bounds(seg)
     assert s.scale_m_s2 is not None
     if not np.any(s.scale_m_s2):
-        raise MeasurementError("its STATUS scale is 0: the samples mean nothing (sensor fault?)")
+        raise SensorFaultError("its STATUS scale is 0: the samples mean nothing (sensor fault?)")
     counts = s.counts[lo:hi]
     if len(counts) and counts.min() == counts.max():
-        raise MeasurementError(
+        raise SensorFaultError(
             f"the sensor reads a constant {int(counts[0])} counts in all {len(counts)} samples: "
             "dead, disconnected or stuck"
         )
@@ -114,7 +114,7 @@ def check_saturation(s: NodeStream) -> None:
     for v in (hi, lo):
         n = int(np.sum(c == v))
         if v != 0 and (allowed or abs(v) >= FULL_SCALE_COUNT) and n > limit:
-            raise MeasurementError(
+            raise SensorFaultError(
                 f"the sensor saturates: {n} samples ({100 * n / len(c):.1f} %) sit at its limit "
                 f"of {v:+d} counts, so the 1x would read low; measure at a lower speed or with "
                 "a sensor of larger range"
@@ -382,7 +382,7 @@ def node_phasor(
     w_ref = sums.w_sum / sums.n
     if w_ref > math.pi / 3:  # 3x beyond half the sample rate: the fit's columns alias
         rate = float(s.rate_hz or 0.0)
-        raise MeasurementError(
+        raise SensorFaultError(
             f"the shaft turns at {w_ref * rate * 30 / math.pi:.0f} rpm: its 3x "
             f"({3 * w_ref * rate / (2 * math.pi):.0f} Hz) is beyond half the node's sample rate "
             f"({rate / 2:g} Hz); it cannot be measured at this rate"

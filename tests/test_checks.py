@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 
 from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.streams import rebuild
-from stand.errors import MeasurementError
+from stand.errors import MeasurementError, SensorFaultError
 from stand.measure import measure
 from stand.sim import load_scene, simulate
 
@@ -60,8 +60,18 @@ def _with(change: str) -> Frames:
 )
 def test_a_fault_is_refused_naming_the_node_and_the_figure(fault: str, says: str) -> None:
     _, p = _demo()
-    with pytest.raises(MeasurementError, match=says):
+    with pytest.raises(SensorFaultError, match=says):  # a fault: live stops at once on it
         measure(rebuild(_with(fault)), p)  # type: ignore[arg-type]
+
+
+def test_too_little_data_yet_is_not_a_fault() -> None:
+    """Live waits out "not yet" (too few edges): a plain MeasurementError, not a fault."""
+    f, p = _demo()
+    first = f.t_s < 0.1  # 1.5 revolutions at 900 rpm
+    short = Frames(f.t_s[first], f.can_id[first], f.dlc[first], f.data[first], f.flags[first])
+    with pytest.raises(MeasurementError, match="reference edges") as info:
+        measure(rebuild(short), p)  # type: ignore[arg-type]
+    assert not isinstance(info.value, SensorFaultError)
 
 
 def test_the_twin_without_a_fault_solves_to_the_truth() -> None:
@@ -240,7 +250,7 @@ def test_a_saturated_sensor_is_refused(k: float, clip: float | None, refused: bo
         data["effects"]["clipping"] = {"range_m_s2": clip}
     streams = rebuild(simulate(type(sc).model_validate(data, strict=False), p).frames)
     if refused:
-        with pytest.raises(MeasurementError, match=r"node 1: the sensor saturates: \d+ samples"):
+        with pytest.raises(SensorFaultError, match=r"node 1: the sensor saturates: \d+ samples"):
             measure(streams, p)
     else:
         m = measure(streams, p)

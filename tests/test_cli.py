@@ -163,17 +163,23 @@ def test_help_pages_name_every_subcommand(capsys: pytest.CaptureFixture[str]) ->
     ) == sorted(SUBCOMMANDS)
 
 
-def test_a_json_answer_with_nan_is_refused_not_printed(capsys: pytest.CaptureFixture[str]) -> None:
-    """1e300 rpm overflows the model: exit 2 naming the key, and no NaN on stdout."""
+@pytest.mark.parametrize("rpm", ["1e300", "2e6"])
+def test_a_meaningless_speed_is_refused_before_any_arithmetic(
+    rpm: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """1e300 rpm used to overflow the model (numpy warnings, then NaN): now refused at once."""
     import warnings
 
-    argv = ["forward", "--config", CFG, "--rpm", "1e300"]
+    argv = ["forward", "--config", CFG, "--rpm", rpm]
     argv += ["--unbalance", "5000@30", "--unbalance", "3000@200", "--json"]
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # the overflow itself
+        warnings.simplefilter("error")  # any overflow warning would fail the test
         assert main(argv) == 2
     out, err = capsys.readouterr()
-    assert out == "" and "not a finite number at supports[0].amplitude_m_s2" in err
+    assert out == "" and f"--rpm: {rpm} rpm is beyond any balancing stand" in err
+    argv[4] = "1e6"  # its twin: the largest speed taken gives finite numbers
+    assert main(argv) == 0
+    json.loads(capsys.readouterr().out, parse_constant=lambda c: pytest.fail(c))
 
 
 def test_finite_names_the_first_bad_key_and_passes_good_objects() -> None:

@@ -116,3 +116,23 @@ def test_measure_refuses_bad_targets(capsys: pytest.CaptureFixture[str]) -> None
     assert "--target-pct must be > 0" in capsys.readouterr().err
     assert main(["measure"]) == 2
     assert "give --config CFG" in capsys.readouterr().err
+
+
+@pytest.mark.realtime
+def test_a_live_sensor_fault_stops_the_measurement_at_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A saturating sensor is a fault more data will not cure: exit 2 at the first solve
+    (about 1 s), not a wait until --max-seconds; the run so far is kept."""
+    scene = (Path(__file__).resolve().parents[1] / "stand/data/scenes/demo.toml").read_text()
+    path = tmp_path / "clipped.toml"
+    path.write_text(scene + "\n[effects.clipping]\nrange_m_s2 = 2.0\n")
+    out = tmp_path / "m.h5"
+    capsys.readouterr()
+    code = main(["measure", "--scene", str(path), "--out", str(out), "--max-seconds", "6"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert "node 1: the sensor saturates" in err[-1] and f"kept in {out}" in err[-1]
+    after = float(err[-1].split("(after ")[1].split(" s;")[0])
+    assert after < 2.5
+    assert main(["inspect", str(out)]) == 0

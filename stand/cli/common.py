@@ -16,13 +16,19 @@ if TYPE_CHECKING:
 
 
 def parse_rpm(text: str) -> float:
-    """``--rpm`` value: a finite speed > 0 [rpm]."""
+    """``--rpm`` value: a finite speed > 0 [rpm], at most the model's ``MAX_SPEED_RPM``."""
+    from stand.core.model import MAX_SPEED_RPM
+
     try:
         rpm = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a speed in rpm, got {text!r}") from None
     if not math.isfinite(rpm) or rpm <= 0:
         raise argparse.ArgumentTypeError(f"expected a finite speed > 0 rpm, got {text!r}")
+    if rpm > MAX_SPEED_RPM:
+        raise argparse.ArgumentTypeError(
+            f"{text} rpm is beyond any balancing stand (at most {MAX_SPEED_RPM:g} rpm)"
+        )
     return rpm
 
 

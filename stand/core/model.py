@@ -397,6 +397,11 @@ def natural_frequencies(p: StandParameters) -> FloatArray:
     return result
 
 
+MAX_SPEED_RPM = 1e6
+"""No rotor on a balancing stand turns faster (dental turbines reach about 4e5 rpm); beyond
+it the model's numbers overflow into meaninglessness, so a speed above it is refused."""
+
+
 def rpm_to_rad_s(rpm: ArrayLike) -> FloatArray:
     """Shaft speed from rev/min to rad/s."""
     result: FloatArray = np.asarray(rpm, dtype=np.float64) * (2.0 * math.pi / 60.0)
