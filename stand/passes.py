@@ -68,7 +68,9 @@ def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
             f"all {s.samples} samples are invalid (count -32768: sensor fault or overrange)"
         )
     if len(s.index) == 0:
-        raise MeasurementError(f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames")
+        raise MeasurementError(
+            f"no samples, only {s.status_frames} STATUS and {s.marks} MARK frames"
+        )
     if len(s.mark_segment) == 0:
         raise MeasurementError(
             "no reference edges: is the reference sensor wired and the mark passing it?"
