@@ -20,7 +20,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from stand.core.dsp import SIDE_BANDS, SPEED_SPAN_SLOPE, Phasor, angle_at, angle_knots
+from stand.core.dsp import (
+    SIDE_BANDS,
+    SPEED_SPAN_SLOPE,
+    Phasor,
+    angle_at,
+    angle_knots,
+    edge_jitter,
+)
 from stand.core.fitsums import (
     WindowSums,
     base_columns,
@@ -57,6 +64,9 @@ class Window:
     end: float
     revolutions: int
     settled_from: float
+    edge_jitter_rad: float = 0.0
+    """Rms shaft-angle error of one edge from its timing jitter [rad]
+    (:func:`~stand.core.dsp.edge_jitter` times the speed)."""
 
 
 def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
@@ -376,6 +386,7 @@ def node_phasor(
         end=float(pos[b]),
         revolutions=int(rev[b] - rev[e0]),
         settled_from=float(pos[e0]),
+        edge_jitter_rad=w0 * edge_jitter(pos[e0 : b + 1], rev[e0 : b + 1]),
     )
     sums = _window_sums(run, chunks, starts, end, first, w0)
     i0 = int(starts[first])

@@ -55,7 +55,8 @@ def test_chunked_equals_all_at_once(
             assert abs(b.harmonics_m_s2[k] - a.harmonics_m_s2[k]) < 1e-9 * abs(a.A_m_s2)
     assert np.allclose(new.radius95_kg_m, old.radius95_kg_m, rtol=1e-5)
     assert [w.message for w in new.warnings] == [w.message for w in old.warnings]
-    assert [astuple(w) for w in new.windows] == [astuple(w) for w in old.windows]
+    # the window's place; its edge jitter is new since the reference (tests/test_checks.py)
+    assert [astuple(w)[:4] for w in new.windows] == [astuple(w) for w in old.windows]
 
 
 @pytest.mark.parametrize("first", [0, 1, 3, 7, 12])

@@ -168,6 +168,27 @@ def angle_knots(
     return x, y, _hermite_slopes(x, y)
 
 
+def edge_jitter(edge_position: ArrayLike, edge_rev: ArrayLike) -> float:
+    """Rms timing jitter of the reference edges [samples], robustly from their second
+    differences.
+
+    For consecutive revolutions, ``x[k+1] - 2 x[k] + x[k-1]`` of independent
+    jitter of rms ``sigma`` has variance ``6 sigma^2``; a steady or slowly
+    changing speed adds an almost constant part, which the median removes.
+    The scale is ``1.4826 MAD / sqrt(6)`` (Gaussian-consistent); fewer than 8
+    second differences give 0.  A speed that varies from one revolution to the
+    next also reads as jitter: the interval is then widened, never narrowed.
+    """
+    x = np.asarray(edge_position, dtype=float)
+    r = np.diff(np.asarray(edge_rev, dtype=np.int64))
+    one = (r[:-1] == 1) & (r[1:] == 1)
+    d2 = np.diff(x, 2)[one]
+    if len(d2) < 8:
+        return 0.0
+    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    return 1.4826 * mad / math.sqrt(6.0)
+
+
 def angle_at(
     knots: tuple[FloatArray, FloatArray, FloatArray], s: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
