@@ -104,8 +104,14 @@ class SensorsTable(BaseModel):
 
     model_config = STRICT
 
-    gain: Annotated[list[PositiveFloat], Field(min_length=2, max_length=2)] = [1.0, 1.0]
-    delay_s: Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)] = [0.0, 0.0]
+    gain: Annotated[
+        list[Annotated[FiniteFloat, Field(ge=0.1, le=10.0)]], Field(min_length=2, max_length=2)
+    ] = [1.0, 1.0]
+    """Within 0.1 to 10: a sensor ten times off its data sheet is a wrong sensor."""
+    delay_s: Annotated[
+        list[Annotated[FiniteFloat, Field(ge=-0.05, le=0.05)]], Field(min_length=2, max_length=2)
+    ] = [0.0, 0.0]
+    """Within +-50 ms: a sensor's and node's filters delay by microseconds to milliseconds."""
 
 
 class Config(BaseModel):

@@ -143,3 +143,23 @@ def test_a_tolerance_speed_under_one_rpm_is_refused(tmp_path: Path, speed: str, 
     else:
         with pytest.raises(ConfigError, match=r"\[tolerance.max_speed_rpm\]"):
             load_config(write(tmp_path, text))
+
+
+@pytest.mark.parametrize(
+    ("table", "ok"),
+    [
+        ("delay_s = [1e300, 0]", False),  # used to give a plausible 5655.2 +- 3.0 g mm
+        ("delay_s = [0.06, 0]", False),
+        ("delay_s = [2.5e-4, -1e-4]", True),
+        ("gain = [1e3, 1]", False),
+        ("gain = [0.05, 1]", False),
+        ("gain = [1.02, 0.97]", True),
+    ],
+)
+def test_sensor_values_beyond_any_sensor_are_refused(tmp_path: Path, table: str, ok: bool) -> None:
+    text = MINIMAL + f"\n[sensors]\n{table}\n"
+    if ok:
+        load_config(write(tmp_path, text))
+    else:
+        with pytest.raises(ConfigError, match=r"\[sensors\.(delay_s|gain)\.0\]"):
+            load_config(write(tmp_path, text))
