@@ -345,6 +345,13 @@ def read_log(path: str | Path) -> Frames:
     try:
         with can.LogReader(path) as reader:
             frames = frames_from_messages(reader)
+            bad = np.flatnonzero(~np.isfinite(frames.t_s))
+            if len(bad):
+                raise RecordingError(
+                    f"frame {int(bad[0])}: its timestamp is {frames.t_s[bad[0]]}, not a number "
+                    f"of seconds ({len(bad)} such frames)",
+                    path=str(path),
+                )
             size = getattr(reader, "file_size", None)  # BLF: the header says how long it is
             if isinstance(size, int) and size > path.stat().st_size:
                 raise RecordingError(

@@ -387,7 +387,15 @@ def _read_run_blocks(
             n, meta, warnings = _open_run(f, p)
             step = max(n, 1) if rows is None else rows
             for lo in range(0, n, step):
-                take(_frame_rows(f, lo, min(lo + step, n)))
+                block = _frame_rows(f, lo, min(lo + step, n))
+                bad = np.flatnonzero(~np.isfinite(block.t_s))
+                if len(bad):
+                    raise RecordingError(
+                        f"frame {lo + int(bad[0])}: its timestamp is {block.t_s[bad[0]]}, not a "
+                        f"number of seconds ({len(bad)} such frames in this block)",
+                        path=str(p),
+                    )
+                take(block)
     except RecordingError:
         raise
     except (OSError, KeyError, ValueError) as exc:

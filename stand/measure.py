@@ -25,6 +25,7 @@ import numpy as np
 from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.inverse import UnbalanceSolution
+from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.passes import (
@@ -74,6 +75,49 @@ class Measurement:
     omega_rad_s: float
     windows: list[Window]
     warnings: list[Diagnostic] = field(default_factory=list)
+
+
+NONLINEAR_WIDEN = 1.5
+"""A nonlinear support's estimated error widens the 95 % radius 1.5 times over: the
+estimate is a square wave's (friction and clearance scenes: within 10 % of the true
+error; the rest covers the smoothing and what the model leaves out)."""
+
+
+def _nonlinear_supports(
+    p: StandParameters, omega: float, supports: list[Phasor], U: np.ndarray
+) -> Nonlinearity | None:
+    """Dry friction or a clearance, from the 3x (:func:`stand.core.nonlinear.detect`)."""
+    A = np.array(
+        [[ph.A_m_s2 for ph in supports]]
+        + [[ph.harmonics_m_s2.get(k, 0j) for ph in supports] for k in (2, 3)]
+    )
+    cov3 = np.zeros((4, 4))  # the noise at 3x is taken as at 1x (white)
+    cov3[:2, :2], cov3[2:, 2:] = supports[0].cov_m2_s4, supports[1].cov_m2_s4
+    return detect(p, omega, A, cov3, U)
+
+
+def _nonlinear_note(found: Nonlinearity, p: StandParameters) -> Diagnostic:
+    f = found.fit
+    if f.kind == "friction":
+        what = "dry friction of {:.2g} N and {:.2g} N at supports 1 and 2".format(*f.size_n)
+        cure = "free the supports (dry friction)"
+    else:
+        gaps = f.size_n / np.array([p.C1, p.C2]) * 1e6
+        what = "a clearance of about {:.2g} and {:.2g} micrometres at supports 1 and 2".format(
+            *gaps
+        )
+        cure = "take up the clearance in the supports"
+    moves = " and ".join(
+        f"{abs(d) * 1e6:.3g} g mm ({e:.1f} deg) in plane {i + 1}"
+        for i, (d, e) in enumerate(zip(found.dU_kg_m, found.error_deg, strict=True))
+    )
+    return Diagnostic(
+        "nonlinear_support",
+        f"the supports do not move linearly: their 3x is what {what} makes; it moves the "
+        f"answer by about {moves}; the interval is widened by {NONLINEAR_WIDEN:g} times that; "
+        f"{cure} and measure again",
+        float(found.error_deg.max()),
+    )
 
 
 JITTER_NOTE = 0.1
@@ -214,8 +258,9 @@ def measure(
             "or its clock is wrong"
         )
     omega = 0.5 * (w1 + w2)
-    supports, cov, note = _with_edge_jitter(supports, windows)
-    warnings.extend(note)
+    plain = supports  # their covariance is the noise's alone: the 3x test's weights
+    supports, cov, jitter_notes = _with_edge_jitter(supports, windows)
+    warnings.extend(jitter_notes)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
     sol = solve_unbalance(p, omega, A, cov)
     dof = min(ph.noise_dof for ph in supports)
@@ -224,6 +269,11 @@ def measure(
         [radius95(cov_U[2 * i : 2 * i + 2, 2 * i : 2 * i + 2], dof) for i in range(2)]
     )
     warnings.extend(sol.diagnostics)
+    found = _nonlinear_supports(p, omega, plain, sol.U_kg_m)
+    if found is not None:
+        radius = radius + NONLINEAR_WIDEN * np.abs(found.dU_kg_m)
+        warnings = [w for w in warnings if w.code != "strong_3x"]  # explained: say what it is
+        warnings.append(_nonlinear_note(found, p))
     return Measurement(
         supports=supports,
         solution=sol,

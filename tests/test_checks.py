@@ -7,6 +7,7 @@ into its frames; the twin is the same run without it.
 from __future__ import annotations
 
 import functools
+import json
 from pathlib import Path
 
 import numpy as np
@@ -174,6 +175,33 @@ def test_a_damaged_block_of_frames_fails_its_checksum(
     assert main(["solve", str(run)]) == 2
     err = capsys.readouterr().err
     assert str(run) in err and "fails its Fletcher32 checksum" in err
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf"), None])
+def test_a_run_with_timestamps_that_are_no_numbers_is_refused(
+    demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], bad: float | None
+) -> None:
+    """NaN host timestamps used to pass into the JSON; the twin (None) is the run as made."""
+    import shutil
+
+    import h5py
+
+    from stand.cli import main
+
+    run = tmp_path / "stamps.h5"
+    shutil.copy(demo_run, run)
+    if bad is not None:
+        with h5py.File(run, "a") as f:
+            t = f["frames/t_s"][:]
+            t[7:9] = bad
+            f["frames/t_s"][:] = t
+    code = main(["solve", str(run), "--json"])
+    out, err = capsys.readouterr()
+    if bad is None:
+        assert code == 0 and json.loads(out, parse_constant=pytest.fail)
+    else:
+        assert code == 2 and out == ""
+        assert f"{run}: frame 7: its timestamp is {bad}, not a number of seconds" in err
 
 
 @pytest.mark.parametrize(("rpm", "refused"), [(45_000.0, True), (30_000.0, False)])
