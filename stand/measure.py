@@ -26,7 +26,7 @@ from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
-from stand.drivers.streams import RunStreams
+from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.passes import (
     BLOCK_REVS,
@@ -87,9 +87,13 @@ def _nonlinear_supports(
     p: StandParameters, omega: float, supports: list[Phasor], U: np.ndarray
 ) -> Nonlinearity | None:
     """Dry friction or a clearance, from the 3x (:func:`stand.core.nonlinear.detect`)."""
+    five = all(5 in ph.harmonics_m_s2 for ph in supports)  # 4x is not measured: a 0 row
     A = np.array(
         [[ph.A_m_s2 for ph in supports]]
-        + [[ph.harmonics_m_s2.get(k, 0j) for ph in supports] for k in (2, 3)]
+        + [
+            [ph.harmonics_m_s2.get(k, 0j) for ph in supports]
+            for k in (2, 3, 4, 5)[: 4 if five else 2]
+        ]
     )
     cov3 = np.zeros((4, 4))  # the noise at 3x is taken as at 1x (white)
     cov3[:2, :2], cov3[2:, 2:] = supports[0].cov_m2_s4, supports[1].cov_m2_s4
@@ -113,9 +117,9 @@ def _nonlinear_note(found: Nonlinearity, p: StandParameters) -> Diagnostic:
     )
     return Diagnostic(
         "nonlinear_support",
-        f"the supports do not move linearly: their 3x is what {what} makes; it moves the "
-        f"answer by about {moves}; the interval is widened by {NONLINEAR_WIDEN:g} times that; "
-        f"{cure} and measure again",
+        f"the supports do not move linearly: their 3x and 5x are what {what} makes; it "
+        f"moves the answer by about {moves}; the interval is widened by "
+        f"{NONLINEAR_WIDEN:g} times that; {cure} and measure again",
         float(found.error_deg.max()),
     )
 
@@ -193,7 +197,7 @@ def measure(
     supports: list[Phasor] = []
     windows: list[Window] = []
     gamma = math.radians(reference_angle_deg)
-    for node in (1, 2):
+    for node in SUPPORT_NODES:
         s = streams.nodes.get(node)
         if s is None:
             raise MeasurementError(
@@ -250,7 +254,7 @@ def measure(
         windows.append(window)
     w1, w2 = supports[0].omega_ref_rad_s, supports[1].omega_ref_rad_s
     if abs(w1 / w2 - 1) > clock_tolerance:
-        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in (1, 2))
+        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in SUPPORT_NODES)
         raise SensorFaultError(
             f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
             f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "

@@ -91,6 +91,14 @@ def _segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
     assert s.scale_m_s2 is not None
     if not np.any(s.scale_m_s2):
         raise SensorFaultError("its STATUS scale is 0: the samples mean nothing (sensor fault?)")
+    if not s.rate_hz or s.rate_hz <= 0:
+        raise SensorFaultError(f"its STATUS says a sample rate of {s.rate_hz} Hz")
+    revs = s.mark_rev[m]
+    if len(revs) >= 3 and len(np.unique(revs)) < 3:
+        raise SensorFaultError(
+            f"its reference edges' revolution counter does not count: {len(revs)} edges "
+            f"say only {sorted(set(revs.tolist()))[:3]}"
+        )
     counts = s.counts[lo:hi]
     if len(counts) and counts.min() == counts.max():
         raise SensorFaultError(
@@ -174,6 +182,8 @@ def settled_block(sums: np.ndarray) -> int:
     A_blocks, n, var = block_fits(sums)
     std = np.sqrt(2 * var / np.maximum(n, 1))  # per component of each block's 1x
     tail = slice(n_blocks // 2, n_blocks)
+    if np.sum(n[tail]) == 0:  # no samples between the edges: the window says so
+        return 0
     A_tail = np.sum(A_blocks[tail] * n[tail]) / np.sum(n[tail])
     spread = float(np.sqrt(np.mean(np.abs(A_blocks[tail] - A_tail) ** 2)))
     ok = np.abs(A_blocks - A_tail) <= np.maximum.reduce(
@@ -311,11 +321,13 @@ def _window_sums(
 def _second_pass(
     run: _NodeRun, kept: _Kept, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
     span: float, taper: bool,
-) -> tuple[np.ndarray, float, float, float]:  # fmt: skip
-    """Side-band sums of the residual over the window, sum r^2, sum wt^2 and sum wt."""
+) -> tuple[np.ndarray, float, float, float, complex]:  # fmt: skip
+    """Side-band sums of the residual over the window, sum r^2, sum wt^2, sum wt, and
+    ``sum r e^{-5 i theta}`` (the fit has no 5x column: the residual holds all of it)."""
     revs = span / (2 * math.pi)
     bands: np.ndarray = np.zeros((2, SIDE_BANDS), complex)
     rr = wt2 = wt1 = 0.0
+    h5 = 0j
     b = (T @ coef).astype(np.float32)
     ph0 = float(kept.phase[i0 - kept.lo])
     for k0 in range(i0, i1, CHUNK):
@@ -333,7 +345,10 @@ def _second_pass(
             wt2 += k1 - k0
             wt1 += k1 - k0
         bands += side_band_sums(r, c, s, phase / np.float32(max(revs, 1e-12)), SIDE_BANDS)
-    return bands, rr, wt2, wt1
+        z = c - 1j * s  # e^{-i theta}, single precision
+        z2 = z * z
+        h5 += complex(np.dot(r, z2 * z2 * z))
+    return bands, rr, wt2, wt1, h5
 
 
 def _tapered_normal_equations(
@@ -410,17 +425,20 @@ def node_phasor(
     else:
         XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
     coef = np.linalg.solve(XtWX, XtWa)
-    bands, rr, wt2, wt1 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
+    bands, rr, wt2, wt1, h5 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
     del kept
     sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
     cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
     j = 5 if sloped else 3
+    harmonics = {2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])}
+    if 5 * w_ref < math.pi:  # 5x below half the sample rate: its phasor from the residual
+        harmonics[5] = 2 * h5 / wt1
     ph = Phasor(
         A_m_s2=complex(coef[0], -coef[1]),
         cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
-        harmonics_m_s2={2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])},
+        harmonics_m_s2=harmonics,
         omega_ref_rad_s=w_ref * float(s.rate_hz or 0.0),
         samples=sums.n,
         revolutions=span / (2 * math.pi),

@@ -232,7 +232,8 @@ class Phasor:
     cov_m2_s4 : ndarray, shape (2, 2)
         Covariance of ``(Re A, Im A)`` [(m/s^2)^2].
     harmonics_m_s2 : dict
-        ``{2: A2, 3: A3}``: the 2x and 3x phasors fitted alongside.
+        ``{2: A2, 3: A3, 5: A5}``: the 2x and 3x phasors fitted alongside, and the 5x
+        projected from the residual (absent when 5x is beyond half the sample rate).
     omega_ref_rad_s : float
         The speed ``A`` refers to (the mean speed over the samples) [rad/s].
     samples : int

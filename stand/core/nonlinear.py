@@ -79,18 +79,20 @@ def _sign_harmonics(values: np.ndarray, k: int) -> ComplexArray:
     return out
 
 
-def unit_force(A: ComplexArray, omega: float, kind: str) -> tuple[ComplexArray, ComplexArray]:
-    """The 1x and 3x phasors of the kind's force per newton of size, on each support [N/N].
+def unit_force(
+    A: ComplexArray, omega: float, kind: str, orders: tuple[int, ...] = (1, 3, 5)
+) -> dict[int, ComplexArray]:
+    """The kind's force per newton of size on each support [N/N]: its phasors at ``orders``.
 
     ``A``: the supports' measured acceleration harmonics, shape (K, 2), row
-    ``k - 1`` the ``k``-th (at least the 1x; the 2x and 3x refine the
+    ``k - 1`` the ``k``-th (at least the 1x; the 2x, 3x and 5x refine the
     waveform).  The motion is rebuilt over one turn from them (displacement
-    ``-A_k / (k w)^2`` or velocity ``-i A_k / (k w)``), and the 1x and 3x of
+    ``-A_k / (k w)^2`` or velocity ``-i A_k / (k w)``), and the harmonics of
     its sign read off.  For a pure 1x this is the Fourier series:
-    ``-(4/pi) e^{i psi}`` and ``(4/(3 pi)) e^{3 i psi}`` for friction,
-    ``(4/pi) e^{i chi}`` and ``-(4/(3 pi)) e^{3 i chi}`` for a clearance; with
-    a strong 3x in the motion (heavy friction) the switching points move, and
-    so do the phasors.
+    ``-(4/pi) e^{i psi}``, ``(4/(3 pi)) e^{3 i psi}``, ``-(4/(5 pi)) e^{5 i psi}``
+    for friction, the opposite signs (and ``chi``) for a clearance; with a
+    strong 3x in the motion (heavy friction) the switching points move, and so
+    do the phasors.
     """
     A = np.atleast_2d(np.asarray(A, dtype=complex))
     k = np.arange(1, len(A) + 1)[:, None]
@@ -98,24 +100,33 @@ def unit_force(A: ComplexArray, omega: float, kind: str) -> tuple[ComplexArray, 
     theta = np.arange(TURN) * (2 * math.pi / TURN)
     turn = np.einsum("ki,kt->it", motion, np.exp(1j * k * theta)).real  # (2, TURN)
     sign = -1.0 if kind == "friction" else 1.0
-    return sign * _sign_harmonics(turn, 1), sign * _sign_harmonics(turn, 3)
+    return {n: sign * _sign_harmonics(turn, n) for n in orders}
 
 
 def force_1x(A: ComplexArray, omega: float, kind: str, size_n: np.ndarray) -> ComplexArray:
     """The kind's 1x force on each support [N] for sizes ``F_i`` or ``k_i`` [N]."""
-    result: ComplexArray = np.asarray(size_n) * unit_force(A, omega, kind)[0]
+    result: ComplexArray = np.asarray(size_n) * unit_force(A, omega, kind, (1,))[1]
     return result
 
 
-def columns_3x(p: StandParameters, omega: float, A: ComplexArray, kind: str) -> ComplexArray:
-    """The 3x accelerations at both nodes per newton of the kind at each support, (2, 2)."""
-    result: ComplexArray = accelerance(p, 3 * omega) * unit_force(A, omega, kind)[1][None, :]
+def orders_of(A: ComplexArray) -> tuple[int, ...]:
+    """The odd harmonics beyond 1x that ``A`` holds: (3, 5), or (3,) without a 5x row."""
+    return (3, 5) if len(np.atleast_2d(A)) >= 5 else (3,)
+
+
+def columns(
+    p: StandParameters, omega: float, A: ComplexArray, kind: str, orders: tuple[int, ...]
+) -> ComplexArray:
+    """Both nodes' accelerations at each order per newton of the kind at each support,
+    stacked order by order: shape (2 len(orders), 2)."""
+    h = unit_force(A, omega, kind, orders)
+    result: ComplexArray = np.vstack([accelerance(p, n * omega) * h[n][None, :] for n in orders])
     return result
 
 
 @dataclass(frozen=True)
 class OddFit:
-    """How well one kind explains the measured 3x.
+    """How well one kind explains the measured odd harmonics (3x, and 5x where measured).
 
     Attributes
     ----------
@@ -124,15 +135,15 @@ class OddFit:
     size_n : ndarray, shape (2,)
         ``F_i`` (friction) or ``k_i = C_i g_i`` (clearance) per support [N], >= 0.
     residual : float
-        ``|A3 - model| / |A3|``: the part of the 3x the kind leaves unexplained.
-    chi2_3x : float
-        ``A3^T C^-1 A3``: how far the 3x stands above its noise (4 real dof).
+        ``|a - model| / |a|``: the part of the odd harmonics the kind leaves unexplained.
+    chi2 : float
+        ``a^T C^-1 a``: how far they stand above their noise (4 real dof per order).
     """
 
     kind: str
     size_n: np.ndarray
     residual: float
-    chi2_3x: float
+    chi2: float
 
 
 def _real(z: ComplexArray) -> np.ndarray:
@@ -143,28 +154,40 @@ def _real(z: ComplexArray) -> np.ndarray:
 def fit_kind(
     p: StandParameters, omega: float, A: ComplexArray, cov3: np.ndarray, kind: str
 ) -> OddFit:
-    """Fit the 3x ``A[2] = columns_3x @ size`` with ``size >= 0``, weighted by its noise.
+    """Fit the odd harmonics ``a = columns @ size`` with ``size >= 0``, weighted by noise.
 
-    ``A``: the harmonics of both supports, shape (3, 2) (1x, 2x, 3x) [m/s^2];
-    ``cov3`` the (4, 4) covariance of ``(Re A3_1, Im A3_1, Re A3_2, Im A3_2)``.
+    ``A``: the harmonics of both supports, shape (K, 2), row ``k - 1`` the
+    ``k``-th (K = 5 with the 5x, 3 without) [m/s^2]; ``cov3`` the (4, 4)
+    noise covariance of one order's ``(Re a_1, Im a_1, Re a_2, Im a_2)``
+    (white noise: the same at each order).
     """
-    return fit_columns(kind, columns_3x(p, omega, A, kind), np.asarray(A, dtype=complex)[2], cov3)
+    A = np.atleast_2d(np.asarray(A, dtype=complex))
+    orders = orders_of(A)
+    a = np.concatenate([A[n - 1] for n in orders])
+    return fit_columns(kind, columns(p, omega, A, kind, orders), a, cov3)
 
 
-def fit_columns(kind: str, B: ComplexArray, a3: ComplexArray, cov3: np.ndarray) -> OddFit:
-    """``a3 = B @ size``, ``size >= 0``: non-negative least squares whitened by ``cov3``."""
-    order = [0, 2, 1, 3]  # (Re1, Im1, Re2, Im2) -> (Re1, Re2, Im1, Im2), as _real stacks
-    C = np.asarray(cov3)[np.ix_(order, order)]
-    L = np.linalg.cholesky(C + np.eye(4) * 1e-30 * max(np.trace(C), 1e-300))
-    y = np.linalg.solve(L, _real(a3))
+def fit_columns(kind: str, B: ComplexArray, a: ComplexArray, cov3: np.ndarray) -> OddFit:
+    """``a = B @ size``, ``size >= 0``: non-negative least squares whitened by the noise.
+
+    ``a`` holds ``m`` orders of both nodes, ``(a_1, a_2)`` per order; each order's
+    (4, 4) covariance is ``cov3``.
+    """
+    n = len(a)  # complex entries; _real stacks their real parts, then their imaginary parts
+    C = np.zeros((2 * n, 2 * n))
+    for o in range(n // 2):
+        idx = [2 * o, n + 2 * o, 2 * o + 1, n + 2 * o + 1]  # (Re a1, Im a1, Re a2, Im a2)
+        C[np.ix_(idx, idx)] = cov3
+    L = np.linalg.cholesky(C + np.eye(2 * n) * 1e-30 * max(np.trace(C), 1e-300))
+    y = np.linalg.solve(L, _real(a))
     X = np.linalg.solve(L, _real(B))
     size, _ = nnls(X, y)
-    resid = a3 - B @ size
+    resid = a - B @ size
     return OddFit(
         kind=kind,
         size_n=size,
-        residual=float(np.linalg.norm(resid)) / max(float(np.linalg.norm(a3)), 1e-300),
-        chi2_3x=float(y @ y),
+        residual=float(np.linalg.norm(resid)) / max(float(np.linalg.norm(a)), 1e-300),
+        chi2=float(y @ y),
     )
 
 
@@ -183,7 +206,7 @@ RESIDUAL_MAX = 0.3
 """A kind explains the 3x when it leaves at most 30 % of it (friction and clearance
 scenes leave 0.6 to 7 %; a misaligned drive's 3x, tied to no support's motion, about 50 %)."""
 CHI2_MIN = 25.0
-"""The 3x must stand out of its noise: chi^2 of 4 real dof above 25 (p < 4e-5)."""
+"""The odd harmonics must stand out of their noise: chi^2 (4 real dof per order) above 25."""
 MATERIAL_DEG = 0.5
 """Flag when the implied error reaches 0.5 deg in a plane, as an angle: ``|dU| / |U|``
 in radians (1 deg is 1.75 % of the unbalance, in any direction)."""
@@ -214,14 +237,15 @@ def detect(
     """The kind of nonlinear support that explains a significant 3x and moves the answer
     by :data:`MATERIAL_DEG` or more; None if none does.
 
-    ``A``: the measured 1x, 2x and 3x phasors of both supports, (3, 2)
-    [m/s^2]; ``cov3``: the (4, 4) noise covariance of the 3x (the 1x's serves:
-    white noise); ``U_kg_m``: the unbalances solved from the 1x.
+    ``A``: the measured harmonics of both supports, (5, 2) (1x to 5x, the 4x
+    row unused) or (3, 2) where the 5x is beyond the sample rate [m/s^2];
+    ``cov3``: one order's (4, 4) noise covariance (the 1x's serves: white
+    noise); ``U_kg_m``: the unbalances solved from the 1x.
     """
     best: Nonlinearity | None = None
     for kind in KINDS:
         fit = fit_kind(p, omega, A, cov3, kind)
-        if fit.residual > RESIDUAL_MAX or fit.chi2_3x < CHI2_MIN:
+        if fit.residual > RESIDUAL_MAX or fit.chi2 < CHI2_MIN:
             continue
         dU = implied_error(p, omega, A, fit)
         deg = np.degrees(np.abs(dU) / np.maximum(np.abs(U_kg_m), 1e-300))
