@@ -159,6 +159,38 @@ class RecordingError(StandError, ValueError):
         super().__init__(f"{where}: {message}")
 
 
+class WriteError(StandError, OSError):
+    """A file cannot be written: it exists (and ``--force`` was not given), it is an input
+    or a special file, or the disk refused the bytes.
+
+    Attributes
+    ----------
+    path : str
+        The file that was to be written.
+    """
+
+    def __init__(self, message: str, *, path: str):
+        self.path = path
+        super().__init__(f"{path}: {message}")
+
+
+class DiskFullError(WriteError):
+    """The disk (or the process's file-size limit) has no room for the next write.
+
+    Attributes
+    ----------
+    needed_bytes : int
+        What the write needed [B].
+    free_bytes : int
+        What the disk (or the limit) had left [B].
+    """
+
+    def __init__(self, message: str, *, path: str, needed_bytes: int, free_bytes: int):
+        self.needed_bytes = needed_bytes
+        self.free_bytes = free_bytes
+        super().__init__(message, path=path)
+
+
 class UnusualLogError(RecordingError):
     """A candump block the fast reader cannot take (caught inside: the file is then read
     the slow way, which names any bad line)."""

@@ -262,23 +262,3 @@ To remove material: at that angle; to add a weight: 180° opposite.</p>
 <pre>{e(config_text)}</pre>
 </body></html>
 """
-
-
-def write_report(result: Result, out_path: str) -> None:
-    """Render the result and write it atomically (a temporary name, then renamed)."""
-    import os
-    from pathlib import Path
-
-    from stand.errors import RecordingError
-
-    text = render(result)
-    dest = Path(out_path)
-    tmp = dest.with_name(f".{dest.name}.{os.getpid()}.part")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, dest)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise RecordingError(
-            f"cannot write the report: {exc.strerror or exc}", path=out_path
-        ) from exc

@@ -27,7 +27,7 @@ from stand.drivers.recording import (
     write_recording,
 )
 from stand.drivers.streams import rebuild
-from stand.errors import RecordingError
+from stand.errors import RecordingError, WriteError
 
 TESTS = Path(__file__).resolve().parent
 
@@ -155,7 +155,7 @@ def test_truncated_and_foreign_hdf5_files_are_refused(tmp_path: Path) -> None:
 def test_writer_refuses_to_overwrite_a_run(tmp_path: Path) -> None:
     path = tmp_path / "run.h5"
     RunWriter(path, source="a").close()
-    with pytest.raises(RecordingError, match="exists already"):
+    with pytest.raises(WriteError, match="exists already"):
         RunWriter(path, source="b")
 
 

@@ -24,6 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="REPORT.html",
         help="where to write the report (default: beside the run file)",
     )
+    p.add_argument("--force", action="store_true", help="replace --report if it exists")
     p.add_argument(
         "--check",
         metavar="PREVIOUS_RUN",
@@ -38,6 +39,12 @@ def run(args: argparse.Namespace) -> int:
     from stand.pipeline import check_against
     from stand.result import to_json
 
+    if args.report:  # refuse a report path that cannot be written before measuring
+        from stand.drivers.files import check_output
+
+        check_output(
+            args.report, force=args.force, inputs=[i for i in (args.check, args.config) if i]
+        )
     result, cfg, params = measure_live_from_args(
         args,
         "balance",
@@ -51,9 +58,11 @@ def run(args: argparse.Namespace) -> int:
     out["report"] = report
     show(out, args.json)  # the answer first: the report takes a moment
     sys.stdout.flush()
-    from stand.report import write_report
+    from stand.cli.common import write_text_output
+    from stand.report import render
 
-    write_report(result, report)
+    inputs = [i for i in (result.provenance.run_file, args.check, args.config) if i]
+    write_text_output(report, render(result), force=args.force, inputs=inputs)
     if not args.json:
         print(f"report: {report}")
     return 0

@@ -9,9 +9,10 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json
 from stand.config import STRICT
-from stand.errors import ConfigError, RecordingError
+from stand.errors import ConfigError
 
 
 class MassTable(BaseModel):
@@ -53,6 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="CALIBRATED.toml",
         help="the calibrated configuration to write",
     )
+    add_force_argument(p, "--out")
     p.add_argument(
         "--rotor",
         action="store_true",
@@ -67,11 +69,11 @@ def run(args: argparse.Namespace) -> int:
 
     from stand.calib.identify import NAMES, CalibrationRun, identify
     from stand.config import load_config, read_toml, validate
+    from stand.drivers.files import check_output
     from stand.errors import ModelError
     from stand.pipeline import measure_recording
 
-    if Path(args.out).exists():
-        raise RecordingError("exists already: refusing to overwrite", path=args.out)
+    check_output(args.out, force=args.force, inputs=[args.config, args.runs])  # before the work
     cfg, params = load_config(args.config)
     _, data = read_toml(args.runs)
     spec = validate(CalibFile, data, args.runs)
@@ -111,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     )
     new = cfg.model_copy(update={"stand": stand, "sensors": sensors})
     header = _write(
-        args.out,
+        args,
         f"calibrated by stand calibrate from {len(runs)} runs ({args.runs})",
         res,
         [n for n in NAMES if not n.startswith("U_res")],
@@ -149,7 +151,7 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
     rotor = cfg.rotor.model_copy(update={"M3": q.M3, "J3": q.J3, "b": q.b, "c": q.c})
     new = cfg.model_copy(update={"rotor": rotor})
     header = _write(
-        args.out,
+        args,
         f"rotor identified by stand calibrate --rotor from {len(runs)} runs ({args.runs})",
         res,
         list(ROTOR_NAMES[:3]),
@@ -172,7 +174,9 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
     return 0
 
 
-def _write(path: str, title: str, res: Any, names: list[str], whose: str, cfg: Any) -> list[str]:
+def _write(
+    args: argparse.Namespace, title: str, res: Any, names: list[str], whose: str, cfg: Any
+) -> list[str]:
     """The calibrated configuration, its fit and standard errors as comments on top."""
     import numpy as np
 
@@ -193,5 +197,10 @@ def _write(path: str, title: str, res: Any, names: list[str], whose: str, cfg: A
             for i in range(2)
         )
     )
-    Path(path).write_text("\n".join(header) + "\n" + config_toml(cfg))
+    write_text_output(
+        args.out,
+        "\n".join(header) + "\n" + config_toml(cfg),
+        force=args.force,
+        inputs=[args.config, args.runs],
+    )
     return header

@@ -15,6 +15,23 @@ if TYPE_CHECKING:
     from stand.core import Diagnostic
 
 
+def add_force_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--force``: replace ``what`` if it exists (else an existing file is never replaced)."""
+    p.add_argument("--force", action="store_true", help=f"replace {what} if it exists")
+
+
+def write_text_output(
+    path: str, text: str, *, force: bool, inputs: Iterable[str | None] = (), newline: str = ""
+) -> None:
+    """Write a whole text file safely (a temporary name, published when complete; never
+    over an input, a special file, or an existing file without ``force``)."""
+    from stand.drivers.files import output
+
+    data = text.encode("utf-8")
+    with output(path, force=force, inputs=[i for i in inputs if i], need_bytes=len(data)) as tmp:
+        tmp.write_bytes(data)
+
+
 def parse_rpm(text: str) -> float:
     """``--rpm`` value: a finite speed > 0 [rpm], at most the model's ``MAX_SPEED_RPM``."""
     from stand.core.model import MAX_SPEED_RPM
@@ -77,6 +94,12 @@ def add_bus_arguments(p: argparse.ArgumentParser) -> None:
         help="any other can.Bus option (repeatable); VALUE is read as int, float, "
         "true/false, else text",
     )
+    g.add_argument(
+        "--allow-url-channel",
+        action="store_true",
+        help="allow a URL as the channel (spy://, loop://, socket://, rfc2217://): serial "
+        "interfaces open files and sockets for them; only the command line can allow it",
+    )
 
 
 def _option_value(text: str) -> str | int | float | bool:
@@ -92,7 +115,13 @@ def _option_value(text: str) -> str | int | float | bool:
 
 def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> dict[str, object]:
     """The ``[bus]`` table with the command-line options applied (what goes to ``can.Bus``)."""
+    from stand.drivers.bus import ALLOW_URL
+
     kwargs = dict(table or {})
+    if ALLOW_URL in kwargs:
+        raise UsageError(
+            f"[bus] {ALLOW_URL}: a file cannot allow URL channels; only --allow-url-channel can"
+        )
     for key in ("interface", "channel", "bitrate", "fd", "data_bitrate"):
         value = getattr(args, key, None)
         if value is not None:
@@ -101,7 +130,11 @@ def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> 
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise UsageError(f"--bus-option: expected KEY=VALUE, got {item!r}")
+        if key.strip() == ALLOW_URL:
+            raise UsageError(f"--bus-option {ALLOW_URL}: say --allow-url-channel")
         kwargs[key.strip()] = _option_value(value.strip())
+    if getattr(args, "allow_url_channel", False):
+        kwargs[ALLOW_URL] = True
     return kwargs
 
 

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
-
-from stand.errors import RecordingError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -15,17 +12,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from stand.drivers.files import check_output
     from stand.drivers.recording import read_recording, write_recording
     from stand.drivers.streams import rebuild
 
-    if Path(args.dest).exists() and not args.force:
-        raise RecordingError("exists already (use --force to replace it)", path=args.dest)
-    if Path(args.dest).resolve() == Path(args.source).resolve():
-        raise RecordingError("is both input and output", path=args.dest)
+    check_output(args.dest, force=args.force, inputs=[args.source])  # before reading
     rec = read_recording(args.source)
-    if Path(args.dest).exists():
-        Path(args.dest).unlink()
     streams = rebuild(rec.frames, strict_status=False) if len(rec.frames) else None
-    write_recording(rec, args.dest, streams)
+    write_recording(rec, args.dest, streams, force=args.force, inputs=[args.source])
     print(f"{args.dest}: {len(rec.frames)} frames from {args.source}")
     return 0

@@ -10,7 +10,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
-from stand.cli.common import print_warnings
+from stand.cli.common import add_force_argument, print_warnings, write_text_output
 from stand.cli.format import dump_json, json_text
 from stand.config import STRICT
 from stand.errors import ConfigError, UsageError
@@ -53,6 +53,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="MATRIX.json",
         help="store the influence matrix (permanent calibration of a rotor type)",
     )
+    add_force_argument(p, "--save")
     p.add_argument(
         "--matrix",
         metavar="MATRIX.json",
@@ -152,15 +153,14 @@ def run(args: argparse.Namespace) -> int:
         "warnings": [w.message for w in warnings],
     }
     if args.save:
-        Path(args.save).write_text(
-            json_text(
-                {
-                    "influence": [[[z.real, z.imag] for z in row] for row in res.alpha],
-                    "units": "reading per kg",
-                    "sensors": alpha.shape[0],
-                    "planes": alpha.shape[1],
-                }
-            )
+        saved = {
+            "influence": [[[z.real, z.imag] for z in row] for row in res.alpha],
+            "units": "reading per kg",
+            "sensors": alpha.shape[0],
+            "planes": alpha.shape[1],
+        }
+        write_text_output(
+            args.save, json_text(saved), force=args.force, inputs=[args.runs, args.matrix]
         )
     if args.json:
         dump_json(out)

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-from stand.cli.common import add_measure_arguments, add_uncertainty_arguments, solve_options
+from stand.cli.common import (
+    add_force_argument,
+    add_measure_arguments,
+    add_uncertainty_arguments,
+    solve_options,
+    write_text_output,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -17,12 +23,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
+    add_force_argument(p, "REPORT.html")
 
 
 def run(args: argparse.Namespace) -> int:
+    from stand.drivers.files import check_output
     from stand.pipeline import solve_recording
-    from stand.report import write_report
+    from stand.report import render
 
-    write_report(solve_recording(args.run, args.config, solve_options(args, traces=True)), args.out)
+    inputs = [i for i in (args.run, args.config) if i]
+    check_output(args.out, force=args.force, inputs=inputs)  # before the work
+    result = solve_recording(args.run, args.config, solve_options(args, traces=True))
+    write_text_output(args.out, render(result), force=args.force, inputs=inputs)
     print(f"wrote {args.out}")
     return 0

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from stand import __version__
 from stand.cli.common import add_bus_arguments, bus_kwargs
-from stand.errors import RecordingError, UsageError
+from stand.errors import UsageError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,8 +37,10 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.out and not args.bus:
         raise UsageError("stand simulate: give --out FILE, --bus, or both")
-    if args.out and Path(args.out).exists() and not args.force:
-        raise RecordingError("exists already (use --force to replace it)", path=args.out)
+    if args.out:
+        from stand.drivers.files import check_output
+
+        check_output(args.out, force=args.force)  # before the work, and again when written
     scene, params, source = load_scene(args.scene)
     if args.seed is not None:
         scene = scene.model_copy(update={"run": scene.run.model_copy(update={"seed": args.seed})})
@@ -50,8 +52,6 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     if args.out:
-        if Path(args.out).exists():
-            Path(args.out).unlink()
         rec = Recording(
             path=source,
             frames=sim.frames,
@@ -61,7 +61,13 @@ def run(args: argparse.Namespace) -> int:
                 "software": f"stand {__version__}",
             },
         )
-        write_recording(rec, args.out, rebuild(sim.frames, strict_status=False))
+        write_recording(
+            rec,
+            args.out,
+            rebuild(sim.frames, strict_status=False),
+            force=args.force,
+            inputs=[source],
+        )
         print(f"wrote {args.out}", file=sys.stderr)
     if args.bus:
         from stand.drivers.bus import describe_bus, open_bus, play

@@ -8,11 +8,18 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import sys
 from pathlib import Path
 from typing import Any
 
-from stand.cli.common import add_measure_arguments, add_uncertainty_arguments, solve_options
+from stand.cli.common import (
+    add_force_argument,
+    add_measure_arguments,
+    add_uncertainty_arguments,
+    solve_options,
+    write_text_output,
+)
 from stand.errors import StandError, UsageError
 
 
@@ -34,6 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--summary", metavar="FILE", help="write a summary of all runs: .csv or .json")
     add_uncertainty_arguments(p)
+    add_force_argument(p, "--summary")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,6 +50,12 @@ def run(args: argparse.Namespace) -> int:
     if args.summary and not args.summary.lower().endswith((".csv", ".json")):
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
     options = solve_options(args)
+    if args.summary:  # refuse a summary that cannot be written before solving
+        from stand.drivers.files import check_output
+
+        check_output(
+            args.summary, force=args.force, inputs=[*args.runs, *filter(None, [args.config])]
+        )
     if len(args.runs) > 1 or args.summary:
         return run_batch(args, options)
     from stand.cli.format import show
@@ -113,14 +127,15 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
             results[path] = {"error": str(res)} if isinstance(res, StandError) else to_json(res)
     rows = [_row(path, results[path]) for path in runs]
     if args.summary:
-        dest = Path(args.summary)
-        if dest.suffix.lower() == ".json":
-            dest.write_text(json_text({p: results[p] for p in runs}, indent=1))
+        if Path(args.summary).suffix.lower() == ".json":
+            text = json_text({p: results[p] for p in runs}, indent=1)
         else:
-            with dest.open("w", newline="") as handle:
-                w = csv.DictWriter(handle, fieldnames=COLUMNS)
-                w.writeheader()
-                w.writerows(rows)
+            buf = io.StringIO(newline="")
+            w = csv.DictWriter(buf, fieldnames=COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+            text = buf.getvalue()
+        write_text_output(args.summary, text, force=args.force, inputs=[*runs, args.config])
     if args.json:
         dump_json({p: results[p] for p in runs})
     else:

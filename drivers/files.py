@@ -1,0 +1,213 @@
+"""Safe writes: every output goes to a unique temporary name beside its target and is
+published only when complete, never over an existing file without ``force``, never over
+an input or a special file; a full disk is seen before the bytes are refused.
+
+:func:`output` is the one way the software writes a whole file (reports, summaries,
+configs, logs, run files made at once); :func:`publish` puts a finished temporary file
+in place; :func:`ensure_room` is asked before each append to a run file being recorded.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import stat
+import tempfile
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from stand.errors import DiskFullError, WriteError
+
+HEADROOM_BYTES = 1 << 18
+"""Room kept free beyond each write's own need (HDF5's metadata, the file system's)."""
+
+
+def _kind(mode: int) -> str:
+    for test, name in (
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a device"),
+        (stat.S_ISBLK, "a device"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
+        if test(mode):
+            return name
+    return "not a regular file"
+
+
+def check_output(
+    path: str | Path, *, force: bool = False, inputs: Iterable[str | Path] = ()
+) -> Path:
+    """The output path, refused if it is an input, a special file or a symlink, exists
+    without ``force``, or has no directory to go in.
+
+    Raises
+    ------
+    WriteError
+    """
+    p = Path(path)
+    for i in inputs:
+        try:
+            same = p.exists() and Path(i).exists() and os.path.samefile(p, i)
+        except OSError:
+            same = False
+        if same or p.resolve() == Path(i).resolve():
+            raise WriteError("is also an input: refusing to write over it", path=str(p))
+    if p.is_symlink():
+        raise WriteError("is a symbolic link: not replaced (name the file itself)", path=str(p))
+    if p.exists():
+        mode = p.stat().st_mode
+        if not stat.S_ISREG(mode):
+            raise WriteError(f"is {_kind(mode)}: not replaced", path=str(p))
+        if not force:
+            raise WriteError("exists already (use --force to replace it)", path=str(p))
+    if not p.parent.is_dir():
+        raise WriteError(f"no such directory: {p.parent}", path=str(p))
+    return p
+
+
+def check_input(path: str | Path) -> Path:
+    """An input file that exists and is a regular file (a FIFO would block the read, a
+    directory or device is no recording).
+
+    Raises
+    ------
+    RecordingError
+        Naming the file and what it is instead.
+    """
+    from stand.errors import RecordingError
+
+    p = Path(path)
+    try:
+        mode = p.stat().st_mode
+    except OSError as exc:
+        if p.is_symlink():
+            raise RecordingError(
+                "a symbolic link that leads nowhere (or in a loop)", path=str(p)
+            ) from None
+        if isinstance(exc, FileNotFoundError):
+            raise RecordingError("no such file", path=str(p)) from None
+        raise RecordingError(f"cannot read: {exc.strerror or exc}", path=str(p)) from None
+    if not stat.S_ISREG(mode):
+        raise RecordingError(f"is {_kind(mode)}: not read", path=str(p))
+    return p
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def temporary_beside(p: Path) -> Path:
+    """A new, empty, uniquely named file beside ``p`` that keeps its extensions (the
+    python-can writers choose their format by them): ``.NAME.XXXXXX.part.EXT``."""
+    stem = p.name[: len(p.name) - len("".join(p.suffixes))] or p.name
+    fd, tmp = tempfile.mkstemp(
+        dir=p.parent, prefix=f".{stem}.", suffix=".part" + "".join(p.suffixes)
+    )
+    os.close(fd)
+    os.chmod(tmp, 0o666 & ~_umask())  # as a plain open() would have made it
+    return Path(tmp)
+
+
+def publish(tmp: Path, dest: Path, *, force: bool = False) -> None:
+    """Put the finished ``tmp`` at ``dest``: replaced with ``force``, else linked, so that
+    of two writers of one name exactly one wins and the other is told."""
+    if force:
+        os.replace(tmp, dest)
+        return
+    try:
+        os.link(tmp, dest)
+    except FileExistsError:
+        tmp.unlink(missing_ok=True)
+        raise WriteError(
+            "exists already: another program wrote it meanwhile (use --force to replace it)",
+            path=str(dest),
+        ) from None
+    except OSError:  # no hard links here (FAT, some network shares): claim the name first
+        fd = os.open(dest, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666)
+        os.close(fd)
+        os.replace(tmp, dest)
+        return
+    tmp.unlink()
+
+
+def write_error(exc: OSError, path: str | Path, what: str = "cannot write") -> WriteError:
+    """One line for an OSError met while writing ``path`` (a full disk said as such)."""
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+        return DiskFullError(
+            f"{what}: {os.strerror(exc.errno)}", path=str(path), needed_bytes=0, free_bytes=0
+        )
+    return WriteError(f"{what}: {exc.strerror or exc}", path=str(path))
+
+
+@contextmanager
+def output(
+    path: str | Path,
+    *,
+    force: bool = False,
+    inputs: Iterable[str | Path] = (),
+    need_bytes: int = 0,
+) -> Iterator[Path]:
+    """Write a whole file safely: yields a temporary path to write; on success it is
+    published at ``path``; on any failure it is removed and ``path`` left as it was.
+
+    Raises
+    ------
+    WriteError
+        The output is refused (:func:`check_output`), or writing failed (a full disk
+        is a :class:`~stand.errors.DiskFullError`).
+    """
+    dest = check_output(path, force=force, inputs=inputs)
+    ensure_room(dest.parent, need_bytes, dest)
+    try:
+        tmp = temporary_beside(dest)
+    except OSError as exc:
+        raise write_error(exc, dest) from exc
+    try:
+        yield tmp
+        publish(tmp, dest, force=force)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_error(exc, dest) from exc
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def ensure_room(where: Path, need_bytes: int, path: Path | None = None) -> None:
+    """Refuse a write of ``need_bytes`` (plus :data:`HEADROOM_BYTES`) that the disk under
+    ``where``, or the process's file-size limit for ``path``, has no room for.
+
+    Asked before the bytes go: HDF5 does not survive a write that fails half way
+    (its cache is left inconsistent, and h5py has crashed on it at exit).
+    """
+    import resource
+
+    need = int(need_bytes) + HEADROOM_BYTES
+    target = str(path if path is not None else where)
+    try:
+        st = os.statvfs(where)
+    except OSError:
+        return  # nothing to measure with: the write itself will tell
+    free = st.f_bavail * st.f_frsize
+    if free < need:
+        raise DiskFullError(
+            f"the disk is full: {free / 1e6:.1f} MB free, the next write needs {need / 1e6:.1f} MB",
+            path=target,
+            needed_bytes=need,
+            free_bytes=free,
+        )
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    if limit != resource.RLIM_INFINITY:
+        size = path.stat().st_size if path is not None and path.exists() else 0
+        if size + need > limit:
+            raise DiskFullError(
+                f"the file-size limit (ulimit -f) is reached: {size / 1e6:.1f} of "
+                f"{limit / 1e6:.1f} MB used, the next write needs {need / 1e6:.1f} MB",
+                path=target,
+                needed_bytes=need,
+                free_bytes=max(limit - size, 0),
+            )
