@@ -16,6 +16,7 @@ frames); frames beyond it are dropped *and counted* (``overruns``).
 from __future__ import annotations
 
 import abc
+import re
 import threading
 import time
 from typing import Any
@@ -36,6 +37,13 @@ def describe_bus(kwargs: dict[str, Any]) -> str:
     return f"{kwargs.get('interface', '?')}:{kwargs.get('channel', '?')}"
 
 
+URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
+"""A channel like ``spy://``, ``loop://``, ``rfc2217://``, ``socket://``: serial interfaces
+hand it to pyserial, whose URL handlers open files and sockets."""
+ALLOW_URL = "allow_url_channel"
+"""The key by which the command line (``--allow-url-channel``), never a file, allows one."""
+
+
 def open_bus(kwargs: dict[str, Any]) -> Any:
     """``can.Bus(**kwargs)``, its failures as one :class:`BusError`.
 
@@ -48,7 +56,16 @@ def open_bus(kwargs: dict[str, Any]) -> Any:
     """
     import can
 
+    kwargs = dict(kwargs)
+    allow_url = bool(kwargs.pop(ALLOW_URL, False))
     where = describe_bus(kwargs)
+    channel = kwargs.get("channel")
+    if isinstance(channel, str) and URL_CHANNEL.match(channel) and not allow_url:
+        raise BusError(
+            f"the channel {channel!r} is a URL: serial interfaces open files and sockets for "
+            "such names; refused unless the command line says --allow-url-channel",
+            channel=where,
+        )
     if "interface" not in kwargs:
         raise BusError(
             "no CAN interface given: set [bus] interface in the config or --interface",
@@ -56,7 +73,8 @@ def open_bus(kwargs: dict[str, Any]) -> Any:
         )
     try:
         return can.Bus(**kwargs)
-    except (can.CanError, ValueError, TypeError, OSError, ImportError) as exc:
+    except Exception as exc:
+        # (kvaser without its DLL: NameError); each is "cannot open", said in one line
         raise BusError(
             f"cannot open the bus ({type(exc).__name__}: {exc})", channel=where
         ) from None

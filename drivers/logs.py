@@ -17,18 +17,22 @@ field is not (a run is one bus).
 from __future__ import annotations
 
 import re
+import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from stand.core import Diagnostic
+from stand.drivers.files import check_input
 from stand.drivers.protocol import (
     FLAG_ERROR,
     FLAG_EXTENDED,
     FLAG_FD,
     FLAG_REMOTE,
     FRAME_DLC,
+    MAX_PAYLOAD,
     Frames,
 )
 from stand.errors import RecordingError, UnusualLogError
@@ -183,17 +187,17 @@ def iter_candump_fast(path: Path) -> Iterator[Frames]:
         raise RecordingError(f"cannot read ({exc.strerror or exc})", path=str(path)) from exc
 
 
-def iter_candump(path: Path) -> Iterator[Frames]:
+def iter_candump(path: Path, warn: list[Diagnostic] | None = None) -> Iterator[Frames]:
     """A candump log in blocks (all at once, through the regular expression, if unusual)."""
     blocks: list[Frames] = []
     try:
         blocks.extend(iter_candump_fast(path))
     except UnusualLogError:
-        blocks = [_read_candump_text(path)]
+        blocks = [_read_candump_text(path, warn)]
     yield from blocks
 
 
-def read_candump(path: Path) -> Frames:
+def read_candump(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read a candump ``.log`` (``candump -L`` format, as python-can writes it).
 
     The common case in blocks of whole lines, as byte columns
@@ -205,11 +209,14 @@ def read_candump(path: Path) -> Frames:
     RecordingError
         Naming the file and the first line that is not a frame.
     """
-    return Frames.concat(list(iter_candump(path)))
+    return Frames.concat(list(iter_candump(path, warn)))
 
 
-def _read_candump_text(path: Path) -> Frames:
+def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read a candump ``.log`` (``candump -L`` format, as python-can writes it).
+
+    A last line cut short (no newline after it, as a killed candump leaves it)
+    is left out with a warning; any other line that is not a frame is refused.
 
     Raises
     ------
@@ -219,7 +226,18 @@ def _read_candump_text(path: Path) -> Frames:
     text = path.read_bytes()
     rows = _CANDUMP.findall(text)
     lines = sum(1 for line in text.split(b"\n") if line.strip())
-    if len(rows) != lines:
+    if b"\n" in text.strip() and not text.endswith(b"\n"):
+        head, last = text[: text.rfind(b"\n") + 1], text[text.rfind(b"\n") + 1 :]
+        match = _CANDUMP.match(last)
+        data = b"" if match is None else match.group(5)
+        if match is None or (data[:1] not in (b"R", b"r") and len(data) % 2):  # cut short
+            text, rows = head, _CANDUMP.findall(head)
+            if warn is not None:
+                where = f"{path}:{lines}"
+                warn.append(
+                    Diagnostic("partial_line", f"{where}: the last line is cut short: left out")
+                )
+    if len(rows) != sum(1 for line in text.split(b"\n") if line.strip()):
         raise _with_line(path, text)
     n = len(rows)
     if n == 0:
@@ -232,6 +250,17 @@ def _read_candump_text(path: Path) -> Frames:
     fd = np.fromiter((len(s) > 0 for s in fd_str), dtype=bool, count=n)
     remote = np.fromiter((s[:1] in (b"R", b"r") for s in data_str), dtype=bool, count=n)
     lengths = np.fromiter((len(s) for s in data_str), dtype=np.int64, count=n)
+    dlcs = lengths // 2
+    for r in np.flatnonzero(remote):  # a remote frame says its length: R<dlc>
+        dlcs[r] = int(data_str[r][1:] or 0)
+    if dlcs.max() > MAX_PAYLOAD:
+        bad = int(np.argmax(dlcs > MAX_PAYLOAD))
+        line = [k for k, ln in enumerate(text.split(b"\n"), 1) if ln.strip()][bad]
+        raise RecordingError(
+            f"a frame of {int(dlcs[bad])} data bytes: CAN carries at most {MAX_PAYLOAD}",
+            path=str(path),
+            line=line,
+        )
     if not remote.any() and (lengths == 2 * FRAME_DLC).all():  # the common case, in one go
         data = np.frombuffer(bytes.fromhex(b"".join(data_str).decode()), np.uint8).reshape(n, 8)
         dlc = np.full(n, FRAME_DLC, np.uint8)
@@ -319,15 +348,14 @@ def iter_log(path: str | Path, *, fast: bool = False) -> Iterator[Frames]:
     :class:`UnusualLogError` if a block needs the slow path (start again without).
     """
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError("no such file", path=str(path))
+    check_input(path)
     if path.suffix.lower() == ".log":
         yield from (iter_candump_fast(path) if fast else iter_candump(path))
     else:
         yield read_log(path)
 
 
-def read_log(path: str | Path) -> Frames:
+def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read any python-can log (format by extension); candump ``.log`` takes the fast path.
 
     Raises
@@ -336,10 +364,9 @@ def read_log(path: str | Path) -> Frames:
         The file is missing, of an unknown format, or not a readable log.
     """
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError("no such file", path=str(path))
+    check_input(path)
     if path.suffix.lower() == ".log":
-        return read_candump(path)
+        return read_candump(path, warn)
     import can
 
     try:
@@ -353,10 +380,24 @@ def read_log(path: str | Path) -> Frames:
                     path=str(path),
                 )
             size = getattr(reader, "file_size", None)  # BLF: the header says how long it is
-            if isinstance(size, int) and size > path.stat().st_size:
+            if isinstance(size, int) and size > path.stat().st_size and not len(frames):
                 raise RecordingError(
                     f"truncated: the BLF header says {size} bytes, the file has "
-                    f"{path.stat().st_size} ({len(frames)} frames readable)",
+                    f"{path.stat().st_size} and no frame is readable",
+                    path=str(path),
+                )
+            if isinstance(size, int) and size > path.stat().st_size and warn is not None:
+                warn.append(
+                    Diagnostic(
+                        "truncated_log",
+                        f"{path}: the BLF header says {size} bytes, the file has "
+                        f"{path.stat().st_size}: read the {len(frames)} frames it holds",
+                    )
+                )
+            if not len(frames) and path.stat().st_size > 0:
+                raise RecordingError(
+                    f"no CAN frame in its {path.stat().st_size} bytes (python-can's "
+                    f"{path.suffix} reader skips what it cannot read)",
                     path=str(path),
                 )
             return frames
@@ -377,7 +418,13 @@ def read_log(path: str | Path) -> Frames:
 
 
 def write_log(frames: Frames, path: str | Path) -> None:
-    """Write the frames as a python-can log, the format by the extension."""
+    """Write the frames as a python-can log, the format by the extension.
+
+    python-can's SQLite writer (``.db``) writes from a thread that, once told
+    to stop, writes one more batch and drops the rest of its queue (it kept
+    2004 of 21588 frames): its queue is let drain before it is stopped, and the
+    rows are counted after.
+    """
     import can
 
     path = Path(path)
@@ -385,7 +432,30 @@ def write_log(frames: Frames, path: str | Path) -> None:
         with can.Logger(path) as logger:
             for m in messages_from_frames(frames):
                 logger.on_message_received(m)
+            queue = getattr(logger, "buffer", None)
+            deadline = time.monotonic() + 60.0
+            while queue is not None and not queue.empty() and time.monotonic() < deadline:
+                time.sleep(0.01)
+    except NotImplementedError as exc:  # a format whose optional package is missing
+        extra = {".mf4": "mf4"}.get(path.suffix.lower())
+        hint = f": pip install 'python-can[{extra}]'" if extra else ""
+        raise RecordingError(
+            f"cannot write {path.suffix} logs here{hint} ({exc})", path=str(path)
+        ) from None
     except ValueError as exc:
         raise RecordingError(f"cannot write this log format: {exc}", path=str(path)) from None
-    except OSError as exc:
-        raise RecordingError(f"cannot write: {exc.strerror or exc}", path=str(path)) from None
+    if path.suffix.lower() == ".db":
+        _check_db_rows(path, len(frames))
+
+
+def _check_db_rows(path: Path, expected: int) -> None:
+    """Refuse a ``.db`` log that does not hold every frame written to it."""
+    import sqlite3
+
+    with sqlite3.connect(path) as conn:
+        (rows,) = conn.execute("SELECT COUNT(*) FROM messages").fetchone()
+    conn.close()
+    if rows != expected:
+        raise RecordingError(
+            f"the SQLite writer kept {rows} of {expected} frames: not written", path=str(path)
+        )

@@ -35,7 +35,11 @@ DBC_PATH = Path(__file__).with_name("sensor_node_v1.dbc")
 PROTOCOL_VERSION = 1
 SAMPLES_BASE, STATUS_BASE, MARK_BASE = 0x100, 0x140, 0x180
 MAX_NODE = 15
+SUPPORT_NODES = (1, 2)
+"""The nodes on the supports (support 1, support 2): the ones a measurement needs."""
 FRAME_DLC = 8
+MAX_PAYLOAD = 64
+"""The most data bytes any CAN frame carries (CAN FD)."""
 SAMPLES_PER_FRAME = 3
 INVALID_COUNT = -32768
 """The count that marks an invalid sample (sensor fault, overrange): missing data."""

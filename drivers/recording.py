@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import os
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -44,9 +43,17 @@ from typing import Any
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.protocol import FRAME_DLC, Frames
+from stand.drivers.files import (
+    check_input,
+    check_output,
+    ensure_room,
+    publish,
+    temporary_beside,
+    write_error,
+)
+from stand.drivers.protocol import FRAME_DLC, MAX_PAYLOAD, Frames
 from stand.drivers.streams import RunStreams
-from stand.errors import RecordingError
+from stand.errors import RecordingError, WriteError
 
 RUN_FORMAT = "rotor-stand-run"
 RUN_FORMAT_VERSION = 1
@@ -59,7 +66,7 @@ _CHUNK_ROWS = 16384
 # the decoded streams are written once, at the end: compress them (the raw frames are
 # not compressed, so an append never moves a chunk that is already on disk)
 _COMPRESSED: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
-_MAX_WIDTH = 64
+_MAX_WIDTH = MAX_PAYLOAD
 _FRAME_FIELDS = {
     "t_s": np.float64,
     "can_id": np.uint32,
@@ -128,6 +135,7 @@ class RunWriter:
         config_toml: str = "",
         software: str = "",
         flush_interval_s: float = FLUSH_INTERVAL_S,
+        force: bool = False,
     ):
         self.path = Path(path)
         self.software = software
@@ -142,12 +150,14 @@ class RunWriter:
         self._width = FRAME_DLC
         self._closed = False
         self._last_flush = self._last_success = time.monotonic()
-        if self.path.exists():
-            raise RecordingError("exists already: refusing to overwrite a run", path=str(self.path))
+        self._broken = False
+        check_output(self.path, force=force)
+        ensure_room(self.path.parent, 0, self.path)
         h5py = _h5py()
-        tmp = self.path.with_name(self.path.name + ".part")
         self.start_time = _utc_now()
+        tmp: Path | None = None
         try:
+            tmp = temporary_beside(self.path)
             with h5py.File(tmp, "w") as f:
                 f.attrs.update(
                     format=RUN_FORMAT,
@@ -183,11 +193,11 @@ class RunWriter:
                     w.create_dataset(
                         name, shape=(0,), maxshape=(None,), dtype=h5py.string_dtype(), chunks=(256,)
                     )
-            os.replace(tmp, self.path)
+            publish(tmp, self.path, force=force)  # of two writers of one name, one wins
         except OSError as exc:
-            raise RecordingError(
-                f"cannot create the run file: {exc}", path=str(self.path)
-            ) from None
+            if tmp is not None:
+                tmp.unlink(missing_ok=True)
+            raise write_error(exc, self.path, "cannot create the run file") from exc
 
     @property
     def frames_written(self) -> int:
@@ -220,9 +230,16 @@ class RunWriter:
         self._last_flush = time.monotonic()
         if not self._pending and not self._warnings:
             return
+        if self._broken:
+            raise WriteError(
+                "a write failed before: the run file is left as it was", path=str(self.path)
+            )
         block = Frames.concat(self._pending)
         warns, self._warnings = self._warnings, []
         n, k = self._n, len(block)
+        # HDF5 does not survive a write that fails half way: make sure of the room first
+        width = max(self._width, block.data.shape[1])
+        ensure_room(self.path.parent, (k + 2 * _CHUNK_ROWS) * (14 + width), self.path)
         try:
             with _h5py().File(self.path, "a") as f:
                 g = f["frames"]
@@ -247,9 +264,12 @@ class RunWriter:
         except OSError as exc:
             self._pending = [block]  # keep them: a later flush may succeed
             self._warnings = warns + self._warnings
-            raise RecordingError(
-                f"cannot append to the run file: {exc}", path=str(self.path)
-            ) from None
+            if _lock_busy(exc):  # another program holds the lock a moment: retried
+                raise RecordingError(
+                    f"cannot append to the run file: {exc}", path=str(self.path)
+                ) from None
+            self._broken = True  # never touch a file HDF5 failed to write again
+            raise write_error(exc, self.path, "cannot append to the run file") from exc
         self._pending = []
         self._n = n + k
         self._last_success = time.monotonic()
@@ -260,12 +280,20 @@ class RunWriter:
             return
         self.flush()
         self._closed = True
-        with _h5py().File(self.path, "a") as f:
-            if streams is not None:
-                write_streams(f, streams)
-            self.end_time = _utc_now()
-            f.attrs["end_time"] = self.end_time
-            f.attrs["complete"] = True
+        if self._broken:
+            return
+        need = 0 if streams is None else sum(_stream_bytes(s) for s in streams.nodes.values())
+        ensure_room(self.path.parent, need, self.path)
+        try:
+            with _h5py().File(self.path, "a") as f:
+                if streams is not None:
+                    write_streams(f, streams)
+                self.end_time = _utc_now()
+                f.attrs["end_time"] = self.end_time
+                f.attrs["complete"] = True
+        except OSError as exc:
+            self._broken = True
+            raise write_error(exc, self.path, "cannot close the run file") from exc
 
     def discard(self) -> None:
         """Close and remove the run file: for a run that never received a frame."""
@@ -278,6 +306,19 @@ class RunWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _lock_busy(exc: OSError) -> bool:
+    """The file could not be opened (another program holds its lock, or has it open):
+    nothing was written, so a later flush may try again."""
+    text = str(exc).lower()
+    return ("lock" in text or "open" in text) and "space" not in text
+
+
+def _stream_bytes(s: Any) -> int:
+    """What a node's decoded stream takes uncompressed [B] (a bound on what it writes)."""
+    names = ("index", "segment", "counts", "mark_position", "mark_segment", "mark_rev")
+    return sum(int(getattr(s, n).nbytes) for n in names) + 8 * len(s.index)
 
 
 def write_streams(f: Any, streams: RunStreams) -> None:
@@ -313,34 +354,103 @@ READ_ROWS = 1 << 20
 """Frames read from a run file at a time by :func:`read_streams` (bounded memory)."""
 
 
+def _attr(f: Any, name: str, kind: type, path: Path, default: Any = None) -> Any:
+    """A root attribute of the expected kind (int: a whole number; str: text), else refused."""
+    if name not in f.attrs:
+        if default is not None:
+            return default
+        raise RecordingError(f"the attribute {name!r} is missing", path=str(path))
+    v = f.attrs[name]
+    if isinstance(v, np.generic) and np.ndim(v) == 0:
+        v = v.item()
+    if kind is int and isinstance(v, int) and not isinstance(v, bool):
+        return v
+    if kind is str and isinstance(v, str):
+        return v
+    want = "a whole number" if kind is int else "text"
+    raise RecordingError(f"the attribute {name!r} is {str(v)[:40]!r}, not {want}", path=str(path))
+
+
+def _member(group: Any, name: str, path: Path, where: str) -> Any:
+    """A member stored in this file: links (soft, external) and external storage refused."""
+    h5py = _h5py()
+    link = group.get(name, getlink=True)
+    if link is None:
+        raise RecordingError(f"{where}/{name} is missing", path=str(path))
+    if not isinstance(link, h5py.HardLink):
+        raise RecordingError(
+            f"{where}/{name} is an HDF5 {type(link).__name__}: links (soft, external) are "
+            "refused, a run file holds its own data",
+            path=str(path),
+        )
+    obj = group[name]
+    if isinstance(obj, h5py.Dataset) and obj.external:
+        raise RecordingError(
+            f"{where}/{name} keeps its data in external storage ({obj.external[0][0]}): refused",
+            path=str(path),
+        )
+    return obj
+
+
+def _frame_dataset(g: Any, name: str, rows: int, path: Path) -> Any:
+    """One /frames dataset, checked: its shape, its kind, and that it holds its rows."""
+    h5py = _h5py()
+    d = _member(g, name, path, "/frames")
+    ndim = 2 if name == "data" else 1
+    if not isinstance(d, h5py.Dataset) or d.ndim != ndim:
+        raise RecordingError(f"/frames/{name} is not a {ndim}-D dataset", path=str(path))
+    kind = "f" if name == "t_s" else "u"
+    if d.dtype.kind != kind and not (kind == "u" and d.dtype.kind == "i"):
+        raise RecordingError(f"/frames/{name} holds {d.dtype}, not the run file's", path=str(path))
+    n = min(rows, d.shape[0])
+    need = n * d.dtype.itemsize * (d.shape[1] if ndim == 2 else 1)
+    if d.id.get_storage_size() < need:  # unwritten chunks would read as zeros
+        raise RecordingError(
+            f"/frames/{name} declares {d.shape[0]} rows but holds "
+            f"{d.id.get_storage_size()} bytes of the {need} they need: truncated or crafted",
+            path=str(path),
+        )
+    return d
+
+
 def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic, ...]]:
     """Check an open run file; its committed frame count, attributes and warnings."""
+    h5py = _h5py()
     if f.attrs.get("format") != RUN_FORMAT:
         raise RecordingError(
             f"an HDF5 file but not a run file (format attribute "
-            f"{f.attrs.get('format')!r}, expected {RUN_FORMAT!r})",
+            f"{str(f.attrs.get('format'))[:40]!r}, expected {RUN_FORMAT!r})",
             path=str(path),
         )
-    version = int(f.attrs.get("format_version", -1))
+    version = _attr(f, "format_version", int, path)
     if version > RUN_FORMAT_VERSION:
         raise RecordingError(
             f"run file format {version} is newer than this software reads ({RUN_FORMAT_VERSION})",
             path=str(path),
         )
-    stored = f.attrs.get("config_sha256")
-    if stored is not None and stored != config_digest(str(f.attrs.get("config_toml", ""))):
+    config = _attr(f, "config_toml", str, path, "")
+    stored = _attr(f, "config_sha256", str, path, "") if "config_sha256" in f.attrs else None
+    if stored is not None and stored != config_digest(config):
         raise RecordingError(
             "the stored configuration does not match its SHA-256 digest: the file was "
             "altered or damaged (solve it with --config CFG)",
             path=str(path),
         )
-    g = f["frames"]
-    n = int(f.attrs["frames_committed"])
-    n = min([n, *(g[k].shape[0] for k in (*_FRAME_FIELDS, "data"))])
+    committed = _attr(f, "frames_committed", int, path)
+    if committed < 0:
+        raise RecordingError(f"the attribute 'frames_committed' is {committed}", path=str(path))
+    g = _member(f, "frames", path, "")
+    if not isinstance(g, h5py.Group):
+        raise RecordingError("/frames is not a group", path=str(path))
+    shapes = [_frame_dataset(g, k, committed, path).shape[0] for k in (*_FRAME_FIELDS, "data")]
+    n = min([committed, *shapes])
     meta = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
-    w = f["warnings"]
-    m = min(w["code"].shape[0], w["message"].shape[0])
-    codes, msgs = w["code"].asstr()[:m], w["message"].asstr()[:m]
+    w = _member(f, "warnings", path, "")
+    codes_d, msgs_d = (_member(w, k, path, "/warnings") for k in ("code", "message"))
+    if any(not h5py.check_string_dtype(d.dtype) for d in (codes_d, msgs_d)):
+        raise RecordingError("/warnings holds something other than text", path=str(path))
+    m = min(codes_d.shape[0], msgs_d.shape[0])
+    codes, msgs = codes_d.asstr()[:m], msgs_d.asstr()[:m]
     warnings = tuple(Diagnostic(str(c), str(s)) for c, s in zip(codes, msgs, strict=True))
     return n, meta, warnings
 
@@ -379,8 +489,7 @@ def _read_run_blocks(
         Not an HDF5 file, truncated beyond use, not a run file, or a failed checksum.
     """
     p = Path(path)
-    if not p.is_file():
-        raise RecordingError("no such file", path=str(p))
+    check_input(p)
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
         with _h5py().File(p, "r", locking=False) as f:
@@ -398,7 +507,13 @@ def _read_run_blocks(
                 take(block)
     except RecordingError:
         raise
-    except (OSError, KeyError, ValueError) as exc:
+    except (
+        OSError,
+        KeyError,
+        ValueError,
+        RuntimeError,
+        TypeError,
+    ) as exc:  # h5py's, whatever the file holds
         raise _unreadable(exc, p) from exc
     return meta, warnings
 
@@ -454,26 +569,39 @@ def read_recording(path: str | Path) -> Recording:
         return read_run(path)
     from stand.drivers.logs import read_log
 
-    return Recording(str(path), read_log(path))
+    warnings: list[Diagnostic] = []
+    frames = read_log(path, warnings)
+    return Recording(str(path), frames, warnings=tuple(warnings))
 
 
 def write_recording(
-    recording: Recording, path: str | Path, streams: RunStreams | None = None
+    recording: Recording,
+    path: str | Path,
+    streams: RunStreams | None = None,
+    *,
+    force: bool = False,
+    inputs: Iterable[str | Path] = (),
 ) -> None:
-    """Write frames as a run file (.h5) or a python-can log (by extension)."""
-    if is_run_file(path):
+    """Write frames as a run file (.h5) or a python-can log (by extension), whole: under a
+    temporary name, published at ``path`` when complete (:func:`stand.drivers.files.output`).
+    """
+    from stand.drivers.files import output
+
+    need = len(recording.frames) * (2 * (14 + recording.frames.data.shape[1]) + 16)
+    with output(path, force=force, inputs=inputs, need_bytes=need) as tmp:
+        if not is_run_file(path):
+            from stand.drivers.logs import write_log
+
+            write_log(recording.frames, tmp)
+            return
         meta = recording.meta
         with RunWriter(
-            path,
+            tmp,
             source=str(meta.get("source", f"converted from {recording.path}")),
             config_toml=str(meta.get("config_toml", "")),
             software=str(meta.get("software", "")),
+            force=True,  # its own temporary file
         ) as w:
             w.append(recording.frames)
             w.warn(recording.warnings)
             w.close(streams)
-        return
-    from stand.drivers.logs import write_log
-
-    Path(path).unlink(missing_ok=True)
-    write_log(recording.frames, path)

@@ -48,6 +48,9 @@ from stand.drivers.protocol import (
     node_records,
     shift_decoded,
 )
+from stand.drivers.protocol import (
+    SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
+)
 from stand.errors import NoStatusError
 
 STATUS_WITHIN_S = 1.5
@@ -367,8 +370,10 @@ def _rebuild_node(
             f"node {node}: no STATUS within {STATUS_WITHIN_S} s of its first frame "
             f"(frame {int(all_frames[0])}, {came}): its samples cannot be scaled"
         )
-        if strict_status:
+        if strict_status and node in SUPPORT_NODES:
             raise NoStatusError(what, node=node, frame=int(all_frames[0]))
+        if node not in SUPPORT_NODES:
+            what += f" (not a support node: {len(all_frames)} frames left aside)"
         warn.append(Diagnostic("no_status", what, None, float(first_t - t0)))
     for name, values, unit in (("rate", rate, "Hz"), ("scale", scale, "µm/s² per count")):
         if len(np.unique(values)) > 1:

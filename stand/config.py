@@ -41,18 +41,32 @@ STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
 """Every table of every TOML file: unknown keys refused, no strings for numbers, frozen."""
 
 
+# Magnitudes beyond these describe no balancing stand, and the model's arithmetic would
+# overflow into meaninglessness: refused, naming the key.
+Mass = Annotated[FiniteFloat, Field(ge=-1e6, le=1e6)]
+"""[kg]: at most 1000 t."""
+Inertia = Annotated[FiniteFloat, Field(ge=-1e9, le=1e9)]
+"""[kg m^2]."""
+Stiffness = Annotated[FiniteFloat, Field(ge=-1e12, le=1e12)]
+"""[N/m] or [N s/m]."""
+Length = Annotated[FiniteFloat, Field(ge=-1e3, le=1e3)]
+"""[m]."""
+Angle = Annotated[FiniteFloat, Field(ge=-360.0, le=360.0)]
+"""[deg]."""
+
+
 class StandTable(BaseModel):
     """``[stand]``: the supports (kg, N/m, N s/m) and the reference sensor (deg)."""
 
     model_config = STRICT
 
-    M1: FiniteFloat
-    M2: FiniteFloat
-    C1: FiniteFloat
-    C2: FiniteFloat
-    H1: FiniteFloat = 0.0
-    H2: FiniteFloat = 0.0
-    reference_angle_deg: FiniteFloat = 0.0
+    M1: Mass
+    M2: Mass
+    C1: Stiffness
+    C2: Stiffness
+    H1: Stiffness = 0.0
+    H2: Stiffness = 0.0
+    reference_angle_deg: Angle = 0.0
     clock_tolerance_pct: PositiveFloat = 0.1
     """How far the speeds two nodes measure of one shaft may differ [%]."""
 
@@ -62,14 +76,14 @@ class RotorTable(BaseModel):
 
     model_config = STRICT
 
-    M3: FiniteFloat
-    J3: FiniteFloat
-    a: FiniteFloat
-    b: FiniteFloat
-    c: FiniteFloat
-    d: FiniteFloat
-    R1: FiniteFloat
-    R2: FiniteFloat
+    M3: Mass
+    J3: Inertia
+    a: Length
+    b: Length
+    c: Length
+    d: Length
+    R1: Length
+    R2: Length
 
 
 class ToleranceTable(BaseModel):
@@ -239,6 +253,8 @@ def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
     """The text of a TOML file and its parsed content (:class:`ConfigError` if unreadable)."""
     path = Path(path)
     try:
+        if path.is_dir():
+            raise ConfigError("is a directory, not a configuration file", source=str(path))
         raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(
@@ -253,6 +269,8 @@ def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
         ) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"not valid TOML: {exc}", source=str(path)) from None
+    except RecursionError:
+        raise ConfigError("nested too deep to be a configuration", source=str(path)) from None
 
 
 def load_config(path: str | Path) -> tuple[Config, StandParameters]:

@@ -14,9 +14,11 @@ CLI modules parse arguments and format; none of them repeats a step here.
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,7 +34,7 @@ from stand.core.balance import (
     static_couple,
 )
 from stand.drivers.recording import config_digest
-from stand.errors import ConfigError, StandError
+from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError
 from stand.measure import Measurement, measure
 from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
 
@@ -253,14 +255,16 @@ def solve_recording(
     """
     from stand.drivers.recording import read_streams
 
-    rec, streams = read_streams(path)
+    with _naming(path):
+        rec, streams = read_streams(path)
     if config:
         cfg, params, text = load_config_text(config)
         source = config
     else:
         cfg, params, text = stored_config(rec.meta, rec.path)
         source = f"{rec.path} (stored)"
-    m = measure_streams(streams, cfg, params, options)
+    with _naming(path):
+        m = measure_streams(streams, cfg, params, options)
     prov = Provenance(
         software=SOFTWARE,
         run_file=path,
@@ -336,13 +340,26 @@ def measure_recording(
     """
     from stand.drivers.recording import read_streams
 
-    rec, streams = read_streams(path)
+    with _naming(path):
+        rec, streams = read_streams(path)
     cfg, params, _ = load_config_text(config) if config else stored_config(rec.meta, rec.path)
-    if raw_sensors:
-        m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
-    else:
-        m = measure_streams(streams, cfg, params, SolveOptions())
+    with _naming(path):
+        if raw_sensors:
+            m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
+        else:
+            m = measure_streams(streams, cfg, params, SolveOptions())
     return m, cfg, params
+
+
+@contextmanager
+def _naming(path: str) -> Iterator[None]:
+    """Measuring errors of a recorded run name its file (its node and figure they name)."""
+    try:
+        yield
+    except (MeasurementError, NoStatusError) as exc:
+        named = copy.copy(exc)
+        named.args = (f"{path}: {exc}",)
+        raise named from exc
 
 
 def _number(x: float | None) -> float | int | None:
