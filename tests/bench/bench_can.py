@@ -11,6 +11,10 @@
    read from the last 2 s every second, as ``stand record`` does.  The CPU
    time of the receiving thread and of the main loop (not of the player) is
    read from their thread CPU clocks.
+3. What the safe writes cost: 60 s of frames written whole as a run file and
+   as a candump log, through :func:`drivers.files.output` (a temporary name,
+   the disk checked, published by a hard link) and straight to the target
+   (best of 5 each).
 """
 
 from __future__ import annotations
@@ -129,11 +133,39 @@ def live(tmp: Path, seconds: float) -> None:
     )
 
 
+def safe_writes(tmp: Path) -> None:
+    from stand.drivers.logs import write_log
+
+    frames = sine_run(seconds=60.0)
+    rec = Recording("bench", frames)
+    print("\nwriting 60 s of frames whole (best of 5)")
+    for ext in (".h5", ".log"):
+        best = {"straight": 1e9, "safe": 1e9}
+        for k in range(5):
+            for how in best:
+                path = tmp / f"w{k}{how}{ext}"
+                t0 = time.perf_counter()
+                if how == "safe":
+                    write_recording(rec, path)
+                elif ext == ".h5":
+                    with RunWriter(path, source="bench") as w:
+                        w.append(frames)
+                        w.close()
+                else:
+                    write_log(frames, path)
+                best[how] = min(best[how], time.perf_counter() - t0)
+        print(
+            f"  {ext}: straight {best['straight'] * 1e3:.0f} ms, safe "
+            f"{best['safe'] * 1e3:.0f} ms ({100 * (best['safe'] / best['straight'] - 1):+.1f} %)"
+        )
+
+
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--live-seconds", type=float, default=20.0)
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as d:
+        safe_writes(Path(d))
         offline(Path(d))
         live(Path(d), args.live_seconds)
 
