@@ -355,6 +355,38 @@ def iter_log(path: str | Path, *, fast: bool = False) -> Iterator[Frames]:
         yield read_log(path)
 
 
+_TEXT_LOG_LINE = {
+    # a line python-can's reader may take: a header or comment, or a timestamped event
+    ".asc": re.compile(
+        r"^\s*($|//|date |base |internal events|no internal events|// version|"
+        r"Begin Triggerblock|End TriggerBlock|\d+(\.\d+)?\s)",
+        re.IGNORECASE,
+    ),
+    ".trc": re.compile(r"^\s*($|;|\d+\)?\s)"),
+    ".csv": re.compile(r"^\s*($|timestamp,|-?\d+(\.\d*)?(e-?\d+)?,)", re.IGNORECASE),
+}
+
+
+def _foreign_lines(path: Path) -> Diagnostic | None:
+    """Lines of a text log (.asc .trc .csv) that python-can's reader skips without a word:
+    counted, with the first one's number."""
+    shape = _TEXT_LOG_LINE.get(path.suffix.lower())
+    if shape is None:
+        return None
+    bad = [
+        k
+        for k, line in enumerate(path.read_text("utf-8", "replace").splitlines(), start=1)
+        if not shape.match(line)
+    ]
+    if not bad:
+        return None
+    return Diagnostic(
+        "skipped_lines",
+        f"{path}:{bad[0]}: {len(bad)} line(s) that are not frames were left out",
+        float(len(bad)),
+    )
+
+
 def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read any python-can log (format by extension); candump ``.log`` takes the fast path.
 
@@ -394,6 +426,9 @@ def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
                         f"{path.stat().st_size}: read the {len(frames)} frames it holds",
                     )
                 )
+            skipped = _foreign_lines(path) if warn is not None or not len(frames) else None
+            if skipped is not None and warn is not None:
+                warn.append(skipped)
             if not len(frames) and path.stat().st_size > 0:
                 raise RecordingError(
                     f"no CAN frame in its {path.stat().st_size} bytes (python-can's "

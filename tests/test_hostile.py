@@ -114,3 +114,19 @@ def test_an_interface_without_its_driver_leaves_no_run_behind(
         err = capsys.readouterr().err
         assert "cannot open the bus" in err and "internal error" not in err
         assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("ext", "after"), [(".trc", 20), (".asc", 7)])
+def test_a_text_log_counts_the_lines_it_skips_and_names_the_first(
+    demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], ext: str, after: int
+) -> None:
+    """Garbage lines in .asc and .trc logs were skipped without a word."""
+    log = tmp_path / f"run{ext}"
+    assert main(["convert", str(demo_run), str(log)]) == 0
+    lines = log.read_text().splitlines(keepends=True)
+    lines[after:after] = ["this is not a frame\n", "nor is this\n"]
+    log.write_text("".join(lines))
+    capsys.readouterr()
+    assert main(["inspect", str(log)]) == 0
+    err = capsys.readouterr().err
+    assert f"{log}:{after + 1}: 2 line(s) that are not frames were left out" in err, err

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import os
 import sys
 import traceback
@@ -90,6 +91,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = "--debug" in args_list
     for var in BLAS_THREADS:
         os.environ.setdefault(var, "1")
+    if not debug:  # python-can's readers log a line per line they skip: we count them instead
+        logging.getLogger("can").setLevel(logging.ERROR)
     try:
         parser = build_parser(_chosen(args_list))
         args = parser.parse_args(args_list)
