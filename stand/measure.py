@@ -197,18 +197,21 @@ def measure(
     supports: list[Phasor] = []
     windows: list[Window] = []
     gamma = math.radians(reference_angle_deg)
+    # frames left out as malformed explain a node with nothing usable: say so beside it
+    bad = next((f" ({w.message})" for w in streams.warnings if w.code == "bad_frames"), "")
     for node in SUPPORT_NODES:
         s = streams.nodes.get(node)
         if s is None:
             raise MeasurementError(
                 f"node {node} sent nothing: need nodes 1 and 2 (one per "
-                f"support), got {sorted(streams.nodes) or 'none'}"
+                f"support), got {sorted(streams.nodes) or 'none'}{bad}"
             )
         try:
             check_saturation(s)
             ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
         except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)
-            raise type(exc)(f"node {node}: {exc}") from None
+            more = bad if "no samples" in str(exc) or "no reference edges" in str(exc) else ""
+            raise type(exc)(f"node {node}: {exc}{more}") from None
         for note in notes:
             warnings.append(Diagnostic("gate", f"node {node}: {note}"))
         if window.revolutions < MIN_REVS:

@@ -130,3 +130,21 @@ def test_a_text_log_counts_the_lines_it_skips_and_names_the_first(
     assert main(["inspect", str(log)]) == 0
     err = capsys.readouterr().err
     assert f"{log}:{after + 1}: 2 line(s) that are not frames were left out" in err, err
+
+
+def test_frames_of_the_wrong_length_are_named_not_called_no_samples(
+    demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Node 1's SAMPLES frames all of DLC 7 were reported as "no samples"."""
+    f = read_recording(demo_run).frames
+    dlc = f.dlc.copy()
+    dlc[f.can_id == SAMPLES_BASE + 1] = 7
+    log = tmp_path / "dlc7.log"
+    from stand.drivers.logs import write_log
+
+    write_log(Frames(f.t_s, f.can_id, dlc, f.data, f.flags), log)
+    cfg = tmp_path / "cfg.toml"
+    cfg.write_text(CFG)
+    assert main(["solve", str(log), "--config", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert "node 1: no samples" in err and "wrong length: DLC 7, expected 8" in err, err
