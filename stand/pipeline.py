@@ -186,9 +186,15 @@ def build_result(
     """Corrections, static and couple parts, tolerance and spread for a measurement."""
     c = cfg.correction
     noise = [abs(U) <= m.radius95_kg_m[i] for i, U in enumerate(m.solution.U_kg_m)]
+    tolerance = tolerance_of(cfg, params)
+    fine = [  # within its permissible share: nothing to do in this plane
+        tolerance is not None and abs(U) <= tolerance.per_plane_kg_m[i]
+        for i, U in enumerate(m.solution.U_kg_m)
+    ]
     corrections = tuple(
-        Correction((), c.mode == "remove", complex(U))  # inside its interval: no angle to act on
-        if noise[i]
+        # inside its interval: no angle to act on; within tolerance: no need
+        Correction((), c.mode == "remove", complex(U))
+        if noise[i] or fine[i]
         else correction(
             complex(U),
             m.radius_m[i],
@@ -218,9 +224,10 @@ def build_result(
         correction_mode=c.mode,
         static_kg_m=static,
         couple_kg_m=couple,
-        tolerance=tolerance_of(cfg, params),
+        tolerance=tolerance,
         warnings=(*stream_warnings, *m.warnings, *floor),
         within_noise=(bool(noise[0]), bool(noise[1])),
+        within_tolerance=(bool(fine[0]), bool(fine[1])),
         provenance=provenance,
         uncertainty=_uncertainty(m, params, options) if options.tolerances is not None else None,
         check=check,

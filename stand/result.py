@@ -138,6 +138,8 @@ class Result:
     live: LiveInfo | None = None
     within_noise: tuple[bool, bool] = (False, False)
     """Per plane: the unbalance is inside its own 95 % interval (no correction prescribed)."""
+    within_tolerance: tuple[bool, bool] = (False, False)
+    """Per plane: the unbalance is within its permissible share (no correction needed)."""
     traces: Traces | None = field(default=None, compare=False)
 
     @property
@@ -205,18 +207,24 @@ def _corrections(r: Result) -> list[dict[str, Any]]:
             {
                 "mass_g": round(w.mass_kg * 1e3, 4),
                 "angle_deg": round(w.angle_deg, 3),
-                "position": w.position,
+                "position": None if w.position is None else w.position + 1,  # 1..N, as on a rotor
+                "pieces_g": [round(x * 1e3, 4) for x in w.pieces_kg],
                 "radius_mm": round(R * 1e3, 3),
             }
             for w in corr.weights
         ]
+        left = abs(corr.residual_kg_m)
+        per = None if r.tolerance is None else r.tolerance.per_plane_kg_m[i]
         out.append(
             {
                 "plane": i + 1,
                 "action": r.correction_mode,
+                "needed": not (r.within_noise[i] or r.within_tolerance[i]),
                 "weights": weights,
-                "residual_g_mm": _g_mm(abs(corr.residual_kg_m)),
+                "residual_g_mm": _g_mm(left),
+                "residual_within_tolerance": None if per is None else bool(left <= per),
                 "within_noise": r.within_noise[i],
+                "within_tolerance": r.within_tolerance[i],
             }
         )
     return out

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from strategies import DEMO, stands
 
@@ -106,9 +106,10 @@ def test_one_or_two_positions_correct_what_lies_on_their_axis(
 
 def test_rounding_to_available_weights_reports_what_it_leaves() -> None:
     U = 5e-3 * np.exp(-1j * math.radians(30.0))  # 55.6 g at 90 mm
-    c = correction(U, 0.09, steps_kg=[0.01, 0.02, 0.05])
-    assert [w.mass_kg for w in c.weights] == [0.05]
-    assert abs(c.residual_kg_m) == pytest.approx(5e-3 - 0.05 * 0.09, rel=1e-9)
+    c = correction(U, 0.09, steps_kg=[0.01, 0.02, 0.05])  # 55.6 g: 50 + 10 is nearer than 50
+    assert [w.pieces_kg for w in c.weights] == [(0.05, 0.01)]
+    assert c.weights[0].mass_kg == pytest.approx(0.06)
+    assert abs(c.residual_kg_m) == pytest.approx(0.06 * 0.09 - 5e-3, rel=1e-9)
     c = correction(U, 0.09, step_kg=0.002)
     assert c.weights[0].mass_kg == pytest.approx(0.056)  # nearest 2 g multiple of 55.6 g
     assert abs(c.residual_kg_m) == pytest.approx(abs(5e-3 - 0.056 * 0.09), rel=1e-9)
@@ -119,3 +120,25 @@ def test_static_plus_couple_give_back_the_planes(U1: complex, U2: complex) -> No
     s, c = static_couple(DEMO, [U1, U2])
     assert abs(s / 2 + c - U1) <= 1e-12 * (abs(U1) + abs(U2))
     assert abs(s / 2 - c - U2) <= 1e-12 * (abs(U1) + abs(U2))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    mass_g=st.floats(0.0, 400.0),
+    stock=st.lists(st.sampled_from([0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0]), min_size=1, max_size=5),
+)
+def test_a_stack_is_the_nearest_sum_of_stock_weights(mass_g: float, stock: list[float]) -> None:
+    """Against brute force over every count of each size up to what the mass needs: no
+    sum of stock weights is nearer (1e-9 g: the sums are in the weights' common unit)."""
+    import itertools
+
+    from stand.core.balance import stack
+
+    sizes = sorted(set(stock))
+    got = sum(stack(mass_g * 1e-3, [x * 1e-3 for x in sizes])) * 1e3
+    limits = [range(int(mass_g // x) + 2) for x in sizes]
+    if math.prod(len(r) for r in limits) > 20_000:
+        limits = [range(int(mass_g // x) + 2) if x >= 5 else range(0, 12) for x in sizes]
+    best = min(abs(sum(k * x for k, x in zip(ks, sizes, strict=True)) - mass_g)
+               for ks in itertools.product(*limits))  # fmt: skip
+    assert abs(got - mass_g) <= best + 1e-9

@@ -109,7 +109,9 @@ ATTRIBUTES = ["format", "format_version", "frames_committed", "config_toml", "co
 VALUES = st.one_of(
     st.integers(-(2**63), 2**63 - 1),
     st.floats(allow_nan=True),
-    st.text(max_size=30),
+    st.text(  # what an HDF5 attribute can hold: no surrogates, no NUL
+        st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=30
+    ),
     st.booleans(),
     st.lists(st.integers(-5, 5), max_size=4),
 )

@@ -65,11 +65,17 @@ def print_measurement(out: dict[str, Any]) -> None:
         print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
 
 
+def _pieces(w: dict[str, Any]) -> str:
+    """`` (20 + 20 + 5 g)`` when a weight is stacked from stock weights."""
+    p = w.get("pieces_g") or []
+    return f" ({' + '.join(f'{x:g}' for x in p)} g)" if len(p) > 1 else ""
+
+
 def weights_text(c: dict[str, Any]) -> str:
     """``55.54 g at 30.0 deg (position 2) + ...`` for one plane's correction."""
     return (
         " + ".join(
-            f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg"
+            f"{w['mass_g']:.2f} g{_pieces(w)} at {w['angle_deg']:.1f} deg"
             + ("" if w["position"] is None else f" (position {w['position']})")
             for w in c["weights"]
         )
@@ -88,9 +94,18 @@ def print_corrections(out: dict[str, Any]) -> None:
                 "interval (its angle is undefined)"
             )
             continue
+        if c.get("within_tolerance"):
+            print(f"  plane {c['plane']}: within tolerance: no correction needed")
+            continue
         left = (
             f"; rounding leaves {c['residual_g_mm']:.1f} g mm" if c["residual_g_mm"] > 0.05 else ""
         )
+        if left and c.get("residual_within_tolerance") is not None:
+            left += (
+                " (within tolerance)"
+                if c["residual_within_tolerance"]
+                else " (OVER the tolerance: finer weights are needed)"
+            )
         radius = c["weights"][0]["radius_mm"] if c["weights"] else 0
         print(
             f"  plane {c['plane']}: {c['action']} {weights_text(c)} at radius {radius:g} mm{left}"

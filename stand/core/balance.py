@@ -80,11 +80,70 @@ def plane_tolerances(p: StandParameters, U_per_kg_m: float) -> tuple[float, floa
 
 @dataclass(frozen=True)
 class Weight:
-    """One weight (or one removal): mass [kg] at an angle [deg, the seed's sense]."""
+    """One weight (or one removal): mass [kg] at an angle [deg, the seed's sense].
+
+    ``position`` is the index of the hole or blade (0 for the first; shown as
+    1..N); ``pieces_kg`` the stock weights stacked to make ``mass_kg`` (empty for a
+    continuous mass).
+    """
 
     mass_kg: float
     angle_deg: float
     position: int | None = None
+    pieces_kg: tuple[float, ...] = ()
+
+
+STACK_CELLS = 200_000
+"""Beyond this many steps of the weights' common unit the stack is chosen greedily."""
+
+
+def stack(mass_kg: float, steps_kg: ArrayLike) -> tuple[float, ...]:
+    """Stock weights (each size any number of times) whose sum is nearest ``mass_kg``,
+    with the fewest pieces among the nearest; largest first.
+
+    An unbounded change-making by dynamic programming on the weights' common unit
+    (their greatest common divisor, to the microgram); greedy beyond
+    :data:`STACK_CELLS` units.
+
+    >>> [round(w * 1e3) for w in stack(0.046, [1e-3, 2e-3, 5e-3, 10e-3, 20e-3])]
+    [20, 20, 5, 1]
+    """
+    steps = sorted({float(x) for x in np.asarray(steps_kg, dtype=float).ravel() if x > 0})
+    if not steps or mass_kg <= 0:
+        return ()
+    ug = [max(1, round(x * 1e9)) for x in steps]
+    unit = ug[0]
+    for u in ug[1:]:
+        unit = math.gcd(unit, u)
+    sizes = [u // unit for u in ug]
+    target = mass_kg * 1e9 / unit
+    top = math.ceil(target) + max(sizes)
+    if top > STACK_CELLS:  # greedy: largest first, then the nearest last piece
+        pieces, left = [], mass_kg
+        for x in reversed(steps):
+            while left >= x:
+                pieces.append(x)
+                left -= x
+        if left > steps[0] / 2:
+            pieces.append(steps[0])
+        return tuple(pieces)
+    count = [0] + [-1] * top  # fewest pieces to make each sum, -1: cannot
+    last = [0] * (top + 1)
+    for v in range(1, top + 1):
+        for k, size in enumerate(sizes):
+            if (
+                size <= v
+                and count[v - size] >= 0
+                and (count[v] < 0 or count[v - size] + 1 < count[v])
+            ):
+                count[v], last[v] = count[v - size] + 1, k
+    made = [v for v in range(top + 1) if count[v] >= 0]
+    best = min(made, key=lambda v: (abs(v - target), count[v]))
+    pieces = []
+    while best > 0:
+        pieces.append(steps[last[best]])
+        best -= sizes[last[best]]
+    return tuple(sorted(pieces, reverse=True))
 
 
 @dataclass(frozen=True)
@@ -135,8 +194,9 @@ def correction(
     position0_deg
         Angle of position 0 (same sense and zero as ``phi``) [deg].
     steps_kg
-        Available weights [kg]: each weight is rounded to the nearest; empty
-        for continuous masses.
+        Available stock weights [kg]: each correction mass is made of as
+        many of them as come nearest (:func:`stack`); empty for continuous
+        masses.
     step_kg
         Or: weights come in multiples of this [kg] (0: continuous).
     """
@@ -169,16 +229,9 @@ def correction(
             if m > 1e-15 * max(q, 1e-300):
                 weights.append(Weight(m, _wrap(position0_deg + j * pitch), j))
     steps = np.sort(np.asarray(steps_kg, dtype=float))
-    if steps.size:
-        rounded = []
-        for w in weights:
-            choice = np.concatenate(([0.0], steps))
-            rounded.append(
-                Weight(
-                    float(choice[np.argmin(np.abs(choice - w.mass_kg))]), w.angle_deg, w.position
-                )
-            )
-        weights = [w for w in rounded if w.mass_kg > 0]
+    if steps.size:  # stock weights, stacked in one hole as needed
+        stacked = [(stack(w.mass_kg, steps), w) for w in weights]
+        weights = [Weight(sum(p), w.angle_deg, w.position, p) for p, w in stacked if p]
     elif step_kg > 0:
         weights = [
             Weight(round(w.mass_kg / step_kg) * step_kg, w.angle_deg, w.position) for w in weights
