@@ -19,7 +19,7 @@ import json
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from types import FrameType
 from typing import Any
@@ -336,26 +336,45 @@ class LiveSource:
     scene_bus: dict[str, Any] | None = None
 
 
-def live_source(scene: str | None, config: str | None, command: str) -> LiveSource:
-    """A simulated scene (played in real time on a private virtual bus), or a config's bus."""
+def live_source(
+    scene: str | None,
+    config: str | None,
+    command: str,
+    masses: Sequence[Any] = (),
+    rpm: float | None = None,
+) -> LiveSource:
+    """A simulated scene (played in real time on a private virtual bus), or a config's bus.
+
+    With a scene, ``--config`` is what the software believes (calibration,
+    correction, tolerance) and the scene is the physical stand and rotor: both
+    are honoured.  ``masses`` (:class:`stand.sim.Mass`) and ``rpm`` change the
+    simulated rotor and its speed.
+    """
     import os
 
     from stand.pipeline import load_config_text
 
     if scene:
         from stand.config import config_toml
-        from stand.sim import load_scene, simulate
+        from stand.sim import load_scene, simulate, with_masses
 
-        sc, params, _ = load_scene(scene)
-        cfg = sc.config()
+        sc, physical, _ = load_scene(scene)
+        sc = with_masses(sc, masses, rpm)
+        if config:
+            cfg, params, text = load_config_text(config)
+        else:
+            cfg, params = sc.config(), physical
+            text = config_toml(cfg)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
         return LiveSource(
             cfg,
             params,
-            config_toml(cfg),
-            scene_frames=simulate(sc, params).frames,
+            text,
+            scene_frames=simulate(sc, physical).frames,
             scene_bus={"interface": "virtual", "channel": channel},
         )
+    if masses or rpm is not None:
+        raise UsageError(f"stand {command}: --add, --apply and --rpm change a --scene's rotor")
     if not config:
         raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params, text = load_config_text(config)

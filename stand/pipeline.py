@@ -358,6 +358,21 @@ def measure_recording(
     return m, cfg, params
 
 
+def correction_masses(run: str, config: str | None = None) -> list[tuple[int, float, float, float]]:
+    """The masses an operator puts on (grams > 0) or takes off (< 0) to apply the correction
+    that ``run``'s result prescribes, with its config's mode, positions and weights:
+    ``(plane, grams, angle_deg, radius_m)`` each, the angle from the reference mark
+    against the direction of rotation.
+    """
+    result = solve_recording(run, config)
+    sign = -1.0 if result.correction_mode == "remove" else 1.0
+    return [
+        (i + 1, sign * w.mass_kg * 1e3, w.angle_deg, result.measurement.radius_m[i])
+        for i, corr in enumerate(result.corrections)
+        for w in corr.weights
+    ]
+
+
 @contextmanager
 def _naming(path: str) -> Iterator[None]:
     """Measuring errors of a recorded run name its file (its node and figure they name)."""

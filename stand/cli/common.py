@@ -49,6 +49,60 @@ def parse_rpm(text: str) -> float:
     return rpm
 
 
+def parse_mass(text: str) -> tuple[int, float, float, float | None]:
+    """``PLANE:GRAMS@DEG[:RADIUS_MM]``: a mass on (grams > 0) or off (< 0) the simulated
+    rotor, at an angle from the reference mark against the direction of rotation."""
+    try:
+        plane_text, rest = text.split(":", 1)
+        mass_text, angle_text = rest.split("@", 1)
+        angle_text, _, radius_text = angle_text.partition(":")
+        plane, grams, deg = int(plane_text), float(mass_text), float(angle_text)
+        radius = float(radius_text) if radius_text else None
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected PLANE:GRAMS@DEG[:RADIUS_MM] (e.g. 1:20@90), got {text!r}"
+        ) from None
+    if plane not in (1, 2) or not all(map(math.isfinite, (grams, deg))):
+        raise argparse.ArgumentTypeError(f"expected plane 1 or 2 and finite numbers, got {text!r}")
+    if radius is not None and not (math.isfinite(radius) and radius > 0):
+        raise argparse.ArgumentTypeError(f"expected a radius > 0 mm, got {text!r}")
+    return plane, grams, deg, radius
+
+
+def add_scene_arguments(p: argparse.ArgumentParser) -> None:
+    """``--add``, ``--apply`` and ``--rpm``: change a simulated scene's rotor and speed."""
+    g = p.add_argument_group("the simulated rotor (with a scene)")
+    g.add_argument(
+        "--add",
+        action="append",
+        default=[],
+        type=parse_mass,
+        metavar="PLANE:GRAMS@DEG[:RADIUS_MM]",
+        help="put a mass on the rotor (negative grams: take material off), at an angle from "
+        "the reference mark against the direction of rotation; the plane's correction radius "
+        "unless given (repeatable)",
+    )
+    g.add_argument(
+        "--apply",
+        metavar="RUN",
+        help="apply the correction RUN's result prescribes, as an operator would (its "
+        "config's mode, positions and weights)",
+    )
+    g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]")
+
+
+def scene_masses(args: argparse.Namespace) -> list[Any]:
+    """The masses ``--add`` and ``--apply`` put on the simulated rotor."""
+    from stand.sim import Mass
+
+    masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
+    if getattr(args, "apply", None):
+        from stand.pipeline import correction_masses
+
+        masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(args.apply)]
+    return masses
+
+
 def parse_unbalance(text: str) -> tuple[float, float]:
     """``G_MM@DEG``: unbalance ``q R`` [g mm] >= 0 at an angle [deg] from the reference mark,
     against the direction of rotation (the model's ``phi``)."""
@@ -233,7 +287,13 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
         help="measure the simulated stand: a shipped scene or a scene file, "
         "played in real time on a private virtual bus",
     )
-    p.add_argument("--config", metavar="CFG", help="stand configuration with its [bus] table")
+    p.add_argument(
+        "--config",
+        metavar="CFG",
+        help="stand configuration with its [bus] table; with --scene, what the software "
+        "believes (calibration, correction, tolerance) about the simulated stand",
+    )
+    add_scene_arguments(p)
     tgt = p.add_mutually_exclusive_group()
     tgt.add_argument(
         "--target-pct",
@@ -302,7 +362,9 @@ def measure_live_from_args(
     from stand.live import live_source, measure_live
 
     check_live_arguments(args, command)
-    source = live_source(args.scene, args.config, command)
+    source = live_source(
+        args.scene, args.config, command, scene_masses(args), getattr(args, "rpm", None)
+    )
     kwargs = source.scene_bus
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from stand import __version__
-from stand.cli.common import add_bus_arguments, bus_kwargs
+from stand.cli.common import add_bus_arguments, add_scene_arguments, bus_kwargs, scene_masses
 from stand.errors import UsageError
 
 
@@ -26,6 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--seed", type=int, help="random seed (overrides [run] seed)")
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
+    add_scene_arguments(p)
     add_bus_arguments(p)
 
 
@@ -33,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     from stand.config import config_toml
     from stand.drivers.recording import Recording, write_recording
     from stand.drivers.streams import rebuild
-    from stand.sim import load_scene, shipped_scenes, simulate
+    from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
     if not args.out and not args.bus:
         raise UsageError("stand simulate: give --out FILE, --bus, or both")
@@ -42,6 +43,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_output(args.out, force=args.force)  # before the work, and again when written
     scene, params, source = load_scene(args.scene)
+    scene = with_masses(scene, scene_masses(args), args.rpm)
     if args.seed is not None:
         scene = scene.model_copy(update={"run": scene.run.model_copy(update={"seed": args.seed})})
     label = args.scene if args.scene in shipped_scenes() else source

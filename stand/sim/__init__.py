@@ -7,6 +7,6 @@ the core and the CLI: it may import the core, the config and the drivers.
 """
 
 from stand.sim.emit import Simulation, simulate
-from stand.sim.scene import Scene, load_scene, shipped_scenes
+from stand.sim.scene import Mass, Scene, load_scene, shipped_scenes, with_masses
 
-__all__ = ["Scene", "Simulation", "load_scene", "shipped_scenes", "simulate"]
+__all__ = ["Mass", "Scene", "Simulation", "load_scene", "shipped_scenes", "simulate", "with_masses"]

@@ -16,6 +16,10 @@ table refuses unknown keys.
 
 from __future__ import annotations
 
+import cmath
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -322,3 +326,47 @@ def describe(scene: Scene) -> dict[str, Any]:
         "effects": scene.effects.named(),
         "physics": "integrate" if scene.needs_integration else "closed_form",
     }
+
+
+@dataclass(frozen=True)
+class Mass:
+    """A mass put on (grams > 0) or taken off (< 0) the simulated rotor.
+
+    ``angle_deg`` in the sense and from the zero of the reported angles (from the
+    reference mark, against the direction of rotation); ``radius_m`` None: the
+    plane's correction radius.
+    """
+
+    plane: int
+    grams: float
+    angle_deg: float
+    radius_m: float | None = None
+
+
+def with_masses(scene: Scene, masses: Sequence[Mass] = (), rpm: float | None = None) -> Scene:
+    """The scene's rotor with masses added or removed, optionally at another speed.
+
+    A mass ``m`` at radius ``r`` and angle ``a`` adds ``m r e^{-i a}`` to its
+    plane's unbalance ``U = q R e^{-i phi}``: a mass put where the software says
+    the unbalance is makes it larger, material taken off there makes it smaller.
+    """
+    U = [
+        scene.unbalance.plane1.g_mm
+        * cmath.exp(-1j * math.radians(scene.unbalance.plane1.angle_deg)),
+        scene.unbalance.plane2.g_mm
+        * cmath.exp(-1j * math.radians(scene.unbalance.plane2.angle_deg)),
+    ]  # g mm
+    radius_mm = (scene.rotor.R1 * 1e3, scene.rotor.R2 * 1e3)
+    for m in masses:
+        if m.plane not in (1, 2):
+            raise ConfigError(f"plane {m.plane}: a rotor has planes 1 and 2", key="add")
+        r = radius_mm[m.plane - 1] if m.radius_m is None else m.radius_m * 1e3
+        U[m.plane - 1] += m.grams * r * cmath.exp(-1j * math.radians(m.angle_deg))
+    planes = {
+        f"plane{i + 1}": PlaneUnbalance(
+            g_mm=abs(u), angle_deg=float(-math.degrees(cmath.phase(u)) % 360.0)
+        )
+        for i, u in enumerate(U)
+    }
+    run = scene.run if rpm is None else scene.run.model_copy(update={"rpm": rpm})
+    return scene.model_copy(update={"unbalance": UnbalanceTable(**planes), "run": run})

@@ -1,0 +1,64 @@
+"""The operator's loop on the simulated stand, as README walks it: balance, apply the
+correction, check; the scene is the physical rotor, the config what the software
+believes (here: add weights in 8 holes, stock weights of 1, 2, 5, 10 and 20 g)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from stand.cli import main
+from stand.sim import Mass, load_scene, with_masses
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _add8(tmp_path: Path) -> Path:
+    text = (ROOT / "examples" / "demo-stand.toml").read_text()
+    text = text.replace('mode = "remove"', 'mode = "add"')
+    text = text.replace("positions = 0", "positions = 8\nweights_g = [1, 2, 5, 10, 20]")
+    path = tmp_path / "add8.toml"
+    path.write_text(text)
+    return path
+
+
+def test_masses_on_the_simulated_rotor_add_as_the_reported_angles_say() -> None:
+    """Taking off q R at the reported angle phi cancels the plane; adding it there doubles it."""
+    sc, _, _ = load_scene("demo")
+    u1 = sc.unbalance.plane1
+    gone = with_masses(sc, [Mass(1, -u1.g_mm / 90.0, u1.angle_deg)])
+    assert gone.unbalance.plane1.g_mm == pytest.approx(0.0, abs=1e-9)
+    twice = with_masses(sc, [Mass(1, u1.g_mm / 45.0, u1.angle_deg, 0.045)], rpm=1200.0)
+    assert twice.unbalance.plane1.g_mm == pytest.approx(2 * u1.g_mm)
+    assert twice.unbalance.plane1.angle_deg == pytest.approx(u1.angle_deg)
+    assert twice.unbalance.plane2.g_mm == pytest.approx(sc.unbalance.plane2.g_mm)
+    assert twice.unbalance.plane2.angle_deg == pytest.approx(sc.unbalance.plane2.angle_deg)
+    assert twice.run.rpm == 1200.0
+
+
+@pytest.mark.realtime
+def test_balance_apply_check_closes_the_loop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cfg = str(_add8(tmp_path))
+    first, second = str(tmp_path / "r1.h5"), str(tmp_path / "r2.h5")
+    assert main(["balance", "--scene", "demo", "--config", cfg, "--out", first, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["correction_mode"] == "add"  # the config is honoured with a scene
+    holes = [w["position"] for c in out["corrections"] for w in c["weights"]]
+    assert holes and all(1 <= h <= 8 for h in holes)
+    assert all(
+        set(w["pieces_g"]) <= {1, 2, 5, 10, 20} for c in out["corrections"] for w in c["weights"]
+    )
+    argv = ["balance", "--scene", "demo", "--config", cfg, "--apply", first, "--check", first]
+    assert main([*argv, "--out", second, "--json"]) == 0
+    after = json.loads(capsys.readouterr().out)
+    urr = [p["urr"] for p in after["check"]["planes"]]
+    assert min(urr) >= 0.95, urr
+    assert all(p["pass"] for p in after["tolerance"]["planes"])
+    left = [c["residual_g_mm"] for c in out["corrections"]]
+    for p, leftover in zip(after["planes"], left, strict=True):  # what rounding left, measured
+        assert abs(p["unbalance_g_mm"] - leftover) <= p["uncertainty_g_mm"] + 1.0
+    assert all(not c["needed"] for c in after["corrections"])
