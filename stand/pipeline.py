@@ -34,7 +34,7 @@ from stand.core.balance import (
     static_couple,
 )
 from stand.drivers.recording import config_digest
-from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError
+from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError, UsageError
 from stand.measure import Measurement, measure
 from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
 
@@ -289,14 +289,72 @@ def solve_recording(
     )  # fmt: skip
 
 
-def check_against(previous: str, cfg: Any, params: StandParameters, after: Measurement) -> Check:
-    """The run before the correction, measured with the same stand (this config)."""
+CHECK_SPEED = 0.05
+"""A check run within 5 % of the speed of the run before the correction (the unbalance
+is the same at any speed, but the stand's response, and its errors, are not)."""
+
+
+def check_against(
+    previous: str, cfg: Any, params: StandParameters, after: Measurement, *, strict: bool = True
+) -> Check:
+    """The run before the correction, measured with the same stand (this config).
+
+    ``strict``: refuse a previous run of another rotor or stand (its stored
+    config) or of another speed (beyond :data:`CHECK_SPEED`): its URR would
+    compare two different things.
+
+    Raises
+    ------
+    UsageError
+        The previous run is of another rotor, stand or speed (and ``strict``).
+    """
     from stand.drivers.recording import read_streams
 
-    _, streams = read_streams(previous)
-    before = measure_streams(streams, cfg, params, SolveOptions())
+    with _naming(previous):
+        rec, streams = read_streams(previous)
+    if strict and rec.meta.get("config_toml"):
+        _same_rotor_and_stand(previous, stored_config(rec.meta, previous)[0], cfg)
+    with _naming(previous):
+        before = measure_streams(streams, cfg, params, SolveOptions())
+    if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > CHECK_SPEED:
+        raise UsageError(
+            f"--check {previous}: that run turned at {before.omega_rad_s * 30 / math.pi:.0f} rpm, "
+            f"this one at {after.omega_rad_s * 30 / math.pi:.0f} rpm: check at the same speed "
+            "(or say --check-any)"
+        )
     b, a = before.solution.U_kg_m, after.solution.U_kg_m
     return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
+
+
+def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
+    """Refuse a previous run whose stored rotor or stand differs from this config's."""
+    for table in ("rotor", "stand"):
+        a, b = getattr(theirs, table).model_dump(), getattr(ours, table).model_dump()
+        keys = [k for k in b if k in ("M1", "M2", "C1", "C2", "H1", "H2") or table == "rotor"]
+        diff = [k for k in keys if not math.isclose(a.get(k, 0.0), b[k], rel_tol=1e-9)]
+        if diff:
+            k = diff[0]
+            raise UsageError(
+                f"--check {previous}: that run is of another {table} ({k} = {a.get(k):g} there, "
+                f"{b[k]:g} here): its unbalance is not this rotor's before the correction "
+                "(or say --check-any)"
+            )
+
+
+def check_notes(check: Check) -> list[Diagnostic]:
+    """What a check says beyond its numbers: a correction that made a plane worse."""
+    return [
+        Diagnostic(
+            "correction_made_worse",
+            f"plane {i + 1}: the unbalance grew after the correction (URR {100 * u:.0f} %): "
+            "was it added where material should have come off (or the other way round), at "
+            "the mirrored angle (the angle counts against the direction of rotation), or in "
+            "the other plane?",
+            float(u),
+        )
+        for i, u in enumerate(check.urr)
+        if u is not None and u < 0
+    ]
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:

@@ -62,3 +62,26 @@ def test_balance_apply_check_closes_the_loop(
     for p, leftover in zip(after["planes"], left, strict=True):  # what rounding left, measured
         assert abs(p["unbalance_g_mm"] - leftover) <= p["uncertainty_g_mm"] + 1.0
     assert all(not c["needed"] for c in after["corrections"])
+
+
+@pytest.mark.realtime
+def test_a_check_refuses_another_rotor_or_speed_and_says_when_it_got_worse(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`--check` took any earlier run (another rotor: "URR -370 %" without comment)."""
+    other_rotor, other_speed, before = (str(tmp_path / n) for n in ("h.h5", "f.h5", "b.h5"))
+    assert main(["simulate", "heavy", "--out", other_rotor]) == 0
+    assert main(["simulate", "demo", "--rpm", "800", "--out", other_speed]) == 0
+    assert main(["simulate", "demo", "--out", before]) == 0
+    capsys.readouterr()
+    for previous, says in ((other_rotor, "another rotor"), (other_speed, "turned at 800 rpm")):
+        assert main(["balance", "--scene", "demo", "--check", previous, "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert says in err and "--check-any" in err, err
+    # a mass put where the unbalance already is: the "correction" made plane 1 worse
+    argv = ["balance", "--scene", "demo", "--add", "1:10@30", "--check", before, "--json"]
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "worse.h5")]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["check"]["planes"][0]["urr"] < 0
+    worse = [w for w in out["warnings"] if "grew after the correction" in w]
+    assert len(worse) == 1 and worse[0].startswith("plane 1:"), out["warnings"]

@@ -24,6 +24,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="REPORT.html",
         help="where to write the report (default: beside the run file)",
     )
+    p.add_argument(
+        "--check-any",
+        action="store_true",
+        help="--check against a run of another rotor, stand or speed anyway",
+    )
     p.add_argument("--force", action="store_true", help="replace --report if it exists")
     p.add_argument(
         "--check",
@@ -36,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from stand.cli.common import measure_live_from_args, solve_options, targets_from
     from stand.cli.format import show
-    from stand.pipeline import check_against
+    from stand.pipeline import check_against, check_notes
     from stand.result import to_json
 
     if args.report:  # refuse a report path that cannot be written before measuring
@@ -52,7 +57,10 @@ def run(args: argparse.Namespace) -> int:
         solve_options(args, traces=True),
     )
     if args.check:
-        result = replace(result, check=check_against(args.check, cfg, params, result.measurement))
+        check = check_against(
+            args.check, cfg, params, result.measurement, strict=not args.check_any
+        )
+        result = replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)
     out["report"] = report
