@@ -224,6 +224,13 @@ class BusReader(FrameSource):
                     f"no frames at all for {self.silence_timeout_s:g} s: is the bus "
                     "connected, the bitrate right, are the nodes powered?"
                 )
+                if self.channel_info.startswith("virtual"):
+                    what = (
+                        f"no frames at all for {self.silence_timeout_s:g} s: python-can's "
+                        "virtual interface joins buses inside one process only; from another "
+                        "process (stand simulate --bus) use udp_multicast, e.g. "
+                        "-i udp_multicast -c 239.74.163.2"
+                    )
             else:
                 what = (
                     f"no more frames for {self.silence_timeout_s:g} s "

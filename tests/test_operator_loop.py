@@ -85,3 +85,40 @@ def test_a_check_refuses_another_rotor_or_speed_and_says_when_it_got_worse(
     assert out["check"]["planes"][0]["urr"] < 0
     worse = [w for w in out["warnings"] if "grew after the correction" in w]
     assert len(worse) == 1 and worse[0].startswith("plane 1:"), out["warnings"]
+
+
+@pytest.mark.realtime
+def test_the_simulated_stand_in_another_process_over_udp_multicast(tmp_path: Path) -> None:
+    """`stand simulate demo --bus` in one process, `stand balance --config` in another, over
+    python-can's udp_multicast on this host (a group of our own, so parallel runs do not meet)."""
+    import random
+    import subprocess
+    import sys
+
+    group = f"239.74.{random.randrange(1, 255)}.{random.randrange(1, 255)}"
+    bus = ["-i", "udp_multicast", "-c", group]
+    cfg = str(ROOT / "examples" / "demo-stand.toml")
+    out = tmp_path / "r.h5"
+    balance = subprocess.Popen(
+        [sys.executable, "-m", "stand.cli", "balance", "--config", cfg, *bus, "--out", str(out),
+         "--json", "--quiet", "--max-seconds", "20", "--report", str(tmp_path / "r.html")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        import time
+
+        time.sleep(2.0)  # let the balance process join the group first
+        sim = subprocess.run(
+            [sys.executable, "-m", "stand.cli", "simulate", "demo", "--bus", *bus],
+            capture_output=True, text=True, timeout=60, check=False,
+        )  # fmt: skip
+        assert sim.returncode == 0, sim.stderr
+        stdout, stderr = balance.communicate(timeout=60)
+    finally:
+        if balance.poll() is None:
+            balance.kill()
+    assert balance.returncode == 0, stderr
+    res = json.loads(stdout)
+    for p, truth in zip(res["planes"], (5000.0, 3000.0), strict=True):
+        # twice the 95 % radius: a 95 % circle misses 1 run in 20, twice it 1 in 10^4 or less
+        assert abs(p["unbalance_g_mm"] - truth) <= 2 * p["uncertainty_g_mm"]

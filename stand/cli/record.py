@@ -107,8 +107,16 @@ def run(args: argparse.Namespace) -> int:
         print_recording(
             Recording(args.out, Frames.empty(), meta, w.warnings), streams, as_json=args.json
         )
-    if session.failure is not None:
+    failure = session.failure
+    if isinstance(failure, BusTimeoutError) and frames:  # the sender stopped: a normal end
+        if not args.quiet:
+            print(
+                f"the frames stopped (none for {failure.timeout_s:g} s): the recording ends",
+                file=sys.stderr,
+            )
+        return 0
+    if failure is not None:
         if frames == 0:
             session.writer.discard()
-        raise _reraise_with_path(session.failure, args.out, frames)
+        raise _reraise_with_path(failure, args.out, frames)
     return 0
