@@ -208,3 +208,13 @@ def test_calibrate_rotor_finds_mass_inertia_and_centre_of_mass(
         assert abs(v[name] - truth) <= 4 * se[name], (name, v[name], se[name])
     new = tomllib.loads((tmp_path / "new.toml").read_text())
     assert new["rotor"]["b"] == pytest.approx(0.60, abs=0.005)
+
+
+def test_calibrate_reports_the_reference_angle_in_degrees_as_the_config_takes_it() -> None:
+    """It printed `reference_angle_error_rad` while `[stand] reference_angle_deg` is degrees."""
+    from stand.cli.calibrate import _estimate_line
+
+    assert _estimate_line("reference_angle_error_rad", math.radians(2.5), math.radians(0.1)) == (
+        "#   reference_angle_error_deg = 2.5 +- 0.1"
+    )
+    assert _estimate_line("C1", 45000.0, 120.0) == "#   C1 = 45000 +- 1.2e+02"

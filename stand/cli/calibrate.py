@@ -174,6 +174,13 @@ def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> 
     return 0
 
 
+def _estimate_line(name: str, value: float, error: float) -> str:
+    """``#   C1 = 45000 +- 120``; an angle in degrees, as the config takes it."""
+    if name.endswith("_rad"):
+        name, value, error = name[:-4] + "_deg", math.degrees(value), math.degrees(error)
+    return f"#   {name} = {value:.6g} +- {error:.2g}"
+
+
 def _write(
     args: argparse.Namespace, title: str, res: Any, names: list[str], whose: str, cfg: Any
 ) -> list[str]:
@@ -187,7 +194,7 @@ def _write(
         f"# {title};",
         f"# rms misfit of the phasors {res.residual_rms_m_s2:.3g} m/s^2; standard errors:",
     ]
-    header += [f"#   {name} = {v[name]:.6g} +- {se[name]:.2g}" for name in names]
+    header += [_estimate_line(name, v[name], se[name]) for name in names]
     U = res.residual_unbalance_kg_m
     header.append(
         f"# {whose} own unbalance: "
