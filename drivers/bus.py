@@ -33,8 +33,11 @@ SOCKETCAN_ERR_BUSOFF = 0x40
 
 
 def describe_bus(kwargs: dict[str, Any]) -> str:
-    """``interface:channel`` for messages, e.g. ``"socketcan:can0"``."""
-    return f"{kwargs.get('interface', '?')}:{kwargs.get('channel', '?')}"
+    """``interface:channel`` for messages, e.g. ``"socketcan:can0"`` (what python-can's own
+    environment or config file names, where the options do not)."""
+    fallback = {} if "interface" in kwargs else _python_can_config()
+    merged = {**fallback, **kwargs}
+    return f"{merged.get('interface', '?')}:{merged.get('channel', '?')}"
 
 
 URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
@@ -42,6 +45,28 @@ URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
 hand it to pyserial, whose URL handlers open files and sockets."""
 ALLOW_URL = "allow_url_channel"
 """The key by which the command line (``--allow-url-channel``), never a file, allows one."""
+
+
+def _python_can_config() -> dict[str, Any]:
+    """What python-can's own environment (``CAN_INTERFACE``, ``CAN_CHANNEL`` ...) or config
+    file (``~/.canrc``, ``can.ini``) says, the environment first: ``can.Bus`` falls back to
+    them when no interface is given."""
+    import can.util
+
+    for read in (can.util.load_environment_config, can.util.load_file_config):
+        try:
+            found = dict(read())
+        except Exception:  # a malformed file: can.Bus will say what is wrong with it
+            found = {}
+        if found.get("interface"):
+            return found
+    return {}
+
+
+def _configured_interface() -> str | None:
+    """The interface python-can's own environment or config file names, if any."""
+    found = _python_can_config().get("interface")
+    return None if found is None else str(found)
 
 
 def open_bus(kwargs: dict[str, Any]) -> Any:
@@ -66,9 +91,10 @@ def open_bus(kwargs: dict[str, Any]) -> Any:
             "such names; refused unless the command line says --allow-url-channel",
             channel=where,
         )
-    if "interface" not in kwargs:
+    if "interface" not in kwargs and not _configured_interface():
         raise BusError(
-            "no CAN interface given: set [bus] interface in the config or --interface",
+            "no CAN interface given: set [bus] interface in the config, --interface, or "
+            "python-can's own config file (~/.canrc) or CAN_INTERFACE",
             channel=where,
         )
     try:

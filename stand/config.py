@@ -135,7 +135,8 @@ class Config(BaseModel):
 
     stand: StandTable
     rotor: RotorTable
-    bus: dict[str, str | int | float | bool] | None = None
+    bus: dict[str, str | int | float | bool | list[Any]] | None = None
+    """Passed to ``can.Bus`` as given; lists for options such as ``can_filters``."""
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
     sensors: SensorsTable = SensorsTable()
@@ -233,15 +234,22 @@ def to_toml(tables: dict[str, dict[str, Any]]) -> str:
     for name, table in tables.items():
         lines.append(f"[{name}]")
         for key, value in table.items():
-            if isinstance(value, bool):
-                text = "true" if value else "false"
-            elif isinstance(value, str):
-                text = json.dumps(value)
-            else:
-                text = repr(value)
-            lines.append(f"{key} = {text}")
+            lines.append(f"{key} = {_toml_value(value)}")
         lines.append("")
     return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _toml_value(value: Any) -> str:
+    """One TOML value: a boolean, string, number, array or inline table."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+    return repr(value)
 
 
 def config_toml(cfg: Config) -> str:

@@ -195,7 +195,9 @@ def test_record_with_no_bus_or_no_frames_writes_nothing(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "run.h5"
-    assert main(["record", "-i", "nosuch", "--out", str(out)]) == 2
+    assert main(["record", "-i", "nosuch", "--out", str(out)]) == 2  # python-can's choices
+    assert "invalid choice: 'nosuch'" in capsys.readouterr().err and not out.exists()
+    assert main(["record", "-i", "kvaser", "-c", "0", "--out", str(out)]) == 2
     assert "cannot open the bus" in capsys.readouterr().err and not out.exists()
     assert (
         main(
@@ -217,3 +219,18 @@ def test_record_with_no_bus_or_no_frames_writes_nothing(
     assert "no frames at all" in capsys.readouterr().err and not out.exists()
     assert main(["record", "--out", str(out)]) == 2
     assert "no CAN interface given" in capsys.readouterr().err
+
+
+def test_python_can_s_environment_is_the_last_fallback_for_the_bus(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """No [bus], no -i: python-can's CAN_INTERFACE names the interface (it was ignored)."""
+    out = tmp_path / "run.h5"
+    assert main(["record", "--out", str(out), "--timeout", "0.3"]) == 2
+    assert "no CAN interface given" in capsys.readouterr().err
+    monkeypatch.setenv("CAN_INTERFACE", "virtual")
+    monkeypatch.setenv("CAN_CHANNEL", f"env-{uuid.uuid4().hex}")
+    assert main(["record", "--out", str(out), "--timeout", "0.3"]) == 2
+    err = capsys.readouterr().err
+    assert "virtual interface joins buses inside one process only" in err, err
+    assert not out.exists()

@@ -111,9 +111,8 @@ def test_bus_table_goes_through_as_given_and_cli_options_override_it(tmp_path: P
             "x.h5",
             "-b",
             "1000000",
-            "--bus-option",
-            "receive_own_messages=true",
-            "--bus-option",
+            "--bus-kwargs",  # python-can's own option, as python -m can.logger takes it
+            "receive_own_messages=True",
             "app_name=stand",
         ]
     )
@@ -163,3 +162,26 @@ def test_sensor_values_beyond_any_sensor_are_refused(tmp_path: Path, table: str,
     else:
         with pytest.raises(ConfigError, match=r"\[sensors\.(delay_s|gain)\.0\]"):
             load_config(write(tmp_path, text))
+
+
+def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path) -> None:
+    """--filter and --timing as python -m can.logger parses them; can_filters as a list in
+    [bus], stored back as TOML that reads the same."""
+    import tomllib
+
+    from stand.cli import build_parser
+    from stand.cli.common import bus_kwargs
+    from stand.config import config_toml
+
+    text = (
+        MINIMAL
+        + '\n[bus]\ninterface = "virtual"\ncan_filters = [{can_id = 0x101, can_mask = 0x7FF}]\n'
+    )
+    cfg, _ = load_config(write(tmp_path, text))
+    assert cfg.bus == {"interface": "virtual", "can_filters": [{"can_id": 257, "can_mask": 2047}]}
+    assert tomllib.loads(config_toml(cfg))["bus"] == cfg.bus
+    argv = ["record", "--out", "x.h5", "--filter", "100:7FC", "--timing", "f_clock=8000000",
+            "tseg1=5", "tseg2=2", "sjw=2", "brp=2", "nof_samples=1"]  # fmt: skip
+    kw = bus_kwargs(build_parser("record").parse_args(argv), cfg.bus)
+    assert kw["can_filters"] == [{"can_id": 0x100, "can_mask": 0x7FC}]
+    assert type(kw["timing"]).__name__ == "BitTiming" and kw["interface"] == "virtual"

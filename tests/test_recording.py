@@ -173,7 +173,7 @@ def test_writer_keeps_frames_while_the_file_is_locked_by_a_reader(tmp_path: Path
 
 KILL_SCRIPT = textwrap.dedent(
     """
-    import sys, threading, time
+    import os, sys, threading, time
     sys.path.insert(0, {tests!r})
     import can
     from synth import sine_run
@@ -184,7 +184,9 @@ KILL_SCRIPT = textwrap.dedent(
     tx = can.Bus(interface="virtual", channel="kill-test", receive_own_messages=False)
 
     def player():
-        time.sleep(0.5)  # let the recorder open its end of the virtual bus
+        while not os.path.exists({out!r}):  # the recorder has made its run file ...
+            time.sleep(0.01)
+        time.sleep(0.3)  # ... and opens its end of the virtual bus right after
         with open({stamp!r}, "w") as f:
             f.write(repr(time.time()))
         play(tx, frames)

@@ -128,27 +128,20 @@ def print_warnings(warnings: Iterable[Diagnostic]) -> None:
         print(f"warning: {w.message}", file=sys.stderr)
 
 
+BUS_KEYS = ("channel", "interface", "bitrate", "fd", "data_bitrate", "can_filters", "timing")
+"""python-can's bus options as its own tools parse them (``can.cli``)."""
+
+
 def add_bus_arguments(p: argparse.ArgumentParser) -> None:
-    """python-can's usual bus options; they override the config's ``[bus]`` table."""
-    g = p.add_argument_group("bus (override the config's [bus] table)")
-    g.add_argument(
-        "-i",
-        "--interface",
-        help="python-can interface: socketcan, pcan, kvaser, vector, slcan, virtual, ...",
+    """python-can's own bus options (``can.cli.add_bus_arguments``: ``-i -c -b --fd
+    --data-bitrate --timing --filter --bus-kwargs``, exactly as ``python -m can.logger``
+    takes them); they override the config's ``[bus]`` table."""
+    from can.cli import add_bus_arguments as python_can_bus_arguments
+
+    python_can_bus_arguments(
+        p, filter_arg=True, group_title="bus (python-can's options; they override [bus])"
     )
-    g.add_argument("-c", "--channel", help="channel, e.g. can0, PCAN_USBBUS1, 0")
-    g.add_argument("-b", "--bitrate", type=int, help="bit rate [bit/s]")
-    g.add_argument("--fd", action="store_true", default=None, help="CAN FD interface mode")
-    g.add_argument("--data-bitrate", type=int, help="CAN FD data-phase bit rate [bit/s]")
-    g.add_argument(
-        "--bus-option",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="any other can.Bus option (repeatable); VALUE is read as int, float, "
-        "true/false, else text",
-    )
-    g.add_argument(
+    p.add_argument(
         "--allow-url-channel",
         action="store_true",
         help="allow a URL as the channel (spy://, loop://, socket://, rfc2217://): serial "
@@ -156,19 +149,9 @@ def add_bus_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _option_value(text: str) -> str | int | float | bool:
-    if text.lower() in ("true", "false"):
-        return text.lower() == "true"
-    for kind in (int, float):
-        try:
-            return kind(text)
-        except ValueError:
-            pass
-    return text
-
-
 def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> dict[str, object]:
-    """The ``[bus]`` table with the command-line options applied (what goes to ``can.Bus``)."""
+    """The ``[bus]`` table with the command-line options applied (what goes to ``can.Bus``;
+    without an interface anywhere, python-can's own config file and environment)."""
     from stand.drivers.bus import ALLOW_URL
 
     kwargs = dict(table or {})
@@ -176,18 +159,15 @@ def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> 
         raise UsageError(
             f"[bus] {ALLOW_URL}: a file cannot allow URL channels; only --allow-url-channel can"
         )
-    for key in ("interface", "channel", "bitrate", "fd", "data_bitrate"):
-        value = getattr(args, key, None)
-        if value is not None:
-            kwargs[key] = value
-    for item in args.bus_option:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise UsageError(f"--bus-option: expected KEY=VALUE, got {item!r}")
-        if key.strip() == ALLOW_URL:
-            raise UsageError(f"--bus-option {ALLOW_URL}: say --allow-url-channel")
-        kwargs[key.strip()] = _option_value(value.strip())
-    if getattr(args, "allow_url_channel", False):
+    given = vars(args)
+    for key in BUS_KEYS:
+        if key in given and given[key] is not None:
+            kwargs[key] = given[key]
+    extra = dict(given.get("bus_kwargs") or {})
+    if ALLOW_URL in extra:
+        raise UsageError(f"--bus-kwargs {ALLOW_URL}: say --allow-url-channel")
+    kwargs.update(extra)
+    if given.get("allow_url_channel"):
         kwargs[ALLOW_URL] = True
     return kwargs
 

@@ -245,7 +245,7 @@ class Scene(BaseModel):
     description: str = ""
     stand: StandTable
     rotor: RotorTable
-    bus: dict[str, str | int | float | bool] | None = None
+    bus: dict[str, str | int | float | bool | list[Any]] | None = None
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
     run: RunTable
