@@ -257,6 +257,24 @@ def config_toml(cfg: Config) -> str:
     return to_toml({k: v for k, v in cfg.model_dump().items() if v is not None})
 
 
+def updated_toml(text: str, cfg: Config) -> str:
+    """The configuration text ``text`` with the values that ``cfg`` changed, its comments,
+    order and layout kept (tomlkit); a table ``text`` lacks is added at its end."""
+    import tomlkit
+
+    doc = tomlkit.parse(text)
+    for name, table in cfg.model_dump().items():
+        if table is None:
+            continue
+        if name not in doc:
+            doc[name] = tomlkit.table()
+        current = doc[name]
+        for key, value in table.items():
+            if key not in current or current[key] != value:
+                current[key] = value
+    return tomlkit.dumps(doc)
+
+
 def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
     """The text of a TOML file and its parsed content (:class:`ConfigError` if unreadable)."""
     path = Path(path)

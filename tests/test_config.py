@@ -185,3 +185,21 @@ def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path)
     kw = bus_kwargs(build_parser("record").parse_args(argv), cfg.bus)
     assert kw["can_filters"] == [{"can_id": 0x100, "can_mask": 0x7FC}]
     assert type(kw["timing"]).__name__ == "BitTiming" and kw["interface"] == "virtual"
+
+
+def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
+    """calibrate wrote the config anew and dropped every comment the user had put in it."""
+    from stand.config import config_from_dict, updated_toml
+
+    text = (ROOT / "examples" / "demo-stand.toml").read_text()
+    cfg, _ = load_config(write(tmp_path, text))
+    stand = cfg.stand.model_copy(update={"C1": 46123.5, "reference_angle_deg": 1.25})
+    sensors = cfg.sensors.model_copy(update={"gain": [1.02, 0.98]})
+    new = updated_toml(text, cfg.model_copy(update={"stand": stand, "sensors": sensors}))
+    comments = [line.split("#", 1)[1] for line in text.splitlines() if "#" in line]
+    assert all(c in new for c in comments)  # every comment, where it was
+    import tomllib
+
+    back, _ = config_from_dict(tomllib.loads(new), source="new")
+    assert back.stand.C1 == 46123.5 and back.stand.reference_angle_deg == 1.25
+    assert back.sensors.gain == [1.02, 0.98] and back.rotor == cfg.rotor

@@ -187,7 +187,7 @@ def _write(
     """The calibrated configuration, its fit and standard errors as comments on top."""
     import numpy as np
 
-    from stand.config import config_toml
+    from stand.config import read_toml, updated_toml
 
     v, se = res.values, res.std_errors
     header = [
@@ -204,9 +204,10 @@ def _write(
             for i in range(2)
         )
     )
+    original, _ = read_toml(args.config)  # the user's file: its comments are kept
     write_text_output(
         args.out,
-        "\n".join(header) + "\n" + config_toml(cfg),
+        "\n".join(header) + "\n" + updated_toml(original, cfg),
         force=args.force,
         inputs=[args.config, args.runs],
     )
