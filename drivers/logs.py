@@ -224,20 +224,22 @@ def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Fram
         Naming the file and the first line that is not a frame.
     """
     text = path.read_bytes()
-    rows = _CANDUMP.findall(text)
     lines = sum(1 for line in text.split(b"\n") if line.strip())
-    if b"\n" in text.strip() and not text.endswith(b"\n"):
-        head, last = text[: text.rfind(b"\n") + 1], text[text.rfind(b"\n") + 1 :]
+    cut = text.rfind(b"\n") + 1
+    last = text[cut:]
+    # a last line without its newline (after others): was it cut short?
+    if last.strip() and text[:cut].strip():
         match = _CANDUMP.match(last)
         data = b"" if match is None else match.group(5)
-        if match is None or (data[:1] not in (b"R", b"r") and len(data) % 2):  # cut short
-            text, rows = head, _CANDUMP.findall(head)
+        if match is None or (data[:1] not in (b"R", b"r") and len(data) % 2):
             if warn is not None:
                 where = f"{path}:{lines}"
                 warn.append(
                     Diagnostic("partial_line", f"{where}: the last line is cut short: left out")
                 )
-    if len(rows) != sum(1 for line in text.split(b"\n") if line.strip()):
+            text, lines = text[:cut], lines - 1
+    rows = _CANDUMP.findall(text)
+    if len(rows) != lines:
         raise _with_line(path, text)
     n = len(rows)
     if n == 0:
