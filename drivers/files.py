@@ -17,6 +17,8 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
+
 from stand.errors import DiskFullError, WriteError
 
 HEADROOM_BYTES = 1 << 18
@@ -92,6 +94,26 @@ def check_input(path: str | Path) -> Path:
     if not stat.S_ISREG(mode):
         raise RecordingError(f"is {_kind(mode)}: not read", path=str(p))
     return p
+
+
+def check_timestamps(t_s: np.ndarray, path: str | Path, first_frame: int = 0) -> None:
+    """Refuse frames whose host timestamps are not numbers (NaN, inf), naming the first.
+
+    ``first_frame``: the index of ``t_s[0]`` in the whole recording.
+
+    Raises
+    ------
+    RecordingError
+    """
+    from stand.errors import RecordingError
+
+    bad = np.flatnonzero(~np.isfinite(t_s))
+    if len(bad):
+        raise RecordingError(
+            f"frame {first_frame + int(bad[0])}: its timestamp is {t_s[bad[0]]}, not a number "
+            f"of seconds ({len(bad)} such frames from frame {first_frame} on)",
+            path=str(path),
+        )
 
 
 def _umask() -> int:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.files import check_input
+from stand.drivers.files import check_input, check_timestamps
 from stand.drivers.protocol import (
     FLAG_ERROR,
     FLAG_EXTENDED,
@@ -406,13 +406,7 @@ def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
     try:
         with can.LogReader(path) as reader:
             frames = frames_from_messages(reader)
-            bad = np.flatnonzero(~np.isfinite(frames.t_s))
-            if len(bad):
-                raise RecordingError(
-                    f"frame {int(bad[0])}: its timestamp is {frames.t_s[bad[0]]}, not a number "
-                    f"of seconds ({len(bad)} such frames)",
-                    path=str(path),
-                )
+            check_timestamps(frames.t_s, path)
             size = getattr(reader, "file_size", None)  # BLF: the header says how long it is
             if isinstance(size, int) and size > path.stat().st_size and not len(frames):
                 raise RecordingError(

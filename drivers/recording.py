@@ -46,6 +46,7 @@ from stand.core import Diagnostic
 from stand.drivers.files import (
     check_input,
     check_output,
+    check_timestamps,
     ensure_room,
     publish,
     temporary_beside,
@@ -499,13 +500,7 @@ def _read_run_blocks(
             step = max(n, 1) if rows is None else rows
             for lo in range(0, n, step):
                 block = _frame_rows(f, lo, min(lo + step, n))
-                bad = np.flatnonzero(~np.isfinite(block.t_s))
-                if len(bad):
-                    raise RecordingError(
-                        f"frame {lo + int(bad[0])}: its timestamp is {block.t_s[bad[0]]}, not a "
-                        f"number of seconds ({len(bad)} such frames in this block)",
-                        path=str(p),
-                    )
+                check_timestamps(block.t_s, p, lo)
                 take(block)
     except RecordingError:
         raise
