@@ -39,10 +39,15 @@ def _kind(mode: int) -> str:
 
 
 def check_output(
-    path: str | Path, *, force: bool = False, inputs: Iterable[str | Path] = ()
+    path: str | Path,
+    *,
+    force: bool = False,
+    inputs: Iterable[str | Path] = (),
+    exists: str = "exists already (use --force to replace it)",
 ) -> Path:
     """The output path, refused if it is an input, a special file or a symlink, exists
-    without ``force``, or has no directory to go in.
+    without ``force`` (saying ``exists``: a command without ``--force`` says otherwise),
+    or has no directory to go in.
 
     Raises
     ------
@@ -63,7 +68,7 @@ def check_output(
         if not stat.S_ISREG(mode):
             raise WriteError(f"is {_kind(mode)}: not replaced", path=str(p))
         if not force:
-            raise WriteError("exists already (use --force to replace it)", path=str(p))
+            raise WriteError(exists, path=str(p))
     if not p.parent.is_dir():
         raise WriteError(f"no such directory: {p.parent}", path=str(p))
     return p

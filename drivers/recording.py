@@ -152,9 +152,7 @@ class RunWriter:
         self._closed = False
         self._last_flush = self._last_success = time.monotonic()
         self._broken = False
-        if self.path.exists() and not self.path.is_symlink() and self.path.is_file() and not force:
-            raise WriteError("exists already: a run is never overwritten", path=str(self.path))
-        check_output(self.path, force=force)
+        check_output(self.path, force=force, exists="exists already: a run is never overwritten")
         ensure_room(self.path.parent, 0, self.path)
         h5py = _h5py()
         self.start_time = _utc_now()
