@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import functools
 import json
+import shutil
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from stand.cli import main
 from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.streams import rebuild
 from stand.errors import MeasurementError, SensorFaultError
@@ -29,6 +32,12 @@ TRUTH = np.array([5000e-6 * np.exp(-1j * np.radians(30)), 3000e-6 * np.exp(-1j *
 def _demo() -> tuple[Frames, object]:
     sc, p, _ = load_scene("demo")
     return simulate(sc, p).frames, p
+
+
+def _copy(run: Path, to: Path) -> Path:
+    """A copy of a run file to damage (the session's demo run stays as it is)."""
+    shutil.copy(run, to)
+    return to
 
 
 def _with(change: str) -> Frames:
@@ -135,14 +144,7 @@ def test_a_stored_config_altered_by_one_character_is_refused(
     demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """C1 45000 -> 95000 in the stored config: refused, naming the file (twin: untouched)."""
-    import shutil
-
-    import h5py
-
-    from stand.cli import main
-
-    run = tmp_path / "altered.h5"
-    shutil.copy(demo_run, run)
+    run = _copy(demo_run, tmp_path / "altered.h5")
     with h5py.File(run, "a") as f:
         text = str(f.attrs["config_toml"])
         assert "C1 = 45000.0" in text
@@ -157,14 +159,7 @@ def test_a_stored_config_altered_by_one_character_is_refused(
 def test_a_damaged_block_of_frames_fails_its_checksum(
     demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    import shutil
-
-    import h5py
-
-    from stand.cli import main
-
-    run = tmp_path / "damaged.h5"
-    shutil.copy(demo_run, run)
+    run = _copy(demo_run, tmp_path / "damaged.h5")
     with h5py.File(run, "r") as f:
         info = f["frames/data"].id.get_chunk_info(0)
     with run.open("r+b") as handle:  # flip one byte inside the first chunk of payloads
@@ -182,14 +177,7 @@ def test_a_run_with_timestamps_that_are_no_numbers_is_refused(
     demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], bad: float | None
 ) -> None:
     """NaN host timestamps used to pass into the JSON; the twin (None) is the run as made."""
-    import shutil
-
-    import h5py
-
-    from stand.cli import main
-
-    run = tmp_path / "stamps.h5"
-    shutil.copy(demo_run, run)
+    run = _copy(demo_run, tmp_path / "stamps.h5")
     if bad is not None:
         with h5py.File(run, "a") as f:
             t = f["frames/t_s"][:]
