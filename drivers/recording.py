@@ -35,7 +35,7 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -123,6 +123,8 @@ class RunWriter:
         Software name and version.
     flush_interval_s
         Longest time frames wait in memory [s].
+    attrs
+        More text attributes to store with the run (e.g. the influence matrix used).
 
     Use as a context manager; :meth:`close` is idempotent and is where the
     decoded streams are added.
@@ -137,6 +139,7 @@ class RunWriter:
         software: str = "",
         flush_interval_s: float = FLUSH_INTERVAL_S,
         force: bool = False,
+        attrs: Mapping[str, str] | None = None,
     ):
         self.path = Path(path)
         self.software = software
@@ -171,6 +174,7 @@ class RunWriter:
                     frames_committed=0,
                     complete=False,
                 )
+                f.attrs.update(dict(attrs or {}))
                 g = f.create_group("frames")
                 for name, dtype in _FRAME_FIELDS.items():
                     g.create_dataset(

@@ -3,12 +3,13 @@
 Tables (SI units, the seed's symbols)::
 
     [stand]   M1 M2 C1 C2 [H1 H2 reference_angle_deg]
-    [rotor]   M3 J3 a b c d R1 R2
+    [rotor]   M3 J3 a b c d R1 R2 [type]
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
     [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
     [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g
     [sensors]     (optional) gain, delay_s per node (from stand calibrate)
+    [display]     (optional) mass = "g" | "oz", length = "mm" | "in" (what the operator sees)
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -53,6 +54,8 @@ Length = Annotated[FiniteFloat, Field(ge=-1e3, le=1e3)]
 """[m]."""
 Angle = Annotated[FiniteFloat, Field(ge=-360.0, le=360.0)]
 """[deg]."""
+Name = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$")]
+"""A name: 1 to 64 characters, no control characters."""
 
 
 class StandTable(BaseModel):
@@ -84,6 +87,8 @@ class RotorTable(BaseModel):
     d: Length
     R1: Length
     R2: Length
+    type: Name | None = None
+    """The rotor type's name (optional): stored with each run and influence matrix."""
 
 
 class ToleranceTable(BaseModel):
@@ -113,6 +118,15 @@ class CorrectionTable(BaseModel):
     """... or weights in multiples of this [g]; 0 and [] mean any mass."""
 
 
+class DisplayTable(BaseModel):
+    """``[display]``: units shown to the operator (SI inside; the JSON keeps g and mm)."""
+
+    model_config = STRICT
+
+    mass: Literal["g", "oz"] = "g"
+    length: Literal["mm", "in"] = "mm"
+
+
 class SensorsTable(BaseModel):
     """``[sensors]``: each node's calibrated sensitivity (1 = as STATUS says) and delay [s]."""
 
@@ -140,6 +154,7 @@ class Config(BaseModel):
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
     sensors: SensorsTable = SensorsTable()
+    display: DisplayTable = DisplayTable()
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measure.measure` needs from the configuration."""
@@ -153,7 +168,7 @@ class Config(BaseModel):
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
-        del values["reference_angle_deg"], values["clock_tolerance_pct"]
+        del values["reference_angle_deg"], values["clock_tolerance_pct"], values["type"]
         return StandParameters(**values)
 
 
@@ -254,7 +269,7 @@ def _toml_value(value: Any) -> str:
 
 def config_toml(cfg: Config) -> str:
     """The configuration as TOML text (stored in run files)."""
-    return to_toml({k: v for k, v in cfg.model_dump().items() if v is not None})
+    return to_toml({k: v for k, v in cfg.model_dump(exclude_none=True).items()})
 
 
 def updated_toml(text: str, cfg: Config) -> str:
@@ -263,9 +278,7 @@ def updated_toml(text: str, cfg: Config) -> str:
     import tomlkit
 
     doc = tomlkit.parse(text)
-    for name, table in cfg.model_dump().items():
-        if table is None:
-            continue
+    for name, table in cfg.model_dump(exclude_none=True).items():
         if name not in doc:
             doc[name] = tomlkit.table()
         current = doc[name]

@@ -34,7 +34,7 @@ from stand.errors import (
     StandError,
     UsageError,
 )
-from stand.pipeline import SOFTWARE, SolveOptions, build_result, measure_streams
+from stand.pipeline import SOFTWARE, SolveOptions, build_result, check_matrix, measure_streams
 from stand.result import LiveInfo, Provenance, Result
 
 FIRST_CHECK_S = 1.0
@@ -63,6 +63,8 @@ class LiveSession:
         Frames of a simulated run to play in real time on the bus, or None.
     silence_timeout_s
         No frame for this long ends the session (:class:`BusTimeoutError`) [s].
+    run_attrs
+        More text attributes stored in the run file (the influence matrix used).
     """
 
     def __init__(
@@ -73,6 +75,7 @@ class LiveSession:
         config_toml: str = "",
         scene_frames: Any = None,
         silence_timeout_s: float = 2.0,
+        run_attrs: dict[str, str] | None = None,
     ):
         from stand.drivers.bus import describe_bus
         from stand.drivers.streams import StreamBuilder
@@ -80,6 +83,7 @@ class LiveSession:
         self.bus_kwargs = bus_kwargs
         self.run_path = run_path
         self.config_toml = config_toml
+        self.run_attrs = run_attrs or {}
         self.where = describe_bus(bus_kwargs)
         self.builder = StreamBuilder()
         self.failure: BusError | None = None
@@ -103,6 +107,7 @@ class LiveSession:
             source=json.dumps(self.bus_kwargs, default=str),
             config_toml=self.config_toml,
             software=SOFTWARE,
+            attrs=self.run_attrs,
         )
         try:
             self.bus = open_bus(self.bus_kwargs)
@@ -305,6 +310,7 @@ def measure_until_precise(
         frames=streams.frames,
         duration_s=streams.duration_s,
         config_toml=session.config_toml,
+        matrix=None if options.matrix is None else options.matrix.path,
     )
     goal = targets(final.solution.U_kg_m)
     return build_result(
@@ -396,12 +402,14 @@ def measure_live(
 ) -> tuple[Result, LiveSession]:
     """One live session measured until precise: the result, and the session (closed)."""
     cfg, params = source.cfg, source.params
+    check_matrix(options, cfg, live=True)
     with LiveSession(
         bus_kwargs,
         run_path,
         config_toml=source.config_toml,
         scene_frames=source.scene_frames,
         silence_timeout_s=silence_timeout_s,
+        run_attrs=None if options.matrix is None else options.matrix.run_attrs(),
     ) as session:
         if on_start:
             on_start(session.where)

@@ -24,6 +24,7 @@ import numpy as np
 
 from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.dsp import Phasor, radius95, sensor_response
+from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
@@ -66,6 +67,9 @@ class Measurement:
         Mean speed over the window [rad/s].
     windows : list of Window
     warnings : list of Diagnostic
+    cov_A_m2_s4 : ndarray, shape (4, 4), or None
+        Covariance of ``(Re A1, Im A1, Re A2, Im A2)`` [m^2/s^4], the reference
+        edges' common jitter included.
     """
 
     supports: list[Phasor]
@@ -75,6 +79,7 @@ class Measurement:
     omega_rad_s: float
     windows: list[Window]
     warnings: list[Diagnostic] = field(default_factory=list)
+    cov_A_m2_s4: np.ndarray | None = None
 
 
 NONLINEAR_WIDEN = 1.5
@@ -181,12 +186,16 @@ def measure(
     sensor_gain: tuple[float, float] = (1.0, 1.0),
     sensor_delay_s: tuple[float, float] = (0.0, 0.0),
     clock_tolerance: float = CLOCK_TOLERANCE,
+    influence: InfluenceMap | None = None,
 ) -> Measurement:
     """The unbalance of both planes from a run's streams (nodes 1 and 2).
 
     Both nodes see one shaft: the speeds they measure (their edges against
     their own sample clocks) must agree within ``clock_tolerance`` (relative),
     else a node's sample rate or clock is wrong and the run is refused.
+    ``influence``: a measured influence matrix takes the stand model's place in
+    the inverse (:func:`stand.core.influence.solve_influence`); the model still
+    judges the supports' linearity.
 
     Raises
     ------
@@ -269,7 +278,10 @@ def measure(
     supports, cov, jitter_notes = _with_edge_jitter(supports, windows)
     warnings.extend(jitter_notes)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
-    sol = solve_unbalance(p, omega, A, cov)
+    if influence is None:
+        sol = solve_unbalance(p, omega, A, cov)
+    else:
+        sol = solve_influence(influence, A, cov)
     dof = min(ph.noise_dof for ph in supports)
     cov_U = np.asarray(sol.cov_U).real if sol.cov_U is not None else np.zeros((4, 4))
     radius = np.array(
@@ -289,4 +301,5 @@ def measure(
         omega_rad_s=float(omega),
         windows=windows,
         warnings=warnings,
+        cov_A_m2_s4=cov,
     )

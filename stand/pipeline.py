@@ -19,7 +19,7 @@ import math
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -35,6 +35,7 @@ from stand.core.balance import (
 )
 from stand.drivers.recording import config_digest
 from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError, UsageError
+from stand.matrix import RUN_ATTR, SAME_SPEED, parse_matrix
 from stand.measure import Measurement, measure
 from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
 
@@ -59,6 +60,8 @@ class SolveOptions:
         Monte Carlo draws for the parameter spread.
     traces : bool
         Also compute the spectra and speed traces the report plots.
+    matrix : stand.matrix.LoadedMatrix or None
+        A stored influence matrix to use in place of the stand model.
     """
 
     taper: bool = False
@@ -66,6 +69,7 @@ class SolveOptions:
     tolerances: Any = None
     draws: int = 1000
     traces: bool = False
+    matrix: Any = None
 
 
 def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:
@@ -237,12 +241,32 @@ def build_result(
 
 
 def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: SolveOptions) -> Any:
-    """The measurement of a run's streams with the config's sensor calibration."""
-    return measure(streams, params, **cfg.measure_options(), taper=options.taper, gate=options.gate)
+    """The measurement of a run's streams with the config's sensor calibration (and the
+    options' influence matrix in place of the model, if any)."""
+    m = measure(
+        streams, params, **cfg.measure_options(), taper=options.taper, gate=options.gate,
+        influence=None if options.matrix is None else options.matrix.imap,
+    )  # fmt: skip
+    if options.matrix is not None:
+        note = options.matrix.speed_note(m.omega_rad_s)
+        if note is not None:
+            m = replace(m, warnings=[*m.warnings, note])
+    return m
+
+
+def check_matrix(options: SolveOptions, cfg: Any, *, live: bool) -> None:
+    """Refuse the options' influence matrix for another rotor type (or typed-in readings
+    on the stand) before anything is measured."""
+    if options.matrix is not None:
+        options.matrix.check(cfg.rotor.type, live=live)
 
 
 def solve_recording(
-    path: str, config: str | None = None, options: SolveOptions = SolveOptions()
+    path: str,
+    config: str | None = None,
+    options: SolveOptions = SolveOptions(),
+    *,
+    adjust: Callable[[Measurement], Measurement] | None = None,
 ) -> Result:
     """Solve one recorded run (a run file or a python-can log).
 
@@ -253,7 +277,11 @@ def solve_recording(
     config
         A configuration file; None: the one the run file carries.
     options
-        How to solve.
+        How to solve.  Without a matrix, a run measured with an influence
+        matrix is solved with the one it stores.
+    adjust
+        A last step on the measurement before the result is built (the
+        initial run of trial runs: its joint covariance with the matrix).
 
     Raises
     ------
@@ -270,8 +298,14 @@ def solve_recording(
     else:
         cfg, params, text = stored_config(rec.meta, rec.path)
         source = f"{rec.path} (stored)"
+    stored = rec.meta.get(RUN_ATTR)
+    if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
+        options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
+    check_matrix(options, cfg, live=True)
     with _naming(path):
         m = measure_streams(streams, cfg, params, options)
+    if adjust is not None:
+        m = adjust(m)
     prov = Provenance(
         software=SOFTWARE,
         run_file=path,
@@ -282,6 +316,7 @@ def solve_recording(
         frames=streams.frames,
         duration_s=streams.duration_s,
         config_toml=text,
+        matrix=None if options.matrix is None else options.matrix.path,
     )
     return build_result(
         m, cfg, params, stream_warnings=streams.warnings, provenance=prov,
@@ -289,19 +324,21 @@ def solve_recording(
     )  # fmt: skip
 
 
-CHECK_SPEED = 0.05
-"""A check run within 5 % of the speed of the run before the correction (the unbalance
-is the same at any speed, but the stand's response, and its errors, are not)."""
-
-
 def check_against(
-    previous: str, cfg: Any, params: StandParameters, after: Measurement, *, strict: bool = True
+    previous: str,
+    cfg: Any,
+    params: StandParameters,
+    after: Measurement,
+    *,
+    strict: bool = True,
+    matrix: Any = None,
 ) -> Check:
     """The run before the correction, measured with the same stand (this config).
 
     ``strict``: refuse a previous run of another rotor or stand (its stored
-    config) or of another speed (beyond :data:`CHECK_SPEED`): its URR would
-    compare two different things.
+    config) or of another speed (beyond :data:`stand.matrix.SAME_SPEED`): its URR
+    would compare two different things.  ``matrix``: the influence matrix the
+    check run was solved with, if any (the run before is solved with it too).
 
     Raises
     ------
@@ -315,8 +352,8 @@ def check_against(
     if strict and rec.meta.get("config_toml"):
         _same_rotor_and_stand(previous, stored_config(rec.meta, previous)[0], cfg)
     with _naming(previous):
-        before = measure_streams(streams, cfg, params, SolveOptions())
-    if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > CHECK_SPEED:
+        before = measure_streams(streams, cfg, params, SolveOptions(matrix=matrix))
+    if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > SAME_SPEED:
         raise UsageError(
             f"--check {previous}: that run turned at {before.omega_rad_s * 30 / math.pi:.0f} rpm, "
             f"this one at {after.omega_rad_s * 30 / math.pi:.0f} rpm: check at the same speed "
@@ -327,10 +364,18 @@ def check_against(
 
 
 def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
-    """Refuse a previous run whose stored rotor or stand differs from this config's."""
+    """Refuse a previous run whose stored rotor (or rotor type) or stand differs from this
+    config's."""
+    t, o = theirs.rotor.type, ours.rotor.type
+    if t and o and t != o:
+        raise UsageError(
+            f"--check {previous}: that run is of rotor type {t!r}, this one {o!r} "
+            "(or say --check-any)"
+        )
     for table in ("rotor", "stand"):
         a, b = getattr(theirs, table).model_dump(), getattr(ours, table).model_dump()
         keys = [k for k in b if k in ("M1", "M2", "C1", "C2", "H1", "H2") or table == "rotor"]
+        keys = [k for k in keys if k != "type"]
         diff = [k for k in keys if not math.isclose(a.get(k, 0.0), b[k], rel_tol=1e-9)]
         if diff:
             k = diff[0]
@@ -397,23 +442,24 @@ def solve_many(
 
 def measure_recording(
     path: str, config: str | None = None, *, raw_sensors: bool = False
-) -> tuple[Measurement, Any, StandParameters]:
+) -> tuple[Measurement, Any, StandParameters, str]:
     """One run's measurement alone, for identification and influence coefficients.
 
     ``raw_sensors``: the nodes' phasors as they read, without the config's
-    ``[sensors]`` gains and delays (what a calibration identifies).
+    ``[sensors]`` gains and delays (what a calibration identifies).  Returns the
+    measurement, the config, its parameters and its text.
     """
     from stand.drivers.recording import read_streams
 
     with _naming(path):
         rec, streams = read_streams(path)
-    cfg, params, _ = load_config_text(config) if config else stored_config(rec.meta, rec.path)
+    cfg, params, text = load_config_text(config) if config else stored_config(rec.meta, rec.path)
     with _naming(path):
         if raw_sensors:
             m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
         else:
             m = measure_streams(streams, cfg, params, SolveOptions())
-    return m, cfg, params
+    return m, cfg, params, text
 
 
 def correction_masses(run: str, config: str | None = None) -> list[tuple[int, float, float, float]]:

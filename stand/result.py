@@ -49,6 +49,8 @@ class Provenance:
         Span of the frames' host timestamps [s].
     config_toml : str
         The configuration text itself (for the report; the JSON carries its digest).
+    matrix : str or None
+        The stored influence matrix used in place of the stand model, if any.
     """
 
     software: str
@@ -60,6 +62,7 @@ class Provenance:
     frames: int = 0
     duration_s: float = 0.0
     config_toml: str = field(default="", repr=False)
+    matrix: str | None = None
 
 
 @dataclass(frozen=True)
@@ -342,5 +345,6 @@ def to_json(r: Result) -> dict[str, Any]:
         "start_time": p.start_time,
         "frames": p.frames,
         "duration_s": round(p.duration_s, 6),
+        "influence_matrix": p.matrix,
     }
     return out

@@ -122,3 +122,40 @@ def test_the_simulated_stand_in_another_process_over_udp_multicast(tmp_path: Pat
     for p, truth in zip(res["planes"], (5000.0, 3000.0), strict=True):
         # twice the 95 % radius: a 95 % circle misses 1 run in 20, twice it 1 in 10^4 or less
         assert abs(p["unbalance_g_mm"] - truth) <= 2 * p["uncertainty_g_mm"]
+
+
+def _readme_block(title: str) -> str:
+    """The first ```sh block after the paragraph that starts with ``title``."""
+    text = (ROOT / "README.md").read_text()
+    after = text[text.index(title) :]
+    return after.split("```sh\n", 1)[1].split("```", 1)[0]
+
+
+@pytest.mark.realtime
+@pytest.mark.parametrize(
+    "title",
+    [
+        "**The operator's loop on the simulated stand.**",
+        "**Influence mode, from trial runs on the simulated stand.**",
+        "**Calibrating a new stand, from generated runs.**",
+    ],
+)
+def test_the_readme_loops_run_as_written(tmp_path: Path, title: str) -> None:
+    """Each loop's commands, verbatim, in a fresh folder beside the installed venv."""
+    import subprocess
+    import sys
+
+    (tmp_path / ".venv").symlink_to(Path(sys.prefix))
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    block = _readme_block(title)
+    if "add8.toml" in block and "sed -e" not in block:  # the influence loop reuses add8.toml
+        block = (
+            _readme_block("**The operator's loop on the simulated stand.**").split("\n")[0]
+            + "\n"
+            + block
+        )
+    done = subprocess.run(
+        ["bash", "-e", "-c", block], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "error" not in done.stderr, done.stderr[-2000:]

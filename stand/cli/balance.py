@@ -50,16 +50,15 @@ def run(args: argparse.Namespace) -> int:
         check_output(
             args.report, force=args.force, inputs=[i for i in (args.check, args.config) if i]
         )
+    options = solve_options(args, traces=True)
     result, cfg, params = measure_live_from_args(
-        args,
-        "balance",
-        targets_from(args, TOLERANCE_SHARE),
-        solve_options(args, traces=True),
+        args, "balance", targets_from(args, TOLERANCE_SHARE), options
     )
     if args.check:
         check = check_against(
-            args.check, cfg, params, result.measurement, strict=not args.check_any
-        )
+            args.check, cfg, params, result.measurement,
+            strict=not args.check_any, matrix=options.matrix,
+        )  # fmt: skip
         result = replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)

@@ -81,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
     runs = []
     for entry in spec.runs:
         # raw readings: the configured reference angle, no sensor correction
-        m, _, _ = measure_recording(
+        m, _, _, _ = measure_recording(
             str(Path(args.runs).parent / entry.file), args.config, raw_sensors=True
         )
         T = np.zeros(2, complex)

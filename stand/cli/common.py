@@ -196,6 +196,12 @@ def add_measure_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="use the whole run, not only its steady, settled part",
     )
+    p.add_argument(
+        "--matrix",
+        metavar="MATRIX.json",
+        help="influence mode: use a stored influence matrix (stand influence --save) in place "
+        "of the stand model",
+    )
 
 
 def add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
@@ -244,7 +250,13 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
             length_m=args.tol_length_mm / 1000,
             gain_rel=args.tol_gain / 100,
         )
+    matrix = None
+    if getattr(args, "matrix", None):
+        from stand.matrix import read_matrix
+
+        matrix = read_matrix(args.matrix)
     return SolveOptions(
+        matrix=matrix,
         taper=getattr(args, "taper", False),
         gate=not getattr(args, "no_gate", False),
         tolerances=tolerances,

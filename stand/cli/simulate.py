@@ -24,6 +24,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="play the run in real time on a python-can bus (the scene's [bus] "
         "table, else the virtual bus 'stand-demo')",
     )
+    p.add_argument(
+        "--config",
+        metavar="CFG",
+        help="the configuration stored with the run: what the software believes about the "
+        "simulated stand (default: the scene's own)",
+    )
     p.add_argument("--seed", type=int, help="random seed (overrides [run] seed)")
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     add_scene_arguments(p)
@@ -42,6 +48,11 @@ def run(args: argparse.Namespace) -> int:
         from stand.drivers.files import check_output
 
         check_output(args.out, force=args.force)  # before the work, and again when written
+    stored = None
+    if args.config:
+        from stand.pipeline import load_config_text
+
+        stored = load_config_text(args.config)[2]
     scene, params, source = load_scene(args.scene)
     scene = with_masses(scene, scene_masses(args), args.rpm)
     if args.seed is not None:
@@ -59,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             frames=sim.frames,
             meta={
                 "source": f"simulated scene {label} (seed {scene.run.seed})",
-                "config_toml": config_toml(scene.config()),
+                "config_toml": stored or config_toml(scene.config()),
                 "software": f"stand {__version__}",
             },
         )
@@ -68,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
             args.out,
             rebuild(sim.frames, strict_status=False),
             force=args.force,
-            inputs=[source],
+            inputs=[source, *([args.config] if args.config else [])],
         )
         print(f"wrote {args.out}", file=sys.stderr)
     if args.bus:
