@@ -237,6 +237,7 @@ def build_result(
         check=check,
         live=live,
         traces=traces_of(streams, m.omega_rad_s) if options.traces and streams else None,
+        display=(cfg.display.mass, cfg.display.length),
     )
 
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from stand.core import rad_s_to_rpm
 from stand.result import Result, Traces, to_json
+from stand.units import Display
 
 
 def _png(fig: Any) -> str:
@@ -35,26 +36,34 @@ def _polar(out: dict[str, Any]) -> str:
 
     fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9, 4.4))
     tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    d = Display.of(out)
     for ax, plane, corr in zip(axes, out["planes"], out["corrections"], strict=True):
         i = plane["plane"]
         ax.set_theta_zero_location("N")  # the reference mark at the top
         ax.set_theta_direction(-1)  # phi counted against the direction of rotation
-        u, phi = plane["unbalance_g_mm"], math.radians(plane["angle_deg"])
-        r95 = plane["uncertainty_g_mm"]
+        u, phi = d.unbalance_value(plane["unbalance_g_mm"]), math.radians(plane["angle_deg"])
+        r95 = d.unbalance_value(plane["uncertainty_g_mm"])
         ring = np.linspace(0, 2 * math.pi, 200)
         rmax = u * 1.25
         if i in tol:
-            per = tol[i]["permissible_g_mm"]
+            per = d.unbalance_value(tol[i]["permissible_g_mm"])
             ax.fill(ring, np.full_like(ring, per), color="tab:green", alpha=0.15)
             ax.plot(
                 ring,
                 np.full_like(ring, per),
                 color="tab:green",
                 lw=1.5,
-                label=f"tolerance {per:.0f} g mm",
+                label=f"tolerance {d.unbalance(tol[i]['permissible_g_mm'])}",
             )
             rmax = max(rmax, per * 1.25)
-        ax.plot([phi], [u], "o", color="tab:red", ms=8, label=f"unbalance {u:.0f} g mm")
+        ax.plot(
+            [phi],
+            [u],
+            "o",
+            color="tab:red",
+            ms=8,
+            label=f"unbalance {d.unbalance(plane['unbalance_g_mm'])}",
+        )
         # the 95 % circle around the unbalance, drawn in the plane (not in polar coordinates)
         z = u * np.exp(1j * phi) + r95 * np.exp(1j * ring)
         ax.plot(np.angle(z), np.abs(z), color="tab:red", lw=1)
@@ -65,12 +74,12 @@ def _polar(out: dict[str, Any]) -> str:
                 [0, rmax * 0.95],
                 color="tab:blue",
                 lw=2.5,
-                label=f"{corr['action']} {w['mass_g']:.1f} g at {w['angle_deg']:.1f}°"
+                label=f"{corr['action']} {d.mass(w['mass_g'])} at {w['angle_deg']:.1f}°"
                 if k < 3
                 else None,
             )
         ax.set_rmax(rmax * 1.1)
-        ax.set_title(f"plane {i}", pad=18)
+        ax.set_title(f"plane {i} [{d.unbalance_unit}]", pad=18)
         ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
     return _png(fig)
 
@@ -143,17 +152,20 @@ def _uncertainty(out: dict[str, Any]) -> str:
     if pu is None:
         return ""
     t = pu["tolerances"]
+    d = Display.of(out)
     rows = "".join(
-        f"<tr><td>{p['plane']}</td><td>±{p['radius95_monte_carlo_g_mm']:.1f}</td>"
-        f"<td>±{p['radius95_linear_g_mm']:.1f}</td><td>±{p['combined_g_mm']:.1f}</td>"
+        f"<tr><td>{p['plane']}</td><td>±{d.number(p['radius95_monte_carlo_g_mm'])}</td>"
+        f"<td>±{d.number(p['radius95_linear_g_mm'])}</td>"
+        f"<td>±{d.number(p['combined_g_mm'])}</td>"
         f"<td class=l>{', '.join(f'{k} {100 * s:.0f} %' for k, s in p['largest_shares'])}</td></tr>"
         for p in pu["planes"]
     )
     return (
         f"<h2>Parameter tolerances</h2><p class=muted>Uniform within C ±{t['C_pct']:g} %, "
-        f"M and J3 ±{t['M_pct']:g} %, lengths ±{t['length_mm']:g} mm, sensor gains "
+        f"M and J3 ±{t['M_pct']:g} %, lengths ±{d.length(t['length_mm'])}, sensor gains "
         f"±{t['gain_pct']:g} %; {pu['draws']} Monte Carlo draws.</p>"
-        "<table><tr><th>plane</th><th>95 % [g mm], Monte Carlo</th><th>linearised</th>"
+        f"<table><tr><th>plane</th><th>95 % [{d.unbalance_unit}], Monte Carlo</th>"
+        "<th>linearised</th>"
         "<th>with the measurement</th><th class=l>largest shares</th></tr>"
         f"{rows}</table>"
     )
@@ -174,13 +186,14 @@ def render(result: Result) -> str:
         "configuration": f"{p.config_source} (SHA-256 {p.config_sha256[:16]})",
     }
     config_text = p.config_toml
+    d = Display.of(out)
     rows = []
     tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
     for plane, corr in zip(out["planes"], out["corrections"], strict=True):
         i = plane["plane"]
         what = (
             " + ".join(
-                f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f}°"
+                f"{d.mass(w['mass_g'])} at {w['angle_deg']:.1f}°"
                 + ("" if w["position"] is None else f" (position {w['position']})")
                 for w in corr["weights"]
             )
@@ -191,24 +204,24 @@ def render(result: Result) -> str:
             verdict = (
                 '<span class="pass">PASS</span>' if t["pass"] else '<span class="fail">FAIL</span>'
             )
-            margin = (
-                f"margin {t['margin_g_mm']:.0f} g mm"
-                if t["pass"]
-                else f"over by {-t['margin_g_mm']:.0f} g mm"
-            )
+            margin = ("margin " if t["pass"] else "over by ") + d.unbalance(abs(t["margin_g_mm"]))
             tol_cell = (
-                f"{t['permissible_g_mm']:.0f} g mm: {verdict} <span class=muted>{margin}</span>"
+                f"{d.unbalance(t['permissible_g_mm'])}: {verdict} <span class=muted>{margin}</span>"
             )
         else:
             tol_cell = "<span class=muted>no [tolerance] set</span>"
-        action = (
-            "no correction: inside its own 95 % interval (angle undefined)"
-            if corr.get("within_noise")
-            else f"<b>{e(corr['action'])} {e(what)}</b> at radius {plane['radius_mm']:g} mm"
-        )
+        if corr.get("within_noise"):
+            action = "no correction: inside its own 95 % interval (angle undefined)"
+        elif corr.get("within_tolerance"):
+            action = "within tolerance: no correction needed"
+        else:
+            action = (
+                f"<b>{e(corr['action'])} {e(what)}</b> at radius {d.length(plane['radius_mm'])}"
+            )
         angle = "–" if corr.get("within_noise") else f"{plane['angle_deg']:.1f}°"
         rows.append(
-            f"<tr><td>{i}</td><td>{plane['unbalance_g_mm']:.1f} ± {plane['uncertainty_g_mm']:.1f}"
+            f"<tr><td>{i}</td><td>{d.number(plane['unbalance_g_mm'])} ± "
+            f"{d.number(plane['uncertainty_g_mm'])}"
             f"</td><td>{angle}</td><td class=l big>{action}</td>"
             f"<td class=l>{tol_cell}</td></tr>"
         )
@@ -227,7 +240,7 @@ def render(result: Result) -> str:
     t = out.get("tolerance")
     tol_line = (
         f"ISO 21940-11, G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
-        f"U<sub>per</sub> = {t['permissible_g_mm']:.0f} g mm"
+        f"U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}"
         if t
         else "no tolerance set"
     )
@@ -245,10 +258,10 @@ def render(result: Result) -> str:
 <h2>Correction</h2>
 <p class=muted>Angles from the reference mark, counted <b>against the direction of rotation</b>.
 To remove material: at that angle; to add a weight: 180° opposite.</p>
-<table><tr><th>plane</th><th>unbalance [g mm] (95 %)</th><th>angle</th>
+<table><tr><th>plane</th><th>unbalance [{d.unbalance_unit}] (95 %)</th><th>angle</th>
 <th class=l>correction</th><th class=l>tolerance</th></tr>{"".join(rows)}</table>
-<p>Static part {st["unbalance_g_mm"]:.0f} g mm at {st["angle_deg"]:.1f}°; couple part
-±{cp["unbalance_g_mm"]:.0f} g mm at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
+<p>Static part {d.unbalance(st["unbalance_g_mm"])} at {st["angle_deg"]:.1f}°; couple part
+±{d.unbalance(cp["unbalance_g_mm"])} at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
 {tol_line}.</p>
 <img alt="corrections against the tolerance circles" src="{_polar(out)}">
 {_uncertainty(out)}

@@ -144,6 +144,8 @@ class Result:
     within_tolerance: tuple[bool, bool] = (False, False)
     """Per plane: the unbalance is within its permissible share (no correction needed)."""
     traces: Traces | None = field(default=None, compare=False)
+    display: tuple[str, str] = ("g", "mm")
+    """The units the operator sees: mass (g or oz) and length (mm or in)."""
 
     @property
     def U_kg_m(self) -> np.ndarray:
@@ -308,9 +310,9 @@ def to_json(r: Result) -> dict[str, Any]:
 
     Keys: ``rpm``, ``planes``, ``supports``, ``condition_number``,
     ``warnings``, ``correction_mode``, ``corrections``, ``static``,
-    ``couple``, and when present ``tolerance``, ``parameter_uncertainty``,
-    ``check``, the live keys ``stopped_by``, ``elapsed_s``, ``targets_g_mm``,
-    ``run_file``; ``provenance`` last.
+    ``couple``, ``display`` (the units the operator sees), and when present
+    ``tolerance``, ``parameter_uncertainty``, ``check``, the live keys
+    ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``; ``provenance`` last.
     """
     m = r.measurement
     out: dict[str, Any] = {
@@ -323,6 +325,7 @@ def to_json(r: Result) -> dict[str, Any]:
         "corrections": _corrections(r),
         "static": _polar(r.static_kg_m),
         "couple": _polar(r.couple_kg_m),
+        "display": {"mass": r.display[0], "length": r.display[1]},
     }
     if r.tolerance is not None:
         out["tolerance"] = _tolerance(r)

@@ -349,8 +349,8 @@ def measure_live_from_args(
     args: argparse.Namespace, command: str, targets: Any, options: Any
 ) -> tuple[Any, Any, Any]:
     """``stand measure`` and ``stand balance``: the live run the options ask for, with its
-    progress on stderr; returns the :class:`stand.result.Result`, config and parameters."""
-    from stand.cli.format import progress_line
+    progress on stderr (a fixed panel on a terminal, else a line per solve); returns the
+    :class:`stand.result.Result`, config and parameters."""
     from stand.live import live_source, measure_live
 
     check_live_arguments(args, command)
@@ -361,24 +361,22 @@ def measure_live_from_args(
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)
     path = run_path(args)
-    quiet = args.quiet
+    from stand.cli.panel import LiveDisplay
 
-    def say(text: str) -> None:
-        if not quiet:
-            print(text, file=sys.stderr)
-
-    result, session = measure_live(
-        source,
-        kwargs,
-        path,
-        options,
-        targets,
-        max_seconds=args.max_seconds,
-        silence_timeout_s=args.timeout,
-        on_start=lambda where: say(f"measuring on {where}, recording into {path} (Ctrl-C stops)"),
-        on_progress=lambda p: say(progress_line(p)),
-        on_wait=lambda elapsed, why: say(f"  {elapsed:5.1f} s  waiting: {why}"),
-    )
-    if session.failure is not None:
-        say(f"stand: {session.failure}")
+    show = LiveDisplay(source, path, quiet=args.quiet)
+    with show:
+        result, session = measure_live(
+            source,
+            kwargs,
+            path,
+            options,
+            targets,
+            max_seconds=args.max_seconds,
+            silence_timeout_s=args.timeout,
+            on_start=show.start,
+            on_progress=show.progress,
+            on_wait=show.wait,
+        )
+    if session.failure is not None and not args.quiet:
+        print(f"stand: {session.failure}", file=sys.stderr)
     return result, source.cfg, source.params

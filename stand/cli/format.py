@@ -12,6 +12,7 @@ import sys
 from typing import Any, TextIO
 
 from stand.errors import ModelError
+from stand.units import Display
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
 
@@ -46,12 +47,17 @@ def dump_json(obj: Any, out: TextIO | None = None) -> None:
 
 def print_measurement(out: dict[str, Any]) -> None:
     """Speed, unbalance per plane, supports."""
+    u = Display.of(out)
     print(f"speed {out['rpm']:.1f} rpm")
-    print("plane  unbalance [g mm]    95 % +-   angle [deg]   mass [g] at radius [mm]")
+    print(
+        f"plane  unbalance [{u.unbalance_unit}]    95 % +-   angle [deg]   "
+        f"mass [{u.mass_unit}] at radius [{u.length_unit}]"
+    )
     for p in out["planes"]:
         print(
-            f"  {p['plane']}  {p['unbalance_g_mm']:16.1f} {p['uncertainty_g_mm']:10.1f} "
-            f"{p['angle_deg']:13.2f} {p['mass_g']:10.3f} at {p['radius_mm']:g}"
+            f"  {p['plane']}  {u.number(p['unbalance_g_mm']):>16} "
+            f"{u.number(p['uncertainty_g_mm']):>10} {p['angle_deg']:13.2f} "
+            f"{u.mass_value(p['mass_g']):10.3f} at {u.length(p['radius_mm']).split()[0]}"
         )
     print(f"({ANGLE_NOTE})")
     print("support  amplitude [m/s^2]  phase [deg]  95 % +-   revolutions")
@@ -65,17 +71,22 @@ def print_measurement(out: dict[str, Any]) -> None:
         print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
 
 
-def _pieces(w: dict[str, Any]) -> str:
+def _pieces(w: dict[str, Any], u: Display) -> str:
     """`` (20 + 20 + 5 g)`` when a weight is stacked from stock weights."""
     p = w.get("pieces_g") or []
-    return f" ({' + '.join(f'{x:g}' for x in p)} g)" if len(p) > 1 else ""
+    if len(p) < 2:
+        return ""
+    if u.mass_unit == "g":
+        return f" ({' + '.join(f'{x:g}' for x in p)} g)"
+    return f" ({' + '.join(u.mass(x) for x in p)})"
 
 
-def weights_text(c: dict[str, Any]) -> str:
+def weights_text(c: dict[str, Any], u: Display | None = None) -> str:
     """``55.54 g at 30.0 deg (position 2) + ...`` for one plane's correction."""
+    u = u or Display()
     return (
         " + ".join(
-            f"{w['mass_g']:.2f} g{_pieces(w)} at {w['angle_deg']:.1f} deg"
+            f"{u.mass(w['mass_g'])}{_pieces(w, u)} at {w['angle_deg']:.1f} deg"
             + ("" if w["position"] is None else f" (position {w['position']})")
             for w in c["weights"]
         )
@@ -83,37 +94,42 @@ def weights_text(c: dict[str, Any]) -> str:
     )
 
 
+def _correction_line(c: dict[str, Any], u: Display) -> str:
+    if c.get("within_noise"):
+        return (
+            f"  plane {c['plane']}: no correction: the unbalance is inside its own 95 % "
+            "interval (its angle is undefined)"
+        )
+    if c.get("within_tolerance"):
+        return f"  plane {c['plane']}: within tolerance: no correction needed"
+    left = (
+        f"; rounding leaves {u.unbalance(c['residual_g_mm'])}" if c["residual_g_mm"] > 0.05 else ""
+    )
+    if left and c.get("residual_within_tolerance") is not None:
+        left += (
+            " (within tolerance)"
+            if c["residual_within_tolerance"]
+            else " (OVER the tolerance: finer weights are needed)"
+        )
+    radius = c["weights"][0]["radius_mm"] if c["weights"] else 0
+    return (
+        f"  plane {c['plane']}: {c['action']} {weights_text(c, u)} at radius "
+        f"{u.length(radius)}{left}"
+    )
+
+
 def print_corrections(out: dict[str, Any]) -> None:
     """The corrections, static and couple parts, and the tolerance verdict."""
+    u = Display.of(out)
     verb = "remove material" if out["correction_mode"] == "remove" else "add weights"
     print(f"correction ({verb}; {ANGLE_NOTE}):")
     for c in out["corrections"]:
-        if c.get("within_noise"):
-            print(
-                f"  plane {c['plane']}: no correction: the unbalance is inside its own 95 % "
-                "interval (its angle is undefined)"
-            )
-            continue
-        if c.get("within_tolerance"):
-            print(f"  plane {c['plane']}: within tolerance: no correction needed")
-            continue
-        left = (
-            f"; rounding leaves {c['residual_g_mm']:.1f} g mm" if c["residual_g_mm"] > 0.05 else ""
-        )
-        if left and c.get("residual_within_tolerance") is not None:
-            left += (
-                " (within tolerance)"
-                if c["residual_within_tolerance"]
-                else " (OVER the tolerance: finer weights are needed)"
-            )
-        radius = c["weights"][0]["radius_mm"] if c["weights"] else 0
-        print(
-            f"  plane {c['plane']}: {c['action']} {weights_text(c)} at radius {radius:g} mm{left}"
-        )
+        print(_correction_line(c, u))
     s, cp = out["static"], out["couple"]
     print(
-        f"  static part {s['unbalance_g_mm']:.1f} g mm at {s['angle_deg']:.1f} deg; couple part "
-        f"+-{cp['unbalance_g_mm']:.1f} g mm at {cp['angle_deg']:.1f} deg (plane 1 / plane 2)"
+        f"  static part {u.unbalance(s['unbalance_g_mm'])} at {s['angle_deg']:.1f} deg; couple "
+        f"part +-{u.unbalance(cp['unbalance_g_mm'])} at {cp['angle_deg']:.1f} deg "
+        "(plane 1 / plane 2)"
     )
     t = out.get("tolerance")
     if t is None:
@@ -121,14 +137,15 @@ def print_corrections(out: dict[str, Any]) -> None:
         return
     print(
         f"tolerance {t['standard']} G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
-        f"U_per {t['permissible_g_mm']:.1f} g mm"
+        f"U_per {u.unbalance(t['permissible_g_mm'])}"
     )
     for p in t["planes"]:
         verdict = "pass" if p["pass"] else "FAIL"
-        how = f"margin {p['margin_g_mm']:.1f}" if p["pass"] else f"over by {-p['margin_g_mm']:.1f}"
+        how = "margin" if p["pass"] else "over by"
         print(
-            f"  plane {p['plane']}: {p['residual_g_mm']:.1f} g mm against "
-            f"{p['permissible_g_mm']:.1f} permissible: {verdict} ({how} g mm)"
+            f"  plane {p['plane']}: {u.unbalance(p['residual_g_mm'])} against "
+            f"{u.number(p['permissible_g_mm'])} permissible: {verdict} "
+            f"({how} {u.unbalance(abs(p['margin_g_mm']))})"
         )
 
 
@@ -137,17 +154,19 @@ def print_uncertainty(out: dict[str, Any]) -> None:
     pu = out.get("parameter_uncertainty")
     if pu is None:
         return
+    u = Display.of(out)
     t = pu["tolerances"]
     print(
         f"parameter tolerances (uniform): C +-{t['C_pct']:g} %, M and J3 +-{t['M_pct']:g} %, "
-        f"lengths +-{t['length_mm']:g} mm, sensor gains +-{t['gain_pct']:g} %"
+        f"lengths +-{u.length(t['length_mm'])}, sensor gains +-{t['gain_pct']:g} %"
     )
     for p in pu["planes"]:
         top = ", ".join(f"{k} {100 * s:.0f} %" for k, s in p["largest_shares"])
         print(
-            f"  plane {p['plane']}: 95 % +-{p['radius95_monte_carlo_g_mm']:.1f} g mm "
-            f"(Monte Carlo, {pu['draws']} draws; linearised {p['radius95_linear_g_mm']:.1f}); "
-            f"with the measurement +-{p['combined_g_mm']:.1f}; most from {top}"
+            f"  plane {p['plane']}: 95 % +-{u.unbalance(p['radius95_monte_carlo_g_mm'])} "
+            f"(Monte Carlo, {pu['draws']} draws; linearised "
+            f"{u.number(p['radius95_linear_g_mm'])}); with the measurement "
+            f"+-{u.number(p['combined_g_mm'])}; most from {top}"
         )
 
 
@@ -156,12 +175,13 @@ def print_check(out: dict[str, Any]) -> None:
     c = out.get("check")
     if c is None:
         return
+    u = Display.of(out)
     print(f"check against the run before the correction ({c['previous_run']}):")
     for p in c["planes"]:
         urr = "-" if p["urr"] is None else f"{100 * p['urr']:.1f} %"
         print(
-            f"  plane {p['plane']}: {p['before_g_mm']:.1f} -> {p['after_g_mm']:.1f} g mm "
-            f"residual, reduction ratio URR {urr}"
+            f"  plane {p['plane']}: {u.number(p['before_g_mm'])} -> "
+            f"{u.unbalance(p['after_g_mm'])} residual, reduction ratio URR {urr}"
         )
 
 
@@ -186,21 +206,6 @@ def show(out: dict[str, Any], as_json: bool) -> None:
         dump_json(out)
     else:
         print_result(out)
-
-
-def progress_line(p: Any) -> str:
-    """One line of the live display."""
-    from stand.core import rad_s_to_rpm
-
-    m = p.measurement
-    planes = "  ".join(
-        f"plane {i + 1}: {abs(m.solution.U_kg_m[i]) * 1e6:.1f} "
-        f"+- {m.radius95_kg_m[i] * 1e6:.1f} g mm (precision goal +- {p.targets_kg_m[i] * 1e6:.1f})"
-        for i in range(2)
-    )
-    amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
-    rpm = float(rad_s_to_rpm(m.omega_rad_s))
-    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}"
 
 
 def print_summary(out: dict[str, Any]) -> None:

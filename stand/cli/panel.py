@@ -1,0 +1,162 @@
+"""The live display of ``stand measure`` and ``stand balance``: one fixed panel (rich).
+
+On a terminal the panel is redrawn in place at each live solve: speed, each
+plane's unbalance and angle, its 95 % interval against the precision goal,
+its tolerance, the supports' 1x; what the measurement is waiting for.
+Elsewhere (a pipe, a log file) the same figures go out as one line per
+solve (:func:`progress_line`).
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+from stand.core import rad_s_to_rpm, unbalance_to_polar
+from stand.units import Display
+
+ANGLE_HELP = "angles from the reference mark, against the direction of rotation"
+
+
+def progress_line(p: Any, units: Display | None = None) -> str:
+    """One line of the live display (when stderr is not a terminal)."""
+    u = units or Display()
+    m = p.measurement
+    planes = "  ".join(
+        f"plane {i + 1}: {u.unbalance(abs(m.solution.U_kg_m[i]) * 1e6)} "
+        f"+- {u.number(m.radius95_kg_m[i] * 1e6)} (precision goal "
+        f"+- {u.number(p.targets_kg_m[i] * 1e6)})"
+        for i in range(2)
+    )
+    amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
+    rpm = float(rad_s_to_rpm(m.omega_rad_s))
+    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}"
+
+
+def panel(
+    where: str,
+    run_path: str,
+    progress: Any | None,
+    *,
+    tolerance_kg_m: tuple[float, float] | None,
+    units: Display,
+    waiting: str = "",
+    elapsed_s: float = 0.0,
+) -> Any:
+    """The panel for the latest solve (``progress``; None before the first)."""
+    from rich.console import Group
+    from rich.panel import Panel
+    from rich.table import Table
+    from rich.text import Text
+
+    u = units
+    t = elapsed_s if progress is None else progress.elapsed_s
+    head = Text("")
+    if progress is not None:
+        rpm = float(rad_s_to_rpm(progress.measurement.omega_rad_s))
+        head.append(f"{rpm:.1f} rpm   ", style="bold cyan")
+    head.append(f"{t:.1f} s   ")
+    head.append(f"measuring on {where}", style="dim")
+    table = Table(box=None, expand=False, pad_edge=False, header_style="bold")
+    for name, justify, width in (
+        ("plane", "center", 5),
+        (f"unbalance\n[{u.unbalance_unit}]", "right", 9),
+        ("angle\n[deg]", "right", 5),
+        ("95 %\ninterval", "right", 8),
+        ("precision\ngoal", "right", 9),
+        (f"tolerance\n[{u.unbalance_unit}]", "right", 9),
+        ("", "left", 14),
+    ):
+        table.add_column(Text(name), justify=justify, no_wrap=True, min_width=width)  # type: ignore[arg-type]
+    rows: list[Any] = []
+    if progress is not None:
+        m = progress.measurement
+        for i in range(2):
+            U, r95, goal = abs(m.solution.U_kg_m[i]), m.radius95_kg_m[i], progress.targets_kg_m[i]
+            per = None if tolerance_kg_m is None else tolerance_kg_m[i]
+            angle = float(unbalance_to_polar([m.solution.U_kg_m[i]])[1][0])
+            precise = r95 <= goal
+            state = Text("precise", style="green") if precise else Text("measuring", style="yellow")
+            if per is not None and U + r95 <= per:
+                state = Text("within tolerance", style="bold green")
+            elif per is not None and U - r95 > per:
+                state.append("\nover tolerance", style="red")
+            rows.append(
+                (
+                    str(i + 1),
+                    Text(u.number(U * 1e6), style="bold"),
+                    "-" if U <= r95 else f"{angle:.1f}",
+                    f"± {u.number(r95 * 1e6)}",
+                    f"± {u.number(goal * 1e6)}",
+                    "-" if per is None else u.number(per * 1e6),
+                    state,
+                )
+            )
+        amps = " and ".join(f"{abs(ph.A_m_s2):.4f}" for ph in m.supports)
+    for row in rows or [("1", "", "", "", "", "", ""), ("2", "", "", "", "", "", "")]:
+        table.add_row(*row)
+    parts: list[Any] = [head, Text(f"recording into {run_path} (Ctrl-C stops)", style="dim"), table]
+    if progress is not None:
+        parts.append(Text(f"1x at supports 1 and 2: {amps} m/s²\n{ANGLE_HELP}", style="dim"))
+    if waiting:
+        parts.append(Text(f"waiting: {waiting}", style="yellow"))
+    return Panel(Group(*parts), title="stand", title_align="left")
+
+
+class LiveDisplay:
+    """The live progress: :func:`panel` redrawn in place on a terminal,
+    one line per solve elsewhere, nothing with ``--quiet``."""
+
+    def __init__(self, source: Any, path: str, *, quiet: bool) -> None:
+        from stand.pipeline import tolerance_of
+        from stand.units import Display
+
+        tol = tolerance_of(source.cfg, source.params)
+        self.tolerance = None if tol is None else tol.per_plane_kg_m
+        self.units = Display(source.cfg.display.mass, source.cfg.display.length)
+        self.path, self.quiet = path, quiet
+        self.where, self.last, self.waiting, self.elapsed = "", None, "", 0.0
+        self.live: Any = None
+        if not quiet and sys.stderr.isatty():
+            from rich.console import Console
+            from rich.live import Live
+
+            self.live = Live(console=Console(stderr=True), auto_refresh=False)
+
+    def __enter__(self) -> LiveDisplay:
+        if self.live is not None:
+            self.live.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.live is not None:
+            self.live.__exit__(*exc)
+
+    def _redraw(self) -> None:
+        view = panel(
+            self.where, self.path, self.last, tolerance_kg_m=self.tolerance, units=self.units,
+            waiting=self.waiting, elapsed_s=self.elapsed,
+        )  # fmt: skip
+        self.live.update(view, refresh=True)
+
+    def _say(self, text: str) -> None:
+        if not self.quiet:
+            print(text, file=sys.stderr)
+
+    def start(self, where: str) -> None:
+        self.where = where
+        if self.live is not None:
+            return self._redraw()
+        self._say(f"measuring on {where}, recording into {self.path} (Ctrl-C stops)")
+
+    def progress(self, p: Any) -> None:
+        self.last, self.waiting = p, ""
+        if self.live is not None:
+            return self._redraw()
+        self._say(progress_line(p, self.units))
+
+    def wait(self, elapsed: float, why: str) -> None:
+        self.waiting, self.elapsed = why, elapsed
+        if self.live is not None:
+            return self._redraw()
+        self._say(f"  {elapsed:5.1f} s  waiting: {why}")
