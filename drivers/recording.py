@@ -6,7 +6,9 @@ A run file holds everything needed to reprocess a run::
                      software, start_time (ISO 8601, UTC), source (the bus),
                      config_toml (the configuration text used, or ""),
                      config_sha256 (its digest, checked on every read),
-                     frames_committed, complete, end_time
+                     frames_committed, complete, end_time; optional
+                     job_json (serial, order, operator, note) and
+                     influence_matrix_json (the matrix the run was solved with)
     /frames/...      every dataset chunked, with HDF5's Fletcher32 checksum
     /frames/t_s      float64 (n,)     host receive time [s]
     /frames/can_id   uint32  (n,)
@@ -59,6 +61,12 @@ from stand.errors import RecordingError, WriteError
 RUN_FORMAT = "rotor-stand-run"
 RUN_FORMAT_VERSION = 1
 RUN_SUFFIXES = (".h5", ".hdf5")
+JOB_ATTR = "job_json"
+"""Run file attribute: the job the run was made for (JSON: serial, order, operator, note)."""
+MATRIX_ATTR = "influence_matrix_json"
+"""Run file attribute: the stored influence matrix the run was measured with (its JSON)."""
+CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR)
+"""Text attributes a converted or rewritten run keeps."""
 FLUSH_INTERVAL_S = 0.5
 """Frames reach the disk at least this often [s]; a crash loses at most this much."""
 RETRY_FOR_S = 10.0
@@ -600,6 +608,7 @@ def write_recording(
             config_toml=str(meta.get("config_toml", "")),
             software=str(meta.get("software", "")),
             force=True,  # its own temporary file
+            attrs={k: str(meta[k]) for k in CARRIED_ATTRS if meta.get(k)},
         ) as w:
             w.append(recording.frames)
             w.warn(recording.warnings)

@@ -10,6 +10,7 @@ Tables (SI units, the seed's symbols)::
     [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g
     [sensors]     (optional) gain, delay_s per node (from stand calibrate)
     [display]     (optional) mass = "g" | "oz", length = "mm" | "in" (what the operator sees)
+    [archive]     (optional) url: the database runs are archived in
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -127,6 +128,15 @@ class DisplayTable(BaseModel):
     length: Literal["mm", "in"] = "mm"
 
 
+class ArchiveTable(BaseModel):
+    """``[archive]``: where runs are archived (a database URL; default: the user's own)."""
+
+    model_config = STRICT
+
+    url: Annotated[str, Field(min_length=1, max_length=2000)]
+    """``sqlite:///path/archive.sqlite`` or ``postgresql+psycopg://user@host/db``."""
+
+
 class SensorsTable(BaseModel):
     """``[sensors]``: each node's calibrated sensitivity (1 = as STATUS says) and delay [s]."""
 
@@ -155,6 +165,7 @@ class Config(BaseModel):
     correction: CorrectionTable = CorrectionTable()
     sensors: SensorsTable = SensorsTable()
     display: DisplayTable = DisplayTable()
+    archive: ArchiveTable | None = None
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measure.measure` needs from the configuration."""

@@ -228,3 +228,17 @@ class BusTimeoutError(BusError, TimeoutError):
     def __init__(self, message: str, *, channel: str, timeout_s: float, frames_received: int = 0):
         self.timeout_s = timeout_s
         super().__init__(message, channel=channel, frames_received=frames_received)
+
+
+class ArchiveError(StandError, OSError):
+    """The archive (its database) cannot be opened, read or written.
+
+    Attributes
+    ----------
+    url : str
+        The archive's address, its password left out.
+    """
+
+    def __init__(self, message: str, *, url: str):
+        self.url = url
+        super().__init__(f"archive {url}: {message}")

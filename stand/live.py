@@ -34,8 +34,15 @@ from stand.errors import (
     StandError,
     UsageError,
 )
-from stand.pipeline import SOFTWARE, SolveOptions, build_result, check_matrix, measure_streams
-from stand.result import LiveInfo, Provenance, Result
+from stand.pipeline import (
+    SOFTWARE,
+    SolveOptions,
+    build_result,
+    check_matrix,
+    job_of,
+    measure_streams,
+)
+from stand.result import Job, LiveInfo, Provenance, Result
 
 FIRST_CHECK_S = 1.0
 """The first solve of a live run comes after this long [s]."""
@@ -311,6 +318,8 @@ def measure_until_precise(
         duration_s=streams.duration_s,
         config_toml=session.config_toml,
         matrix=None if options.matrix is None else options.matrix.path,
+        job=job_of(session.run_attrs, session.run_path),
+        rotor_type=cfg.rotor.type,
     )
     goal = targets(final.solution.U_kg_m)
     return build_result(
@@ -399,17 +408,24 @@ def measure_live(
     on_start: Callable[[str], None] | None = None,
     on_progress: Callable[[Progress], None] | None = None,
     on_wait: Callable[[float, str], None] | None = None,
+    job: Job | None = None,
 ) -> tuple[Result, LiveSession]:
-    """One live session measured until precise: the result, and the session (closed)."""
+    """One live session measured until precise: the result, and the session (closed).
+    ``job`` (serial, order, operator, note) is recorded with the run."""
+    from stand.drivers.recording import JOB_ATTR
+
     cfg, params = source.cfg, source.params
     check_matrix(options, cfg, live=True)
+    attrs = {} if options.matrix is None else options.matrix.run_attrs()
+    if job:
+        attrs[JOB_ATTR] = job.to_text()
     with LiveSession(
         bus_kwargs,
         run_path,
         config_toml=source.config_toml,
         scene_frames=source.scene_frames,
         silence_timeout_s=silence_timeout_s,
-        run_attrs=None if options.matrix is None else options.matrix.run_attrs(),
+        run_attrs=attrs,
     ) as session:
         if on_start:
             on_start(session.where)

@@ -32,9 +32,6 @@ it checks, an influence matrix and the run it solves.  The unbalance is the same
 speed, but the stand's response (each influence coefficient, about as the speed's square
 on a soft-bearing stand) and its errors are not."""
 
-RUN_ATTR = "influence_matrix_json"
-"""The run file attribute holding the matrix a run was measured with."""
-
 Pair = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
 
 
@@ -101,7 +98,9 @@ class LoadedMatrix:
 
     def run_attrs(self) -> dict[str, str]:
         """What a run solved with it stores, so that it is reprocessed with it."""
-        return {RUN_ATTR: self.text}
+        from stand.drivers.recording import MATRIX_ATTR
+
+        return {MATRIX_ATTR: self.text}
 
 
 def read_matrix(path: str) -> LoadedMatrix:

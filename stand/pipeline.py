@@ -33,11 +33,20 @@ from stand.core.balance import (
     plane_tolerances,
     static_couple,
 )
-from stand.drivers.recording import config_digest
+from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, config_digest
 from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError, UsageError
-from stand.matrix import RUN_ATTR, SAME_SPEED, parse_matrix
+from stand.matrix import SAME_SPEED, parse_matrix
 from stand.measure import Measurement, measure
-from stand.result import Check, LiveInfo, Provenance, Result, Tolerance, Traces, Uncertainty
+from stand.result import (
+    Check,
+    Job,
+    LiveInfo,
+    Provenance,
+    Result,
+    Tolerance,
+    Traces,
+    Uncertainty,
+)
 
 SOFTWARE = f"stand {__version__}"
 SPECTRUM_MAX_SAMPLES = 1 << 18
@@ -70,6 +79,21 @@ class SolveOptions:
     draws: int = 1000
     traces: bool = False
     matrix: Any = None
+
+
+def job_of(meta: dict[str, Any], path: str) -> Job:
+    """The job a run file records (an empty one if none; RecordingError if damaged)."""
+    from stand.errors import RecordingError
+
+    text = meta.get(JOB_ATTR)
+    if not text:
+        return Job()
+    try:
+        return Job.from_text(str(text))
+    except (ValueError, TypeError) as exc:
+        raise RecordingError(
+            f"the attribute {JOB_ATTR!r} is not a job ({exc})", path=path
+        ) from None
 
 
 def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:
@@ -299,7 +323,7 @@ def solve_recording(
     else:
         cfg, params, text = stored_config(rec.meta, rec.path)
         source = f"{rec.path} (stored)"
-    stored = rec.meta.get(RUN_ATTR)
+    stored = rec.meta.get(MATRIX_ATTR)
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
     check_matrix(options, cfg, live=True)
@@ -318,6 +342,8 @@ def solve_recording(
         duration_s=streams.duration_s,
         config_toml=text,
         matrix=None if options.matrix is None else options.matrix.path,
+        job=job_of(rec.meta, path),
+        rotor_type=cfg.rotor.type,
     )
     return build_result(
         m, cfg, params, stream_warnings=streams.warnings, provenance=prov,

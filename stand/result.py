@@ -11,18 +11,47 @@ agree to the last digit they show.
 
 from __future__ import annotations
 
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
 from stand.core import Diagnostic, phasor_to_polar, rad_s_to_rpm, unbalance_to_polar
 from stand.core.balance import Correction
+from stand.errors import ModelError
 from stand.measure import Measurement
 
 RESULT_VERSION = 1
 """Version of the JSON form; bumped when a key changes meaning."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a run was made for: the rotor's serial number, the order, who balanced it."""
+
+    serial: str | None = None
+    order: str | None = None
+    operator: str | None = None
+    note: str | None = None
+
+    def __bool__(self) -> bool:
+        return any(asdict(self).values())
+
+    def to_text(self) -> str:
+        """As a run file records it (JSON)."""
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_text(cls, text: str) -> Job:
+        """The job a run file records (ValueError if the attribute is not one)."""
+        data = json.loads(text)
+        if not isinstance(data, dict) or set(data) - set(cls.__dataclass_fields__):
+            raise ValueError("not a job record")
+        if not all(v is None or isinstance(v, str) for v in data.values()):
+            raise ValueError("a job field is not text")
+        return cls(**data)
 
 
 @dataclass(frozen=True)
@@ -51,6 +80,10 @@ class Provenance:
         The configuration text itself (for the report; the JSON carries its digest).
     matrix : str or None
         The stored influence matrix used in place of the stand model, if any.
+    job : Job
+        Serial, order, operator, note (empty when not given).
+    rotor_type : str or None
+        The config's ``[rotor] type``.
     """
 
     software: str
@@ -63,6 +96,8 @@ class Provenance:
     duration_s: float = 0.0
     config_toml: str = field(default="", repr=False)
     matrix: str | None = None
+    job: Job = Job()
+    rotor_type: str | None = None
 
 
 @dataclass(frozen=True)
@@ -156,6 +191,29 @@ class Result:
     def omega_rad_s(self) -> float:
         """The speed the result refers to [rad/s]."""
         return self.measurement.omega_rad_s
+
+
+def finite(obj: Any, where: str = "") -> Any:
+    """``obj`` if every number in it is finite; else :class:`ModelError` naming the key.
+
+    A NaN or an infinity in an answer means the inputs carry no physics (a speed
+    of 1e300 rpm, NaN timestamps): it is refused, never printed.
+    """
+    if isinstance(obj, float) and not math.isfinite(obj):
+        raise ModelError(f"the answer is not a finite number at {where or 'the top'} ({obj}): "
+                         "the inputs make no physical sense")  # fmt: skip
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            finite(v, f"{where}.{k}" if where else str(k))
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            finite(v, f"{where}[{i}]")
+    return obj
+
+
+def json_text(obj: Any, **kwargs: Any) -> str:
+    """Strict JSON (no NaN or Infinity: :func:`finite` refuses them first)."""
+    return json.dumps(finite(obj), allow_nan=False, **kwargs)
 
 
 def _g_mm(kg_m: float) -> float:
@@ -312,7 +370,8 @@ def to_json(r: Result) -> dict[str, Any]:
     ``warnings``, ``correction_mode``, ``corrections``, ``static``,
     ``couple``, ``display`` (the units the operator sees), and when present
     ``tolerance``, ``parameter_uncertainty``, ``check``, the live keys
-    ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``; ``provenance`` last.
+    ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``; ``job`` (serial,
+    order, operator, note, rotor type); ``provenance`` last.
     """
     m = r.measurement
     out: dict[str, Any] = {
@@ -339,6 +398,7 @@ def to_json(r: Result) -> dict[str, Any]:
         out["targets_g_mm"] = [_g_mm(t) for t in r.live.targets_kg_m]
         out["run_file"] = r.provenance.run_file
     p = r.provenance
+    out["job"] = {**asdict(p.job), "rotor_type": p.rotor_type}
     out["provenance"] = {
         "result_version": RESULT_VERSION,
         "software": p.software,

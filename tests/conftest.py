@@ -19,3 +19,69 @@ def demo_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("demo") / "demo.h5"
     assert main(["simulate", "demo", "--out", str(path)]) == 0
     return path
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _private_archive(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """The default archive (the user's data directory, via XDG_DATA_HOME) in a folder of
+    the test session's own: balance and measure archive every run."""
+    os.environ["XDG_DATA_HOME"] = str(tmp_path_factory.mktemp("xdg-data"))
+
+
+def _pg_bin() -> Path | None:
+    """The folder of PostgreSQL's server programs (Debian's package, or on PATH)."""
+    import glob
+    import shutil
+
+    found = shutil.which("initdb")
+    if found:
+        return Path(found).resolve().parent
+    versions = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"))
+    return Path(versions[-1]).parent if versions else None
+
+
+@pytest.fixture(scope="session")
+def postgres_url(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """A PostgreSQL server of the test session's own (a new cluster in a temporary folder,
+    on a Unix socket there, stopped at the end): its SQLAlchemy URL."""
+    import pwd
+    import shutil
+    import socket
+    import subprocess
+
+    bin_dir = _pg_bin()
+    if bin_dir is None:
+        pytest.skip("PostgreSQL's server is not installed (Debian: apt-get install postgresql)")
+    as_user: list[str] = []
+    if os.geteuid() == 0:  # initdb refuses root: run the server as Debian's postgres user
+        try:
+            pwd.getpwnam("postgres")
+        except KeyError:
+            pytest.skip("running as root and there is no 'postgres' user to run the server as")
+        as_user = ["runuser", "-u", "postgres", "--"]
+    import tempfile
+
+    # not under pytest's own temporary root: that is private to root, and the server's
+    # user must reach its folder (and a Unix socket path is at most 107 bytes)
+    folder = Path(tempfile.mkdtemp(prefix="stand-pg-"))
+    folder.chmod(0o777)
+    data = folder / "data"
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    run = lambda *cmd: subprocess.run(  # noqa: E731
+        [*as_user, *cmd], check=True, capture_output=True, text=True, timeout=120
+    )
+    run(str(bin_dir / "initdb"), "-D", str(data), "-U", "stand", "-A", "trust", "--no-sync")
+    log = folder / "server.log"
+    opts = f"-k {folder} -p {port} -c listen_addresses='' -c fsync=off"
+    run(str(bin_dir / "pg_ctl"), "-D", str(data), "-l", str(log), "-o", opts, "-w", "start")
+    try:
+        yield f"postgresql+psycopg://stand@/postgres?host={folder}&port={port}"
+    finally:
+        subprocess.run(
+            [*as_user, str(bin_dir / "pg_ctl"), "-D", str(data), "-m", "immediate", "stop"],
+            capture_output=True,
+            timeout=60,
+        )
+        shutil.rmtree(folder, ignore_errors=True)

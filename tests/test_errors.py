@@ -22,6 +22,7 @@ SAMPLES = {
     "DiskFullError": {"path": "run.h5", "needed_bytes": 10, "free_bytes": 1},
     "BusError": {"channel": "virtual:x", "frames_received": 5},
     "BusTimeoutError": {"channel": "virtual:x", "timeout_s": 2.0},
+    "ArchiveError": {"url": "sqlite:///a.sqlite"},
 }  # fmt: skip
 CLASSES = [
     c for _, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, errors.StandError)

@@ -30,6 +30,7 @@ APP = DRIVERS | {
     "stand",
     "stand.matrix",
     "stand.influence",
+    "stand.archive",
 }
 
 ALLOWED: dict[str, set[str]] = {
@@ -50,10 +51,13 @@ ALLOWED: dict[str, set[str]] = {
     # the application layer: one path from a run (or a live session) to one Result
     "stand/result.py": NUMERIC | CORE | {"stand.measure"},
     # a stored influence matrix: its schema, read and written
-    "stand/matrix.py": NUMERIC | CORE | {"pydantic", "stand.config", "stand.drivers.files"},
+    "stand/matrix.py": NUMERIC | CORE | {"pydantic", "stand.config", "stand.drivers.files",
+                                         "stand.drivers.recording"},
     "stand/pipeline.py": NUMERIC | APP | {"stand.config"},
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},
     "stand/influence.py": NUMERIC | APP,
+    # the archive: results into a database (SQLAlchemy; schema migrations by Alembic)
+    "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},
     "stand/evaluate.py": NUMERIC | APP | {"stand.sim"},
     # the simulated stand: physics on the core; frames through the drivers
     "stand/sim": NUMERIC | DRIVERS | {"stand.sim", "stand.config", "pydantic"},

@@ -48,6 +48,9 @@ SUBCOMMANDS: dict[str, str] = {
     "advise": "natural frequencies and the recommended balancing speed range",
     "evaluate": "ISO 21940-21 evaluation of stand + software on a simulated scene",
     "forward": "support accelerations for given unbalances, and the natural frequencies",
+    "archive": "the archive of runs: import runs recorded before, verify the run files",
+    "history": "find archived runs by serial, rotor type, order, operator, date, verdict",
+    "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
 }
 """Each subcommand and its one-line help; its module ``stand.cli.<name>`` is imported only
 when it is the one chosen, so ``stand --help`` and ``stand --version`` import none."""

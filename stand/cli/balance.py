@@ -39,7 +39,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import measure_live_from_args, solve_options, targets_from
+    from stand.cli.common import (
+        archive_live,
+        measure_live_from_args,
+        solve_options,
+        targets_from,
+    )
     from stand.cli.format import show
     from stand.pipeline import check_against, check_notes
     from stand.result import to_json
@@ -65,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     out["report"] = report
     show(out, args.json)  # the answer first: the report takes a moment
     sys.stdout.flush()
+    archive_live(args, result, cfg)
     from stand.cli.common import write_text_output
     from stand.report import render
 

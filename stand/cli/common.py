@@ -310,7 +310,75 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
     add_live_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_measure_arguments(p)
+    add_job_arguments(p)
+    add_archive_argument(p)
+    p.add_argument("--no-archive", action="store_true", help="do not archive the run")
     add_bus_arguments(p)
+
+
+def add_archive_argument(p: argparse.ArgumentParser) -> None:
+    """``--archive URL``: the archive's database."""
+    p.add_argument(
+        "--archive",
+        metavar="URL",
+        help="the archive's database (default: the config's [archive] url, else one SQLite "
+        "file in the user's data directory)",
+    )
+
+
+def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
+    """Archive a live run (unless ``--no-archive``); say where on stderr."""
+    if args.no_archive or not result.provenance.run_file:
+        return
+    from stand.archive import archive_result
+    from stand.errors import ArchiveError
+
+    url = archive_url(args, cfg)
+    try:
+        run_id = archive_result(result, url, config=args.config)
+    except ArchiveError as exc:
+        raise ArchiveError(
+            f"{str(exc).split(': ', 1)[1]} (the run is kept in {result.provenance.run_file}: "
+            "stand archive import it later)",
+            url=exc.url,
+        ) from exc
+    if not args.quiet:
+        print(f"archived as run {run_id}", file=sys.stderr)
+
+
+def archive_url(args: argparse.Namespace, cfg: Any = None) -> str:
+    """The archive the options (or the config) name."""
+    from stand.archive import url_for
+
+    return url_for(getattr(args, "archive", None), cfg)
+
+
+JOB_FIELDS = ("serial", "order", "operator", "note")
+
+
+def add_job_arguments(p: argparse.ArgumentParser) -> None:
+    """``--serial``, ``--order``, ``--operator``, ``--note``: the job, recorded with the run."""
+    g = p.add_argument_group("the job (recorded with the run and archived)")
+    g.add_argument("--serial", metavar="SN", help="the rotor's serial number")
+    g.add_argument("--order", metavar="ORDER", help="the order or batch it belongs to")
+    g.add_argument("--operator", metavar="NAME", help="who balances it")
+    g.add_argument("--note", metavar="TEXT", help="a free note")
+
+
+def job_from(args: argparse.Namespace) -> Any:
+    """The :class:`stand.result.Job` the options give (UsageError for unusable text)."""
+    from stand.result import Job
+
+    values = {}
+    for name in JOB_FIELDS:
+        value = getattr(args, name, None)
+        limit = 1000 if name == "note" else 64
+        if value is not None and (
+            not value.strip() or len(value) > limit or any(ord(c) < 32 for c in value)
+        ):
+            raise UsageError(f"--{name}: 1 to {limit} printable characters, got {value[:80]!r}")
+        values[name] = value
+    return Job(**values)
 
 
 def check_live_arguments(args: argparse.Namespace, command: str) -> None:
@@ -361,6 +429,7 @@ def measure_live_from_args(
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)
     path = run_path(args)
+    job = job_from(args)
     from stand.cli.panel import LiveDisplay
 
     show = LiveDisplay(source, path, quiet=args.quiet)
@@ -376,6 +445,7 @@ def measure_live_from_args(
             on_start=show.start,
             on_progress=show.progress,
             on_wait=show.wait,
+            job=job,
         )
     if session.failure is not None and not args.quiet:
         print(f"stand: {session.failure}", file=sys.stderr)

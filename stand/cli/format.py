@@ -6,38 +6,13 @@ so the text and the JSON of one run agree to the last digit shown.
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 from typing import Any, TextIO
 
-from stand.errors import ModelError
+from stand.result import json_text
 from stand.units import Display
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
-
-
-def finite(obj: Any, where: str = "") -> Any:
-    """``obj`` if every number in it is finite; else :class:`ModelError` naming the key.
-
-    A NaN or an infinity in an answer means the inputs carry no physics (a speed
-    of 1e300 rpm, NaN timestamps): it is refused, never printed.
-    """
-    if isinstance(obj, float) and not math.isfinite(obj):
-        raise ModelError(f"the answer is not a finite number at {where or 'the top'} ({obj}): "
-                         "the inputs make no physical sense")  # fmt: skip
-    if isinstance(obj, dict):
-        for k, v in obj.items():
-            finite(v, f"{where}.{k}" if where else str(k))
-    elif isinstance(obj, (list, tuple)):
-        for i, v in enumerate(obj):
-            finite(v, f"{where}[{i}]")
-    return obj
-
-
-def json_text(obj: Any, **kwargs: Any) -> str:
-    """Strict JSON (no NaN or Infinity: :func:`finite` refuses them first)."""
-    return json.dumps(finite(obj), allow_nan=False, **kwargs)
 
 
 def dump_json(obj: Any, out: TextIO | None = None) -> None:

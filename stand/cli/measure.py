@@ -12,10 +12,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import measure_live_from_args, solve_options, targets_from
+    from stand.cli.common import (
+        archive_live,
+        measure_live_from_args,
+        solve_options,
+        targets_from,
+    )
     from stand.cli.format import show
     from stand.result import to_json
 
-    result, _, _ = measure_live_from_args(args, "measure", targets_from(args), solve_options(args))
+    result, cfg, _ = measure_live_from_args(
+        args, "measure", targets_from(args), solve_options(args)
+    )
     show(to_json(result), args.json)
+    archive_live(args, result, cfg)
     return 0

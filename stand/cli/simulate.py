@@ -7,7 +7,14 @@ import sys
 from pathlib import Path
 
 from stand import __version__
-from stand.cli.common import add_bus_arguments, add_scene_arguments, bus_kwargs, scene_masses
+from stand.cli.common import (
+    add_bus_arguments,
+    add_job_arguments,
+    add_scene_arguments,
+    bus_kwargs,
+    job_from,
+    scene_masses,
+)
 from stand.errors import UsageError
 
 
@@ -33,12 +40,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, help="random seed (overrides [run] seed)")
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     add_scene_arguments(p)
+    add_job_arguments(p)
     add_bus_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
     from stand.config import config_toml
-    from stand.drivers.recording import Recording, write_recording
+    from stand.drivers.recording import JOB_ATTR, Recording, write_recording
     from stand.drivers.streams import rebuild
     from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
@@ -48,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         from stand.drivers.files import check_output
 
         check_output(args.out, force=args.force)  # before the work, and again when written
+    job = job_from(args)
     stored = None
     if args.config:
         from stand.pipeline import load_config_text
@@ -72,6 +81,7 @@ def run(args: argparse.Namespace) -> int:
                 "source": f"simulated scene {label} (seed {scene.run.seed})",
                 "config_toml": stored or config_toml(scene.config()),
                 "software": f"stand {__version__}",
+                JOB_ATTR: job.to_text() if job else "",
             },
         )
         write_recording(

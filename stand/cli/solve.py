@@ -105,9 +105,9 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-    from stand.cli.format import dump_json, json_text
+    from stand.cli.format import dump_json
     from stand.pipeline import solve_many
-    from stand.result import to_json
+    from stand.result import json_text, to_json
 
     runs = list(args.runs)
     results: dict[str, dict[str, Any]] = {}

@@ -1,0 +1,108 @@
+"""Reading the archive: runs by job, type, date and verdict, with their links and planes."""
+
+from __future__ import annotations
+
+import cmath
+import datetime as dt
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from stand.archive.schema import planes, runs
+from stand.archive.store import Archive
+
+
+@dataclass(frozen=True)
+class Filters:
+    """What ``stand history`` looks for; None matches anything.
+
+    ``since`` and ``until`` are dates (``YYYY-MM-DD``, UTC), both included.
+    """
+
+    serial: str | None = None
+    rotor_type: str | None = None
+    order: str | None = None
+    operator: str | None = None
+    since: dt.date | None = None
+    until: dt.date | None = None
+    verdict: str | None = None
+    limit: int | None = None
+
+
+def _where(f: Filters) -> list[Any]:
+    conds = []
+    for column, value in (
+        (runs.c.serial, f.serial),
+        (runs.c.rotor_type, f.rotor_type),
+        (runs.c.order_no, f.order),
+        (runs.c.operator, f.operator),
+        (runs.c.verdict, f.verdict),
+    ):
+        if value is not None:
+            conds.append(column == value)
+    if f.since is not None:
+        conds.append(runs.c.start_time >= f.since.isoformat())
+    if f.until is not None:
+        conds.append(runs.c.start_time < (f.until + dt.timedelta(days=1)).isoformat())
+    return conds
+
+
+def _plane(p: Any) -> dict[str, Any]:
+    U = complex(p.U_re_kg_m, p.U_im_kg_m)
+    return {
+        "plane": p.plane,
+        "unbalance_g_mm": round(abs(U) * 1e6, 3),
+        "angle_deg": round(math.degrees(-cmath.phase(U)) % 360, 3),
+        "uncertainty_g_mm": round(p.radius95_kg_m * 1e6, 3),
+        "permissible_g_mm": None
+        if p.permissible_kg_m is None
+        else round(p.permissible_kg_m * 1e6, 3),
+        "pass": p.passed,
+        "leftover_g_mm": round(p.leftover_kg_m * 1e6, 3),
+        "urr": None if p.urr is None else round(p.urr, 5),
+    }
+
+
+def history(url: str, f: Filters) -> list[dict[str, Any]]:
+    """The runs that match, oldest first, each with its planes, the run it checks and the
+    runs that check it."""
+    import sqlalchemy as sa
+
+    cols = [c for c in runs.c if c.name != "result_json"]
+    q = sa.select(*cols).where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
+    if f.limit is not None:
+        q = q.limit(f.limit)
+    with Archive(url) as archive, archive.transaction() as conn:
+        found = conn.execute(q).all()
+        ids = [r.id for r in found]
+        by_run: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
+        checked_by: dict[int, list[int]] = {i: [] for i in ids}
+        for chunk in range(0, len(ids), 500):  # IN lists of bounded length
+            part = ids[chunk : chunk + 500]
+            for p in conn.execute(
+                sa.select(planes).where(planes.c.run_id.in_(part)).order_by(planes.c.plane)
+            ):
+                by_run[p.run_id].append(_plane(p))
+            for c in conn.execute(
+                sa.select(runs.c.id, runs.c.checks_run_id).where(runs.c.checks_run_id.in_(part))
+            ):
+                checked_by[c.checks_run_id].append(c.id)
+    return [
+        {
+            "id": r.id,
+            "start_time": r.start_time,
+            "serial": r.serial,
+            "order": r.order_no,
+            "operator": r.operator,
+            "note": r.note,
+            "rotor_type": r.rotor_type,
+            "rpm": r.rpm,
+            "verdict": r.verdict,
+            "checks_run": r.checks_run_id,
+            "checked_by": checked_by[r.id],
+            "planes": by_run[r.id],
+            "run_file": r.run_file,
+            "file_sha256": r.file_sha256,
+        }
+        for r in found
+    ]

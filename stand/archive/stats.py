@@ -1,0 +1,212 @@
+"""What the archive says about production: yield, spread, and a systematic unbalance.
+
+Each rotor (a serial number; a run without one counts alone) enters with its
+first run, the unbalance production gave it.  Per plane, and for the static
+and couple parts, the complex unbalances ``U_k`` (as points ``(Re, Im)``)
+give a mean and a spread.  Whether production puts a *systematic*
+unbalance into every rotor (a jig, a machining step) is Hotelling's T^2
+test of ``mean = 0``, with the 95 % confidence region of the mean: the
+ellipse ``n (m - mu)^T S^-1 (m - mu) <= p (n-1)/(n-p) F_{p,n-p}(0.95)``,
+``p = 2``.  This is the statistical view of manufacturing tolerances of
+the stand model's seed 003, against which the stand's own 95 % interval (the
+mean radius the runs report) is set.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+CONFIDENCE = 0.95
+"""Confidence of the mean's region and level of the test (5 % false alarms by design)."""
+MIN_ROTORS = 3
+"""Hotelling's T^2 in two dimensions needs at least three points."""
+
+
+@dataclass(frozen=True)
+class MeanUnbalance:
+    """The mean of complex unbalances, its confidence region, the test of ``mean = 0``.
+
+    Attributes
+    ----------
+    n : int
+    mean_kg_m : complex
+    region_axes_kg_m : tuple of float
+        Semi-axes of the 95 % confidence ellipse of the mean (major, minor) [kg m].
+    region_major_deg : float
+        Direction of the major axis, in the sense of the reported angles [deg].
+    t2, p_value : float
+        Hotelling's T^2 of ``mean = 0`` and its p-value.
+    spread_kg_m : float
+        RMS distance of the rotors from the mean [kg m].
+    """
+
+    n: int
+    mean_kg_m: complex
+    region_axes_kg_m: tuple[float, float]
+    region_major_deg: float
+    t2: float
+    p_value: float
+    spread_kg_m: float
+    _S: Any = None  # the sample covariance (2 x 2), for :meth:`holds`
+    _c: float = 0.0
+
+    @property
+    def systematic(self) -> bool:
+        """The mean differs from zero at the 5 % level."""
+        return self.p_value < 1 - CONFIDENCE
+
+    def holds(self, mu_kg_m: complex) -> bool:
+        """Whether ``mu`` lies in the mean's confidence region."""
+        d = np.array([self.mean_kg_m.real - mu_kg_m.real, self.mean_kg_m.imag - mu_kg_m.imag])
+        return bool(self.n * d @ np.linalg.solve(self._S, d) <= self._c)
+
+
+def mean_unbalance(U_kg_m: Any) -> MeanUnbalance:
+    """Hotelling's T^2 on complex unbalances (at least :data:`MIN_ROTORS`, not all alike).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> U = 1e-3 + 2e-4 * (rng.normal(size=400) + 1j * rng.normal(size=400))
+    >>> m = mean_unbalance(U)
+    >>> m.systematic, m.holds(1e-3), round(abs(m.mean_kg_m) * 1e6)
+    (True, True, 984)
+    """
+    from scipy import stats
+
+    z = np.asarray(U_kg_m, dtype=complex)
+    n, p = len(z), 2
+    if n < MIN_ROTORS:
+        raise ValueError(f"need {MIN_ROTORS} rotors or more, got {n}")
+    x = np.column_stack([z.real, z.imag])
+    m = x.mean(axis=0)
+    S = np.cov(x, rowvar=False)
+    if not np.linalg.matrix_rank(S) == 2:
+        raise ValueError("the unbalances lie on a line: no spread to judge a mean against")
+    t2 = float(n * m @ np.linalg.solve(S, m))
+    f = (n - p) / (p * (n - 1)) * t2
+    c = p * (n - 1) / (n - p) * float(stats.f.ppf(CONFIDENCE, p, n - p))
+    lam, vec = np.linalg.eigh(S)
+    axes = np.sqrt(c * lam / n)
+    major = vec[:, 1]
+    return MeanUnbalance(
+        n=n,
+        mean_kg_m=complex(m[0], m[1]),
+        region_axes_kg_m=(float(axes[1]), float(axes[0])),
+        region_major_deg=math.degrees(-math.atan2(major[1], major[0])) % 180,
+        t2=t2,
+        p_value=float(stats.f.sf(f, p, n - p)),
+        spread_kg_m=float(np.sqrt(np.mean(np.sum((x - m) ** 2, axis=1)))),
+        _S=S,
+        _c=c,
+    )
+
+
+def _polar_g_mm(U: complex) -> dict[str, float]:
+    return {
+        "unbalance_g_mm": round(abs(U) * 1e6, 3),
+        "angle_deg": round(math.degrees(-math.atan2(U.imag, U.real)) % 360, 3),
+    }
+
+
+def _mean_json(m: MeanUnbalance) -> dict[str, Any]:
+    return {
+        "rotors": m.n,
+        "mean": _polar_g_mm(m.mean_kg_m),
+        "region95_g_mm": [round(a * 1e6, 3) for a in m.region_axes_kg_m],
+        "region95_major_deg": round(m.region_major_deg, 2),
+        "t2": round(m.t2, 4),
+        "p_value": round(m.p_value, 6),
+        "systematic": m.systematic,
+        "spread_rms_g_mm": round(m.spread_kg_m * 1e6, 3),
+    }
+
+
+def _rotors(rows: list[Any]) -> list[Any]:
+    """Each rotor's first run that checks no other (a run without a serial is a rotor)."""
+    seen: set[str] = set()
+    first = []
+    for r in rows:
+        if r.checks_run_id is not None:
+            continue
+        if r.serial is None or r.serial not in seen:
+            first.append(r)
+            if r.serial is not None:
+                seen.add(r.serial)
+    return first
+
+
+def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]:
+    """The statistics of one rotor type's archived runs (JSON-ready, g mm and degrees)."""
+    import sqlalchemy as sa
+
+    from stand.archive.query import Filters, _where
+    from stand.archive.schema import planes, runs
+    from stand.archive.store import Archive
+
+    f = filters or Filters()
+    f = Filters(**{**f.__dict__, "rotor_type": rotor_type, "limit": None})
+    cols = [c for c in runs.c if c.name != "result_json"]
+    with Archive(url) as archive, archive.transaction() as conn:
+        rows = conn.execute(
+            sa.select(*cols).where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
+        ).all()
+        ids = [r.id for r in rows]
+        U: dict[int, list[complex]] = {i: [0j, 0j] for i in ids}
+        r95: dict[int, list[float]] = {i: [0.0, 0.0] for i in ids}
+        for k in range(0, len(ids), 500):
+            q = sa.select(planes).where(planes.c.run_id.in_(ids[k : k + 500]))
+            for p in conn.execute(q):
+                U[p.run_id][p.plane - 1] = complex(p.U_re_kg_m, p.U_im_kg_m)
+                r95[p.run_id][p.plane - 1] = p.radius95_kg_m
+    rotors = _rotors(rows)
+    checks: dict[int, list[Any]] = {}
+    for r in rows:
+        if r.checks_run_id is not None:
+            checks.setdefault(r.checks_run_id, []).append(r)
+    passed = failed = open_ = 0
+    for r in rotors:
+        if r.verdict == "pass":
+            passed += 1
+        elif r.verdict == "fail":
+            after = checks.get(r.id)
+            if not after:
+                open_ += 1
+            elif after[0].verdict == "pass":
+                passed += 1
+            else:
+                failed += 1
+    out: dict[str, Any] = {
+        "rotor_type": rotor_type,
+        "runs": len(rows),
+        "rotors": len(rotors),
+        "first_pass_yield": None if passed + failed == 0 else round(passed / (passed + failed), 4),
+        "passed_first_time": passed,
+        "failed_first_check": failed,
+        "not_checked_yet": open_,
+        "stand_interval95_g_mm": [
+            round(float(np.mean([r95[r.id][i] for r in rotors])) * 1e6, 3) if rotors else None
+            for i in range(2)
+        ],
+    }
+    parts = {
+        "plane1": [U[r.id][0] for r in rotors],
+        "plane2": [U[r.id][1] for r in rotors],
+        "static": [complex(r.static_re_kg_m, r.static_im_kg_m) for r in rotors],
+        "couple": [complex(r.couple_re_kg_m, r.couple_im_kg_m) for r in rotors],
+    }
+    for name, values in parts.items():
+        try:
+            out[name] = _mean_json(mean_unbalance(values))
+        except ValueError as exc:
+            out[name] = {"rotors": len(values), "note": str(exc)}
+    out["points_g_mm"] = {
+        name: [[round(z.real * 1e6, 3), round(z.imag * 1e6, 3)] for z in values]
+        for name, values in parts.items()
+    }
+    out["times"] = [r.start_time for r in rotors]
+    return out

@@ -1,0 +1,164 @@
+"""The archive's database: open (and migrate), write one result, read back.
+
+SQLAlchemy Core over SQLite (the default: one file in the user's data
+directory, WAL mode, writers queued by ``BEGIN IMMEDIATE`` and a busy
+timeout) or PostgreSQL (a plant-wide archive, by URL).  Each run is written
+in one transaction: a crash leaves the run in the archive whole or not at
+all.  The schema is :mod:`stand.archive.schema`; every change to it is an
+Alembic migration, applied when an archive is opened.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from stand.archive.schema import planes, runs
+from stand.errors import ArchiveError
+
+BUSY_TIMEOUT_S = 60.0
+"""A writer waits this long for another to finish before giving up [s]."""
+MIGRATIONS = Path(__file__).resolve().parent / "migrations"
+
+
+def default_url() -> str:
+    """``sqlite:///`` the file ``archive.sqlite`` in the user's data directory."""
+    import platformdirs
+
+    folder = platformdirs.user_data_path("stand", appauthor=False)
+    return f"sqlite:///{folder / 'archive.sqlite'}"
+
+
+def _safe(url: str) -> str:
+    """The URL as errors show it: without a password."""
+    from sqlalchemy.engine import make_url
+
+    try:
+        return make_url(url).render_as_string(hide_password=True)
+    except Exception:
+        return url
+
+
+class Archive:
+    """One archive, opened (and migrated to the latest schema).
+
+    Use as a context manager; :meth:`close` is idempotent.
+
+    Raises
+    ------
+    ArchiveError
+        The URL is not a database this software can use, or it cannot be reached.
+    """
+
+    def __init__(self, url: str | None = None):
+        import sqlalchemy as sa
+        from sqlalchemy.exc import ArgumentError, NoSuchModuleError, SQLAlchemyError
+
+        self.url = url or default_url()
+        self.shown = _safe(self.url)
+        try:
+            u = sa.engine.make_url(self.url)
+            self.sqlite = u.get_backend_name() == "sqlite"
+            if self.sqlite and u.database and u.database != ":memory:":
+                Path(u.database).parent.mkdir(parents=True, exist_ok=True)
+            self.engine = sa.create_engine(self.url, future=True)
+        except (ArgumentError, NoSuchModuleError, ValueError, OSError) as exc:
+            raise ArchiveError(f"not a usable database URL ({exc})", url=self.shown) from exc
+        if self.sqlite:
+            _sqlite_pragmas(self.engine)
+        self._closed = False
+        try:
+            self._migrate()
+        except SQLAlchemyError as exc:
+            self.close()
+            raise ArchiveError(_reason(exc), url=self.shown) from exc
+
+    def _migrate(self) -> None:
+        from alembic import command
+        from alembic.config import Config
+
+        cfg = Config()
+        cfg.set_main_option("script_location", str(MIGRATIONS))
+        with self.engine.begin() as conn:
+            if not self.sqlite:  # one migrating process at a time on a shared server
+                conn.exec_driver_sql("SELECT pg_advisory_xact_lock(727274)")
+            cfg.attributes["connection"] = conn
+            command.upgrade(cfg, "head")
+
+    @contextmanager
+    def transaction(self) -> Iterator[Any]:
+        """One transaction (``BEGIN IMMEDIATE`` on SQLite); ArchiveError if it fails."""
+        from sqlalchemy.exc import SQLAlchemyError
+
+        try:
+            with self.engine.begin() as conn:
+                yield conn
+        except SQLAlchemyError as exc:
+            raise ArchiveError(_reason(exc), url=self.shown) from exc
+
+    def add(self, row: dict[str, Any], plane_rows: list[dict[str, Any]]) -> int:
+        """Write one run and its planes in one transaction; the run's id.  A run already
+        archived (the same file digest) is not written again: its id is returned."""
+        import sqlalchemy as sa
+
+        with self.transaction() as conn:
+            found = conn.execute(
+                sa.select(runs.c.id).where(runs.c.file_sha256 == row["file_sha256"])
+            ).scalar()
+            if found is not None:
+                return int(found)
+            stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+            new = conn.execute(runs.insert().values(**row, archived_at=stamp))
+            run_id = new.inserted_primary_key[0]
+            conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
+            return int(run_id)
+
+    def run_id(self, file_sha256: str) -> int | None:
+        """The id of the run with this file digest, if archived."""
+        import sqlalchemy as sa
+
+        with self.transaction() as conn:
+            found = conn.execute(
+                sa.select(runs.c.id).where(runs.c.file_sha256 == file_sha256)
+            ).scalar()
+        return None if found is None else int(found)
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.engine.dispose()
+
+    def __enter__(self) -> Archive:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _sqlite_pragmas(engine: Any) -> None:
+    """WAL (readers never block the writer), foreign keys, a busy timeout, and
+    ``BEGIN IMMEDIATE`` so that two writers queue instead of deadlocking."""
+    from sqlalchemy import event
+
+    @event.listens_for(engine, "connect")
+    def _on_connect(dbapi_conn: Any, _record: Any) -> None:
+        dbapi_conn.isolation_level = None  # SQLAlchemy emits BEGIN itself, below
+        cur = dbapi_conn.cursor()
+        cur.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
+        cur.execute("PRAGMA journal_mode = WAL")
+        cur.execute("PRAGMA synchronous = NORMAL")
+        cur.execute("PRAGMA foreign_keys = ON")
+        cur.close()
+
+    @event.listens_for(engine, "begin")
+    def _on_begin(conn: Any) -> None:
+        conn.exec_driver_sql("BEGIN IMMEDIATE")
+
+
+def _reason(exc: Exception) -> str:
+    """The database's own words, on one line."""
+    orig = getattr(exc, "orig", None) or exc
+    return " ".join(str(orig).split())[:300]

@@ -1,0 +1,81 @@
+"""Production statistics of a rotor type: yield, spread, and a systematic unbalance."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from stand.cli.common import add_archive_argument, archive_url
+from stand.cli.format import dump_json
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
+    p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
+    p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
+    add_archive_argument(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def run(args: argparse.Namespace) -> int:
+    import datetime as dt
+
+    from stand.archive.query import Filters
+    from stand.archive.stats import production
+    from stand.errors import UsageError
+
+    dates = {}
+    for name in ("since", "until"):
+        text = getattr(args, name)
+        try:
+            dates[name] = None if text is None else dt.date.fromisoformat(text)
+        except ValueError:
+            raise UsageError(f"--{name}: a date YYYY-MM-DD, got {text!r}") from None
+    out = production(
+        archive_url(args), args.rotor_type, Filters(since=dates["since"], until=dates["until"])
+    )
+    if args.json:
+        dump_json(out)
+    else:
+        _text(out)
+    return 0
+
+
+def _text(out: dict[str, Any]) -> None:
+    if not out["rotors"]:
+        print(f"rotor type {out['rotor_type']}: no archived rotor")
+        return
+    fpy = out["first_pass_yield"]
+    print(
+        f"rotor type {out['rotor_type']}: {out['rotors']} rotors ({out['runs']} runs); "
+        f"first-pass yield {'-' if fpy is None else f'{100 * fpy:.1f} %'} "
+        f"({out['passed_first_time']} within tolerance first time, {out['failed_first_check']} "
+        f"failed their first check, {out['not_checked_yet']} not checked yet)"
+    )
+    print("initial unbalance (each rotor's first run); angles from the reference mark, against")
+    print("the direction of rotation:")
+    print(
+        f"  {'part':8} {'mean [g mm]':>12} {'at [deg]':>9}  {'95 % region of the mean':>26}  "
+        f"{'spread rms':>11}  systematic?"
+    )
+    for name in ("plane1", "plane2", "static", "couple"):
+        s = out[name]
+        if "mean" not in s:
+            print(f"  {name:8} {s['note']}")
+            continue
+        a, b = s["region95_g_mm"]
+        verdict = f"{'YES' if s['systematic'] else 'no'} (p = {s['p_value']:.2g})"
+        major = s["region95_major_deg"]
+        region = f"+-{a:.1f} x {b:.1f} (major at {major:.0f} deg)"
+        print(
+            f"  {name:8} {s['mean']['unbalance_g_mm']:12.1f} {s['mean']['angle_deg']:9.1f}  "
+            f"{region:>26}  {s['spread_rms_g_mm']:11.1f}  {verdict}"
+        )
+    own = out["stand_interval95_g_mm"]
+    print(
+        f"the stand's own 95 % interval: +-{own[0]:.1f} and +-{own[1]:.1f} g mm per run, against "
+        f"a production spread of {out['plane1']['spread_rms_g_mm']:.1f} and "
+        f"{out['plane2']['spread_rms_g_mm']:.1f} g mm rms"
+        if "spread_rms_g_mm" in out["plane1"] and "spread_rms_g_mm" in out["plane2"]
+        else f"the stand's own 95 % interval: +-{own[0]:.1f} and +-{own[1]:.1f} g mm per run"
+    )
