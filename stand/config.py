@@ -73,6 +73,10 @@ class StandTable(BaseModel):
     reference_angle_deg: Angle = 0.0
     clock_tolerance_pct: PositiveFloat = 0.1
     """How far the speeds two nodes measure of one shaft may differ [%]."""
+    name: Name | None = None
+    """The stand's name, as certificates show it (e.g. "stand 2, hall B")."""
+    calibrated: Annotated[str, Field(pattern=r"^\d{4}-\d{2}-\d{2}$")] | None = None
+    """The date of its last calibration (YYYY-MM-DD; stand calibrate writes it)."""
 
 
 class RotorTable(BaseModel):
@@ -179,7 +183,8 @@ class Config(BaseModel):
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
-        del values["reference_angle_deg"], values["clock_tolerance_pct"], values["type"]
+        for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated"):
+            del values[key]
         return StandParameters(**values)
 
 

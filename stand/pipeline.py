@@ -262,6 +262,9 @@ def build_result(
         live=live,
         traces=traces_of(streams, m.omega_rad_s) if options.traces and streams else None,
         display=(cfg.display.mass, cfg.display.length),
+        positions=(c.positions, c.position0_deg),
+        stand_name=cfg.stand.name,
+        calibrated=cfg.stand.calibrated,
     )
 
 

@@ -1,149 +1,206 @@
-"""The balancing report: one self-contained HTML file, figures embedded as PNG.
+"""The balancing certificate: one self-contained HTML document, figures embedded.
 
-What an operator needs on one page: the verdict per plane, the correction
-(mass, angle, remove or add) on a polar plot against the tolerance circles,
-the support amplitudes and phases, the spectrum around 1x, the speed over
-the run, the settings and the warnings.  matplotlib is imported here only.
+Page 1 is what a customer accepts: the job (rotor type, serial, order,
+operator, stand, date in local time), the tolerance basis, per plane the
+unbalance before and after (with the URR when the run checks a correction)
+against its permissible share, the correction still to make and what the
+weight rounding leaves, the calibration used, and signature fields.  Page 2
+is the measurement behind it: the supports, the spectrum and speed, the
+warnings and the configuration.  A print layout (A4) goes with it, and
+:mod:`stand.printing` turns it into a PDF.  Formatting only: everything
+comes from the run's :class:`~stand.result.Result`.
 """
 
 from __future__ import annotations
 
-import base64
+import datetime as dt
 import html
-import io
-import math
 from typing import Any
 
-import numpy as np
-
-from stand.core import rad_s_to_rpm
-from stand.result import Result, Traces, to_json
+from stand.plots import polar, spectrum_and_speed
+from stand.result import Result, to_json
 from stand.units import Display
 
-
-def _png(fig: Any) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=96, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
-
-
-def _polar(out: dict[str, Any]) -> str:
-    """Unbalance per plane, its 95 % circle, and the plane's tolerance circle."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9, 4.4))
-    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
-    d = Display.of(out)
-    for ax, plane, corr in zip(axes, out["planes"], out["corrections"], strict=True):
-        i = plane["plane"]
-        ax.set_theta_zero_location("N")  # the reference mark at the top
-        ax.set_theta_direction(-1)  # phi counted against the direction of rotation
-        u, phi = d.unbalance_value(plane["unbalance_g_mm"]), math.radians(plane["angle_deg"])
-        r95 = d.unbalance_value(plane["uncertainty_g_mm"])
-        ring = np.linspace(0, 2 * math.pi, 200)
-        rmax = u * 1.25
-        if i in tol:
-            per = d.unbalance_value(tol[i]["permissible_g_mm"])
-            ax.fill(ring, np.full_like(ring, per), color="tab:green", alpha=0.15)
-            ax.plot(
-                ring,
-                np.full_like(ring, per),
-                color="tab:green",
-                lw=1.5,
-                label=f"tolerance {d.unbalance(tol[i]['permissible_g_mm'])}",
-            )
-            rmax = max(rmax, per * 1.25)
-        ax.plot(
-            [phi],
-            [u],
-            "o",
-            color="tab:red",
-            ms=8,
-            label=f"unbalance {d.unbalance(plane['unbalance_g_mm'])}",
-        )
-        # the 95 % circle around the unbalance, drawn in the plane (not in polar coordinates)
-        z = u * np.exp(1j * phi) + r95 * np.exp(1j * ring)
-        ax.plot(np.angle(z), np.abs(z), color="tab:red", lw=1)
-        for k, w in enumerate(corr["weights"]):
-            a = math.radians(w["angle_deg"])
-            ax.plot(
-                [a, a],
-                [0, rmax * 0.95],
-                color="tab:blue",
-                lw=2.5,
-                label=f"{corr['action']} {d.mass(w['mass_g'])} at {w['angle_deg']:.1f}°"
-                if k < 3
-                else None,
-            )
-        ax.set_rmax(rmax * 1.1)
-        ax.set_title(f"plane {i} [{d.unbalance_unit}]", pad=18)
-        ax.legend(loc="lower center", bbox_to_anchor=(0.5, -0.32), fontsize=8)
-    return _png(fig)
-
-
-def _spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
-    import matplotlib.pyplot as plt
-
-    f1 = rpm / 60
-    fig, ax = plt.subplots(figsize=(9, 3.2))
-    for n, (f, spec) in sorted((traces.spectra if traces else {}).items()):
-        ax.semilogy(f, spec, lw=1, label=f"support {n}")
-    for k in (1, 2, 3):
-        ax.axvline(k * f1, color="grey", ls=":", lw=1)
-        ax.text(k * f1, ax.get_ylim()[1], f"{k}x", ha="center", va="bottom", fontsize=8)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("amplitude [m/s²]")
-    ax.legend(fontsize=8)
-    ax.grid(True, alpha=0.3)
-    spectrum = _png(fig)
-
-    fig, ax = plt.subplots(figsize=(9, 2.6))
-    for n, (t, w) in sorted((traces.speeds if traces else {}).items()):
-        ax.plot(t, rad_s_to_rpm(w), lw=1, label=f"node {n}")
-    ax.set_xlabel("time [s] (node clock)")
-    ax.set_ylabel("speed [rpm]")
-    ax.ticklabel_format(axis="y", useOffset=False, style="plain")
-    lo, hi = ax.get_ylim()
-    mid = 0.5 * (lo + hi)
-    half = max(0.5 * (hi - lo), 0.01 * mid)  # a steady speed shows as steady: at least +-1 %
-    ax.set_ylim(mid - half, mid + half)
-    ax.legend(fontsize=8)
-    ax.grid(True, alpha=0.3)
-    return spectrum, _png(fig)
-
-
 _CSS = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 960px; color: #222; }
-h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.15em; margin-top: 1.6em; }
-table { border-collapse: collapse; margin: 0.5em 0; }
-td, th { border: 1px solid #ccc; padding: 4px 10px; text-align: right; }
-th { background: #f2f2f2; } td.l, th.l { text-align: left; }
+body { font-family: "DejaVu Sans", system-ui, sans-serif; margin: 2em auto; max-width: 960px;
+       color: #222; font-size: 14px; }
+h1 { font-size: 1.6em; margin: 0; } h2 { font-size: 1.1em; margin: 1.2em 0 0.3em; }
+header { display: flex; justify-content: space-between; align-items: center;
+         border-bottom: 2px solid #222; padding-bottom: 0.4em; }
+table { border-collapse: collapse; margin: 0.4em 0; width: 100%; }
+td, th { border: 1px solid #bbb; padding: 4px 8px; text-align: right; }
+th { background: #eee; } td.l, th.l { text-align: left; }
+table.job td, table.job th { text-align: left; }
 .pass { background: #1b7f3a; color: white; padding: 2px 10px; border-radius: 4px; }
 .fail { background: #b3261e; color: white; padding: 2px 10px; border-radius: 4px; }
-.big { font-size: 1.25em; } .muted { color: #666; font-size: 0.9em; }
+.badge { font-size: 1.3em; font-weight: bold; }
+.muted { color: #555; font-size: 0.9em; }
 .warn { background: #fff4ce; border-left: 4px solid #e0a800; padding: 4px 10px; margin: 4px 0; }
+.sign { display: grid; grid-template-columns: 1fr 1fr; gap: 1.2em 3em; margin-top: 1.5em; }
+.sign div { border-top: 1px solid #222; padding-top: 3px; font-size: 0.9em; }
 img { max-width: 100%; }
+pre { font-size: 0.8em; background: #f6f6f6; padding: 0.6em; white-space: pre-wrap; }
+.appendix { margin-top: 2em; }
+@page { size: A4; margin: 12mm 12mm 14mm 12mm; }
+@media print {
+  body { margin: 0; max-width: none; font-size: 11px; }
+  .appendix { break-before: page; }
+  img { max-height: 88mm; }
+  h2 { break-after: avoid; } table, .sign { break-inside: avoid; }
+}
 """
 
 
-def _verdict(out: dict[str, Any]) -> str:
+def local_time(iso_utc: str) -> str:
+    """``2026-11-22 15:03 CET`` from an ISO 8601 UTC time (as given if unreadable).
+
+    >>> local_time("")
+    ''
+    """
+    if not iso_utc:
+        return ""
+    try:
+        t = dt.datetime.fromisoformat(iso_utc)
+    except ValueError:
+        return iso_utc
+    return t.astimezone().strftime("%Y-%m-%d %H:%M %Z")
+
+
+def _badge(out: dict[str, Any]) -> str:
     t = out.get("tolerance")
     if t is None:
-        return '<p class="big">No tolerance set: correct as shown below.</p>'
-    ok = all(p["pass"] for p in t["planes"])
-    if ok:
-        return (
-            '<p class="big"><span class="pass">IN TOLERANCE</span> both planes within '
-            f"ISO 21940-11 G {t['grade_mm_s']:g}: no correction needed.</p>"
-        )
-    bad = ", ".join(str(p["plane"]) for p in t["planes"] if not p["pass"])
+        return '<span class="badge muted">no tolerance set</span>'
+    if all(p["pass"] for p in t["planes"]):
+        return '<span class="badge pass">IN TOLERANCE</span>'
+    return '<span class="badge fail">OUT OF TOLERANCE</span>'
+
+
+def _job(out: dict[str, Any], result: Result) -> str:
+    e, j, st = html.escape, out["job"], out["stand"]
+    cells = [
+        ("rotor type", j.get("rotor_type")), ("serial number", j.get("serial")),
+        ("order", j.get("order")), ("operator", j.get("operator")),
+        ("balancing stand", st.get("name")),
+        ("date", local_time(result.provenance.start_time)),
+    ]  # fmt: skip
+    row = "".join(f"<th>{k}</th><td>{e(v or '–')}</td>" for k, v in cells[:3])
+    row2 = "".join(f"<th>{k}</th><td>{e(v or '–')}</td>" for k, v in cells[3:])
+    note = f"<tr><th>note</th><td colspan=5>{e(j['note'])}</td></tr>" if j.get("note") else ""
+    return f"<table class=job><tr>{row}</tr><tr>{row2}</tr>{note}</table>"
+
+
+def _basis(out: dict[str, Any]) -> str:
+    t, d = out.get("tolerance"), Display.of(out)
+    if t is None:
+        return "<p><b>Tolerance:</b> none set (the configuration has no [tolerance] table).</p>"
+    per = " and ".join(d.unbalance(p["permissible_g_mm"]) for p in t["planes"])
     return (
-        '<p class="big"><span class="fail">OUT OF TOLERANCE</span> plane(s) '
-        + bad
-        + ": make the correction below, then run again with --check.</p>"
+        f"<p><b>Tolerance basis:</b> {t['standard']}, balance quality grade "
+        f"G {t['grade_mm_s']:g}, maximum service speed {t['max_speed_rpm']:g} rpm: "
+        f"U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}, "
+        f"shared as {per} in planes 1 and 2. Balancing speed {out['rpm']:.0f} rpm.</p>"
+    )
+
+
+def _results(out: dict[str, Any]) -> str:
+    d, e = Display.of(out), html.escape
+    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}
+    u = d.unbalance_unit
+    head = (
+        f"<th>before [{u}]</th><th>after [{u}] (95 %)</th><th>URR</th>"
+        if check
+        else f"<th>unbalance [{u}] (95 %)</th>"
+    )
+    rows = []
+    for plane in out["planes"]:
+        i = plane["plane"]
+        now = f"{d.number(plane['unbalance_g_mm'])} ± {d.number(plane['uncertainty_g_mm'])}"
+        cells = (
+            f"<td>{d.number(check[i]['before_g_mm'])}</td><td>{now}</td>"
+            f"<td>{100 * check[i]['urr']:.1f} %</td>"
+            if i in check and check[i]["urr"] is not None
+            else f"<td>{now}</td>"
+        )
+        angle = f"{plane['angle_deg']:.1f}°"
+        verdict = (
+            (
+                '<span class="pass">PASS</span>'
+                if tol[i]["pass"]
+                else '<span class="fail">FAIL</span>'
+            )
+            if i in tol
+            else "–"
+        )
+        per = d.number(tol[i]["permissible_g_mm"]) if i in tol else "–"
+        rows.append(f"<tr><td>{i}</td>{cells}<td>{angle}</td><td>{per}</td><td>{verdict}</td></tr>")
+    prev = (
+        f"<p class=muted>Before: the run {e(out['check']['previous_run'])}, before the "
+        "correction; after: this run.</p>"
+        if check
+        else ""
+    )
+    return (
+        f"<table><tr><th>plane</th>{head}<th>angle</th><th>permissible [{u}]</th>"
+        f"<th>verdict</th></tr>{''.join(rows)}</table>{prev}"
+    )
+
+
+def _corrections(out: dict[str, Any]) -> str:
+    d, e = Display.of(out), html.escape
+    items = []
+    for plane, c in zip(out["planes"], out["corrections"], strict=True):
+        i = plane["plane"]
+        if c.get("within_noise"):
+            items.append(
+                f"plane {i}: no correction needed: the unbalance is inside its own 95 % interval"
+            )
+            continue
+        if c.get("within_tolerance"):
+            items.append(f"plane {i}: within tolerance: no correction needed")
+            continue
+        what = " + ".join(
+            f"{d.mass(w['mass_g'])}"
+            + (
+                f" ({' + '.join(d.mass(x) for x in w['pieces_g'])})"
+                if len(w["pieces_g"]) > 1
+                else ""
+            )
+            + f" at {w['angle_deg']:.1f}°"
+            + ("" if w["position"] is None else f" (position {w['position']})")
+            for w in c["weights"]
+        )
+        left = ""
+        if c["residual_g_mm"] > 0.05:
+            judged = c.get("residual_within_tolerance")
+            left = f"; the weight rounding leaves {d.unbalance(c['residual_g_mm'])}" + (
+                "" if judged is None else " (within tolerance)" if judged else " (OVER tolerance)"
+            )
+        items.append(
+            f"plane {i}: <b>{e(c['action'])} {e(what)}</b> at radius "
+            f"{d.length(plane['radius_mm'])}{left}"
+        )
+    return "<ul>" + "".join(f"<li>{x}</li>" for x in items) + "</ul>"
+
+
+def _calibration(out: dict[str, Any], result: Result) -> str:
+    p, e = result.provenance, html.escape
+    when = out["stand"].get("calibrated")
+    cal = f"calibrated on {e(when)}" if when else "design values (no calibration date)"
+    matrix = f"; influence matrix {e(p.matrix)}" if p.matrix else ""
+    return (
+        f"<p><b>Calibration used:</b> configuration {e(p.config_source)}, SHA-256 "
+        f"{p.config_sha256[:16]}…, {cal}{matrix}. Measured with {e(p.software)}.</p>"
+    )
+
+
+def _signatures(out: dict[str, Any]) -> str:
+    op = html.escape(out["job"].get("operator") or "")
+    return (
+        "<div class=sign>"
+        f"<div>balanced by {op}</div><div>date</div>"
+        "<div>inspected by</div><div>date</div>"
+        "</div>"
     )
 
 
@@ -171,60 +228,8 @@ def _uncertainty(out: dict[str, Any]) -> str:
     )
 
 
-def render(result: Result) -> str:
-    """The report of a result as one HTML document (figures embedded): formatting only."""
+def _appendix(out: dict[str, Any], result: Result) -> str:
     e = html.escape
-    out = to_json(result)
-    p = result.provenance
-    meta = {
-        "run file": p.run_file or "",
-        "start time": p.start_time,
-        "software": p.software,
-        "source": p.source,
-        "frames": p.frames,
-        "duration [s]": round(p.duration_s, 3),
-        "configuration": f"{p.config_source} (SHA-256 {p.config_sha256[:16]})",
-    }
-    config_text = p.config_toml
-    d = Display.of(out)
-    rows = []
-    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
-    for plane, corr in zip(out["planes"], out["corrections"], strict=True):
-        i = plane["plane"]
-        what = (
-            " + ".join(
-                f"{d.mass(w['mass_g'])} at {w['angle_deg']:.1f}°"
-                + ("" if w["position"] is None else f" (position {w['position']})")
-                for w in corr["weights"]
-            )
-            or "nothing"
-        )
-        if i in tol:
-            t = tol[i]
-            verdict = (
-                '<span class="pass">PASS</span>' if t["pass"] else '<span class="fail">FAIL</span>'
-            )
-            margin = ("margin " if t["pass"] else "over by ") + d.unbalance(abs(t["margin_g_mm"]))
-            tol_cell = (
-                f"{d.unbalance(t['permissible_g_mm'])}: {verdict} <span class=muted>{margin}</span>"
-            )
-        else:
-            tol_cell = "<span class=muted>no [tolerance] set</span>"
-        if corr.get("within_noise"):
-            action = "no correction: inside its own 95 % interval (angle undefined)"
-        elif corr.get("within_tolerance"):
-            action = "within tolerance: no correction needed"
-        else:
-            action = (
-                f"<b>{e(corr['action'])} {e(what)}</b> at radius {d.length(plane['radius_mm'])}"
-            )
-        angle = "–" if corr.get("within_noise") else f"{plane['angle_deg']:.1f}°"
-        rows.append(
-            f"<tr><td>{i}</td><td>{d.number(plane['unbalance_g_mm'])} ± "
-            f"{d.number(plane['uncertainty_g_mm'])}"
-            f"</td><td>{angle}</td><td class=l big>{action}</td>"
-            f"<td class=l>{tol_cell}</td></tr>"
-        )
     supports = "".join(
         f"<tr><td>{s['node']}</td><td>{s['amplitude_m_s2']:.4f} ± {s['uncertainty_m_s2']:.4f}</td>"
         f"<td>{s['phase_deg']:.2f}°</td><td>{s['revolutions']:.0f}</td>"
@@ -235,43 +240,50 @@ def render(result: Result) -> str:
         "".join(f'<div class="warn">{e(w)}</div>' for w in out["warnings"])
         or "<p class=muted>none</p>"
     )
-    spectrum, speed = _spectrum_and_speed(result.traces, out["rpm"])
-    st, cp = out["static"], out["couple"]
-    t = out.get("tolerance")
-    tol_line = (
-        f"ISO 21940-11, G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
-        f"U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}"
-        if t
-        else "no tolerance set"
-    )
-    run_meta = "".join(
+    spectrum, speed = spectrum_and_speed(result.traces, out["rpm"])
+    p = result.provenance
+    meta = {
+        "run file": p.run_file or "", "start time (UTC)": p.start_time, "source": p.source,
+        "frames": p.frames, "duration [s]": round(p.duration_s, 3),
+    }  # fmt: skip
+    rows = "".join(
         f"<tr><th class=l>{e(str(k))}</th><td class=l>{e(str(v))}</td></tr>"
         for k, v in meta.items()
     )
-    return f"""<!doctype html>
-<html lang="en"><head><meta charset="utf-8"><title>Balancing report</title>
-<style>{_CSS}</style></head><body>
-<h1>Balancing report</h1>
-{_verdict(out)}
-<p class=muted>{e(str(meta.get("run file", "")))} · {out["rpm"]:.1f} rpm ·
-{e(str(meta.get("start time", "")))}</p>
-<h2>Correction</h2>
-<p class=muted>Angles from the reference mark, counted <b>against the direction of rotation</b>.
-To remove material: at that angle; to add a weight: 180° opposite.</p>
-<table><tr><th>plane</th><th>unbalance [{d.unbalance_unit}] (95 %)</th><th>angle</th>
-<th class=l>correction</th><th class=l>tolerance</th></tr>{"".join(rows)}</table>
-<p>Static part {d.unbalance(st["unbalance_g_mm"])} at {st["angle_deg"]:.1f}°; couple part
-±{d.unbalance(cp["unbalance_g_mm"])} at {cp["angle_deg"]:.1f}° (plane 1 / plane 2).
-{tol_line}.</p>
-<img alt="corrections against the tolerance circles" src="{_polar(out)}">
-{_uncertainty(out)}
-<h2>Supports (1x)</h2>
-<table><tr><th>node</th><th>amplitude [m/s²] (95 %)</th><th>phase</th><th>revolutions</th>
+    return f"""<div class=appendix>
+<h2>Measurement</h2>
+<table><tr><th>support</th><th>1x amplitude [m/s²] (95 %)</th><th>phase</th><th>revolutions</th>
 <th>noise at 1x [m/s²]</th></tr>{supports}</table>
+{_uncertainty(out)}
 <h2>Spectrum around 1x</h2><img alt="spectrum" src="{spectrum}">
 <h2>Speed over the run</h2><img alt="speed" src="{speed}">
 <h2>Warnings</h2>{warnings}
-<h2>Settings</h2><table>{run_meta}</table>
-<pre>{e(config_text)}</pre>
+<h2>Run</h2><table>{rows}</table>
+<pre>{e(p.config_toml)}</pre>
+</div>"""
+
+
+def render(result: Result) -> str:
+    """The certificate of a result as one HTML document (figures embedded)."""
+    out = to_json(result)
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>Balancing certificate</title>
+<style>{_CSS}</style></head><body>
+<header><h1>Balancing certificate</h1>{_badge(out)}</header>
+{_job(out, result)}
+{_basis(out)}
+<h2>Unbalance per correction plane</h2>
+{_results(out)}
+<p class=muted>Angles from the reference mark, counted
+<b>against the direction of rotation</b>. Material is removed, or weights added, at the
+angles given.</p>
+<h2>Correction</h2>
+{_corrections(out)}
+<img alt="each plane: tolerance, unbalance, correction" src="{polar(out)}">
+<p class=muted>▼ the reference mark; the arrow: the direction of rotation; angles are counted
+against it from the mark; 1..N: the holes (positions) when the correction uses them.</p>
+{_calibration(out, result)}
+{_signatures(out)}
+{_appendix(out, result)}
 </body></html>
 """

@@ -181,6 +181,11 @@ class Result:
     traces: Traces | None = field(default=None, compare=False)
     display: tuple[str, str] = ("g", "mm")
     """The units the operator sees: mass (g or oz) and length (mm or in)."""
+    positions: tuple[int, float] = (0, 0.0)
+    """The correction's positions: how many (0: any angle), and the angle of the first [deg]."""
+    stand_name: str | None = None
+    calibrated: str | None = None
+    """The date of the stand's last calibration (YYYY-MM-DD), if the config says."""
 
     @property
     def U_kg_m(self) -> np.ndarray:
@@ -368,7 +373,8 @@ def to_json(r: Result) -> dict[str, Any]:
 
     Keys: ``rpm``, ``planes``, ``supports``, ``condition_number``,
     ``warnings``, ``correction_mode``, ``corrections``, ``static``,
-    ``couple``, ``display`` (the units the operator sees), and when present
+    ``couple``, ``display`` (the units the operator sees), ``correction_positions``,
+    ``stand`` (its name and calibration date), and when present
     ``tolerance``, ``parameter_uncertainty``, ``check``, the live keys
     ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``; ``job`` (serial,
     order, operator, note, rotor type); ``provenance`` last.
@@ -385,6 +391,8 @@ def to_json(r: Result) -> dict[str, Any]:
         "static": _polar(r.static_kg_m),
         "couple": _polar(r.couple_kg_m),
         "display": {"mass": r.display[0], "length": r.display[1]},
+        "correction_positions": {"count": r.positions[0], "position1_deg": r.positions[1]},
+        "stand": {"name": r.stand_name, "calibrated": r.calibrated},
     }
     if r.tolerance is not None:
         out["tolerance"] = _tolerance(r)

@@ -62,9 +62,12 @@ ALLOWED: dict[str, set[str]] = {
     # the simulated stand: physics on the core; frames through the drivers
     "stand/sim": NUMERIC | DRIVERS | {"stand.sim", "stand.config", "pydantic"},
     # formatting only: the report and the CLI read a Result, never measure on their own
-    "stand/report.py": NUMERIC | CORE | {"stand.result", "stand.units", "matplotlib"},
+    "stand/report.py": NUMERIC | CORE | {"stand.result", "stand.units", "stand.plots"},
+    "stand/plots.py": NUMERIC | CORE | {"stand.result", "stand.units", "matplotlib"},
+    "stand/printing.py": {"stand.errors", "stand.drivers.files"},
     "stand/cli": NUMERIC | APP | {"stand.cli", "stand.config", "stand.sim", "stand.evaluate",
-                                  "stand.live", "stand.report", "stand.units", "pydantic", "rich"},
+                                  "stand.live", "stand.report", "stand.units", "stand.printing",
+                                  "pydantic", "rich"},
 }  # fmt: skip
 """Layer (a folder or a file) -> the non-stdlib modules it may import (and their children;
 ``stand`` alone is the package's ``__init__``: its version)."""

@@ -101,13 +101,13 @@ def test_the_simulated_stand_in_another_process_over_udp_multicast(tmp_path: Pat
     out = tmp_path / "r.h5"
     balance = subprocess.Popen(
         [sys.executable, "-m", "stand.cli", "balance", "--config", cfg, *bus, "--out", str(out),
-         "--json", "--quiet", "--max-seconds", "20", "--report", str(tmp_path / "r.html")],
+         "--json", "--max-seconds", "20", "--report", str(tmp_path / "r.html")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
-        import time
-
-        time.sleep(2.0)  # let the balance process join the group first
+        assert balance.stderr is not None  # its first line: the bus is open, the group joined
+        first = balance.stderr.readline()
+        assert first.startswith("measuring on"), first
         sim = subprocess.run(
             [sys.executable, "-m", "stand.cli", "simulate", "demo", "--bus", *bus],
             capture_output=True, text=True, timeout=60, check=False,
@@ -117,7 +117,7 @@ def test_the_simulated_stand_in_another_process_over_udp_multicast(tmp_path: Pat
     finally:
         if balance.poll() is None:
             balance.kill()
-    assert balance.returncode == 0, stderr
+    assert balance.returncode == 0, first + stderr
     res = json.loads(stdout)
     for p, truth in zip(res["planes"], (5000.0, 3000.0), strict=True):
         # twice the 95 % radius: a 95 % circle misses 1 run in 20, twice it 1 in 10^4 or less

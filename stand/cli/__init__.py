@@ -11,10 +11,8 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import logging
 import os
 import sys
-import traceback
 from collections.abc import Callable, Sequence
 
 from stand import __version__
@@ -94,8 +92,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = "--debug" in args_list
     for var in BLAS_THREADS:
         os.environ.setdefault(var, "1")
-    if not debug:  # python-can's readers log a line per line they skip: we count them instead
-        logging.getLogger("can").setLevel(logging.ERROR)
     try:
         parser = build_parser(_chosen(args_list))
         args = parser.parse_args(args_list)
@@ -103,9 +99,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         if run is None:
             parser.print_help(sys.stderr)
             return EXIT_BAD_INPUT
+        if not debug:  # python-can's readers log a line per line they skip: we count them
+            import logging  # here, not at the top: --help and --version need none of it
+
+            logging.getLogger("can").setLevel(logging.ERROR)
         return run(args)
     except StandError as exc:
         if debug:
+            import traceback
+
             traceback.print_exc()
         print(f"stand: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -118,6 +120,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except Exception as exc:  # a bug: say so in one line, keep the traceback for --debug
         if debug:
+            import traceback
+
             traceback.print_exc()
         what = f"{type(exc).__name__}: {exc}"
         print(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import math
 from pathlib import Path
 from typing import Annotated, Any
@@ -106,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
             "H2": v["H2"],
             "reference_angle_deg": cfg.stand.reference_angle_deg
             + math.degrees(v["reference_angle_error_rad"]),
+            "calibrated": dt.date.today().isoformat(),
         }
     )
     sensors = cfg.sensors.model_copy(

@@ -1,4 +1,4 @@
-"""Write the balancing report of a run: one self-contained HTML file."""
+"""Write the balancing certificate of a run: a self-contained HTML file, and/or a PDF."""
 
 from __future__ import annotations
 
@@ -15,25 +15,65 @@ from stand.cli.common import (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run", metavar="RUN", help="run file (.h5) or python-can log")
-    p.add_argument("-o", "--out", required=True, metavar="REPORT.html", help="the report to write")
+    p.add_argument("-o", "--out", metavar="REPORT.html", help="the HTML certificate to write")
+    p.add_argument("--pdf", metavar="REPORT.pdf", help="the PDF to write (printed by Chromium)")
     p.add_argument(
         "--config",
         metavar="CFG",
         help="stand configuration (default: the one stored in the run file)",
     )
+    p.add_argument(
+        "--check",
+        metavar="PREVIOUS_RUN",
+        help="RUN is a check run: show the unbalance before the correction and the URR",
+    )
+    p.add_argument(
+        "--check-any",
+        action="store_true",
+        help="--check against a run of another rotor, stand or speed anyway",
+    )
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
-    add_force_argument(p, "REPORT.html")
+    add_force_argument(p, "the outputs")
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from stand.drivers.files import check_output
-    from stand.pipeline import solve_recording
+    from stand.errors import UsageError
+    from stand.pipeline import check_against, check_notes, load_config_text, solve_recording
     from stand.report import render
 
-    inputs = [i for i in (args.run, args.config) if i]
-    check_output(args.out, force=args.force, inputs=inputs)  # before the work
-    result = solve_recording(args.run, args.config, solve_options(args, traces=True))
-    write_text_output(args.out, render(result), force=args.force, inputs=inputs)
-    print(f"wrote {args.out}")
+    if not args.out and not args.pdf:
+        raise UsageError("stand report: give -o REPORT.html, --pdf REPORT.pdf, or both")
+    inputs = [i for i in (args.run, args.config, args.check) if i]
+    for out in (args.out, args.pdf):
+        if out:
+            check_output(out, force=args.force, inputs=inputs)  # before the work
+    options = solve_options(args, traces=True)
+    result = solve_recording(args.run, args.config, options)
+    if args.check:
+        from stand.pipeline import stored_config
+
+        if args.config:
+            cfg, params, _ = load_config_text(args.config)
+        else:
+            from stand.drivers.recording import read_recording
+
+            cfg, params, _ = stored_config(read_recording(args.run).meta, args.run)
+        check = check_against(
+            args.check, cfg, params, result.measurement,
+            strict=not args.check_any, matrix=options.matrix,
+        )  # fmt: skip
+        result = replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
+    page = render(result)
+    if args.out:
+        write_text_output(args.out, page, force=args.force, inputs=inputs)
+        print(f"wrote {args.out}")
+    if args.pdf:
+        from stand.printing import write_pdf
+
+        write_pdf(page, args.pdf, force=args.force, inputs=inputs)
+        print(f"wrote {args.pdf}")
     return 0
