@@ -149,3 +149,63 @@ def spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return spectrum, png(fig)
+
+
+_PARTS = (("plane1", "plane 1"), ("plane2", "plane 2"), ("static", "static part"),
+          ("couple", "couple part"))  # fmt: skip
+
+
+def production(out: dict[str, Any]) -> tuple[str, str]:
+    """A rotor type's initial unbalances: a polar scatter per part (tolerance circle, the
+    mean and its 95 % region), and their size over time."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 4, subplot_kw={"projection": "polar"}, figsize=(14, 4.4))
+    fig.subplots_adjust(wspace=0.55)
+    ring = np.linspace(0, 2 * math.pi, 200)
+    per = dict(zip(("plane1", "plane2"), out.get("permissible_g_mm") or [None, None], strict=True))
+    for ax, (key, title) in zip(axes, _PARTS, strict=True):
+        ax.set_theta_zero_location("N")
+        ax.set_theta_direction(-1)
+        pts = np.array([complex(x, y) for x, y in out["points_g_mm"][key]])
+        ax.plot(-np.angle(pts), np.abs(pts), ".", ms=3, color="0.4", label="rotors")
+        rmax = float(np.abs(pts).max()) * 1.1 if len(pts) else 1.0
+        if per.get(key):
+            ax.plot(ring, np.full_like(ring, per[key]), color="tab:green", lw=1.5,
+                    label=f"tolerance {per[key]:.0f} g mm")  # fmt: skip
+            rmax = max(rmax, per[key] * 1.2)
+        s = out[key]
+        if "mean" in s:
+            m = s["mean"]["unbalance_g_mm"] * np.exp(-1j * math.radians(s["mean"]["angle_deg"]))
+            a, b = s["region95_g_mm"]
+            t = math.radians(-s["region95_major_deg"])  # the ellipse, drawn in the plane
+            e = m + (a * np.cos(ring) + 1j * b * np.sin(ring)) * np.exp(1j * t)
+            ax.plot(-np.angle(e), np.abs(e), color="tab:red", lw=1.5, label="mean: 95 % region")
+            ax.plot([-np.angle(m)], [abs(m)], "+", color="tab:red", ms=10, mew=2)
+        ax.set_rmax(rmax)
+        ax.set_rticks(_ticks(rmax))
+        ax.set_rlabel_position(112)
+        ax.set_thetagrids(range(0, 360, 90), labels=["0°", "90°", "180°", "270°"], fontsize=7)
+        ax.tick_params(axis="y", labelsize=7)
+        ax.set_title(title, pad=14)
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), fontsize=7, frameon=False)
+    polar_png = png(fig)
+
+    import datetime as dt
+
+    import matplotlib.dates as mdates
+
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    times = mdates.date2num([dt.datetime.fromisoformat(t) for t in out["times"]])  # type: ignore[no-untyped-call]
+    ax.xaxis_date()
+    for key, title in _PARTS[:2]:
+        size = [abs(complex(x, y)) for x, y in out["points_g_mm"][key]]
+        ax.plot(times, size, ".", ms=3, label=title)
+    for key in ("plane1", "plane2"):
+        if per.get(key):
+            ax.axhline(per[key], color="tab:green", lw=1, ls="--")
+    ax.set_ylabel("initial unbalance [g mm]")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.autofmt_xdate()
+    return polar_png, png(fig)

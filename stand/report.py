@@ -287,3 +287,55 @@ against it from the mark; 1..N: the holes (positions) when the correction uses t
 {_appendix(out, result)}
 </body></html>
 """
+
+
+def _p(p: float) -> str:
+    """``p = 0.21``, or ``p < 0.0001`` (a p-value is never shown as 0)."""
+    return "p < 0.0001" if p < 1e-4 else f"p = {p:.2g}"
+
+
+def render_production(out: dict[str, Any]) -> str:
+    """A rotor type's production statistics (``stand stats --report``) as one HTML page."""
+    from stand.plots import production
+
+    e = html.escape
+    polar_png, trend_png = production(out)
+    rows = []
+    for key, title in (("plane1", "plane 1"), ("plane2", "plane 2"), ("static", "static part"),
+                       ("couple", "couple part")):  # fmt: skip
+        s = out[key]
+        if "mean" not in s:
+            rows.append(
+                f"<tr><td class=l>{title}</td><td colspan=5 class=l>{e(s['note'])}</td></tr>"
+            )
+            continue
+        a, b = s["region95_g_mm"]
+        verdict = "yes" if s["systematic"] else "no"
+        rows.append(
+            f"<tr><td class=l>{title}</td><td>{s['mean']['unbalance_g_mm']:.1f}</td>"
+            f"<td>{s['mean']['angle_deg']:.1f}°</td><td>± {a:.1f} × {b:.1f}</td>"
+            f"<td>{s['spread_rms_g_mm']:.1f}</td><td>{verdict} ({_p(s['p_value'])})</td></tr>"
+        )
+    fpy = out["first_pass_yield"]
+    own = out["stand_interval95_g_mm"]
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>Production of {e(out["rotor_type"])}</title>
+<style>{_CSS}</style></head><body>
+<header><h1>Production statistics: {e(out["rotor_type"])}</h1></header>
+<p>{out["rotors"]} rotors ({out["runs"]} runs). First-pass yield
+<b>{"–" if fpy is None else f"{100 * fpy:.1f} %"}</b>: {out["passed_first_time"]} within
+tolerance at their first run or first check, {out["failed_first_check"]} failed their
+first check, {out["not_checked_yet"]} not checked yet.</p>
+<h2>Initial unbalance (each rotor's first run)</h2>
+<table><tr><th class=l>part</th><th>mean [g mm]</th><th>at</th>
+<th>95 % region of the mean [g mm]</th><th>spread rms [g mm]</th>
+<th>systematic?</th></tr>{"".join(rows)}</table>
+<p class=muted>Hotelling's T² on the complex unbalances: a systematic part is a mean that
+differs from zero at the 5 % level; its 95 % region is an ellipse (semi-axes given). The
+stand's own 95 % interval per run: ± {own[0]:.1f} and ± {own[1]:.1f} g mm.</p>
+<img alt="initial unbalances, per part" src="{polar_png}">
+<p class=muted>Angles from the reference mark, against the direction of rotation; grey:
+the rotors; green: the tolerance; red: the mean and its 95 % region.</p>
+<h2>Over time</h2><img alt="initial unbalance over time" src="{trend_png}">
+</body></html>
+"""

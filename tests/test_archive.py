@@ -310,9 +310,12 @@ def test_stats_find_a_systematic_unbalance_within_its_region_and_none_when_there
     # the production spread (about 1414 g mm rms) is far above the stand's own interval
     assert out["plane1"]["spread_rms_g_mm"] == pytest.approx(1414, rel=0.15)
     assert out["stand_interval95_g_mm"][0] < 20
-    assert main(["stats", "--rotor-type", "auger", "--archive", url]) == 0
+    page = tmp_path / "stats.html"
+    assert main(["stats", "--rotor-type", "auger", "--archive", url, "--report", str(page)]) == 0
     text = capsys.readouterr().out
     assert "200 rotors" in text and "systematic?" in text
+    html = page.read_text()
+    assert html.count('src="data:image/png;base64,') == 2 and "first-pass yield" in html.lower()
 
 
 def test_hotelling_s_region_and_test_keep_their_95_percent_over_many_batches() -> None:

@@ -158,11 +158,14 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
         ids = [r.id for r in rows]
         U: dict[int, list[complex]] = {i: [0j, 0j] for i in ids}
         r95: dict[int, list[float]] = {i: [0.0, 0.0] for i in ids}
+        per: list[list[float]] = [[], []]
         for k in range(0, len(ids), 500):
             q = sa.select(planes).where(planes.c.run_id.in_(ids[k : k + 500]))
             for p in conn.execute(q):
                 U[p.run_id][p.plane - 1] = complex(p.U_re_kg_m, p.U_im_kg_m)
                 r95[p.run_id][p.plane - 1] = p.radius95_kg_m
+                if p.permissible_kg_m is not None:
+                    per[p.plane - 1].append(p.permissible_kg_m)
     rotors = _rotors(rows)
     checks: dict[int, list[Any]] = {}
     for r in rows:
@@ -188,6 +191,9 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
         "passed_first_time": passed,
         "failed_first_check": failed,
         "not_checked_yet": open_,
+        "permissible_g_mm": [  # the tolerance in force (the latest runs')
+            round(v[-1] * 1e6, 3) if v else None for v in per
+        ],
         "stand_interval95_g_mm": [
             round(float(np.mean([r95[r.id][i] for r in rotors])) * 1e6, 3) if rotors else None
             for i in range(2)

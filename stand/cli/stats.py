@@ -15,6 +15,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
     add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--report",
+        metavar="STATS.html",
+        help="also write a page with the polar scatter of the rotors and the trend",
+    )
+    p.add_argument("--force", action="store_true", help="replace --report if it exists")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,6 +44,13 @@ def run(args: argparse.Namespace) -> int:
         dump_json(out)
     else:
         _text(out)
+    if args.report and out["rotors"]:
+        from stand.cli.common import write_text_output
+        from stand.report import render_production
+
+        write_text_output(args.report, render_production(out), force=args.force)
+        if not args.json:
+            print(f"wrote {args.report}")
     return 0
 
 
@@ -64,7 +77,10 @@ def _text(out: dict[str, Any]) -> None:
             print(f"  {name:8} {s['note']}")
             continue
         a, b = s["region95_g_mm"]
-        verdict = f"{'YES' if s['systematic'] else 'no'} (p = {s['p_value']:.2g})"
+        p = s["p_value"]
+        verdict = f"{'YES' if s['systematic'] else 'no'} " + (
+            "(p < 0.0001)" if p < 1e-4 else f"(p = {p:.2g})"
+        )
         major = s["region95_major_deg"]
         region = f"+-{a:.1f} x {b:.1f} (major at {major:.0f} deg)"
         print(
