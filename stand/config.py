@@ -3,7 +3,7 @@
 Tables (SI units, the seed's symbols)::
 
     [stand]   M1 M2 C1 C2 [H1 H2 reference_angle_deg]
-    [rotor]   M3 J3 a b c d R1 R2 [type]
+    [rotor]   M3 J3 a b c d R1 R2 [type bending_hz]
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
     [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
@@ -94,6 +94,9 @@ class RotorTable(BaseModel):
     R2: Length
     type: Name | None = None
     """The rotor type's name (optional): stored with each run and influence matrix."""
+    bending_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e6)] | None = None
+    """The rotor's first free-free bending frequency [Hz] (optional): the rigid model's
+    limit is judged against it (:mod:`stand.core.flexible`)."""
 
 
 class ToleranceTable(BaseModel):
@@ -183,7 +186,8 @@ class Config(BaseModel):
     def parameters(self) -> StandParameters:
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
-        for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated"):
+        for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
+                    "bending_hz"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 

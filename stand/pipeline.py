@@ -275,11 +275,44 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
         streams, params, **cfg.measure_options(), taper=options.taper, gate=options.gate,
         influence=None if options.matrix is None else options.matrix.imap,
     )  # fmt: skip
+    notes = [rigid_note(cfg, params, m.omega_rad_s)]
     if options.matrix is not None:
-        note = options.matrix.speed_note(m.omega_rad_s)
-        if note is not None:
-            m = replace(m, warnings=[*m.warnings, note])
+        notes.append(options.matrix.speed_note(m.omega_rad_s))
+    if any(notes):
+        m = replace(m, warnings=[*m.warnings, *(n for n in notes if n is not None)])
     return m
+
+
+def rigid_note(cfg: Any, params: StandParameters, omega_rad_s: float) -> Diagnostic | None:
+    """A warning when a rotor bending at ``[rotor] bending_hz`` would put the rigid model's
+    answer more than 1 % off at this speed (:mod:`stand.core.flexible`)."""
+    from stand.core import natural_frequencies
+    from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
+    from stand.core.inverse import RESONANCE_BAND
+
+    f_ff = cfg.rotor.bending_hz
+    if f_ff is None:
+        return None
+    f = omega_rad_s / (2 * math.pi)
+    lo, hi = rigid_error_range(f, f_ff)
+    if hi <= RIGID_TOLERANCE:
+        return None
+    limit = rigid_limit_rpm(f_ff)
+    floor = float(natural_frequencies(params).max()) * 30 / math.pi * RESONANCE_BAND
+    return Diagnostic(
+        "flexible_rotor",
+        f"the rotor bends: at {60 * f:.0f} rpm, {100 * f / f_ff:.1f} % "
+        f"of its first bending frequency ({f_ff:g} Hz), the rigid model's answer may be off "
+        f"by {100 * lo:.1f} to {100 * hi:.1f} % (mostly in the static part); "
+        + (
+            f"balance at {limit:.0f} rpm or below for 1 %"
+            if limit > floor
+            else f"within 1 % it needs {limit:.0f} rpm or less, below this stand's natural "
+            f"frequencies ({floor:.0f} rpm with their margin): the rotor needs a flexible "
+            "model, or a stiffer stand"
+        ),
+        hi,
+    )
 
 
 def check_matrix(options: SolveOptions, cfg: Any, *, live: bool) -> None:
@@ -393,6 +426,12 @@ def check_against(
     return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
 
 
+SAME_STAND = ("M1", "M2", "C1", "C2", "H1", "H2")
+SAME_ROTOR = ("M3", "J3", "a", "b", "c", "d", "R1", "R2")
+"""What makes a check run's stand and rotor the same as the run before (names, dates and
+the sensors' calibration may change between them)."""
+
+
 def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
     """Refuse a previous run whose stored rotor (or rotor type) or stand differs from this
     config's."""
@@ -404,8 +443,7 @@ def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
         )
     for table in ("rotor", "stand"):
         a, b = getattr(theirs, table).model_dump(), getattr(ours, table).model_dump()
-        keys = [k for k in b if k in ("M1", "M2", "C1", "C2", "H1", "H2") or table == "rotor"]
-        keys = [k for k in keys if k != "type"]
+        keys = SAME_STAND if table == "stand" else SAME_ROTOR
         diff = [k for k in keys if not math.isclose(a.get(k, 0.0), b[k], rel_tol=1e-9)]
         if diff:
             k = diff[0]

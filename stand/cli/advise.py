@@ -25,11 +25,18 @@ def run(args: argparse.Namespace) -> int:
     cfg, params = load_config(args.config)
     top = args.max_rpm or (cfg.tolerance.max_speed_rpm if cfg.tolerance else None)
     a = advise(params, top)
+    limit = None
+    if cfg.rotor.bending_hz is not None:
+        from stand.core.flexible import rigid_limit_rpm
+
+        limit = rigid_limit_rpm(cfg.rotor.bending_hz)
     out = {
         "natural_frequencies_hz": list(a.natural_frequencies_hz),
         "natural_frequencies_rpm": [f * 60 for f in a.natural_frequencies_hz],
         "recommended_rpm": list(a.recommended_rpm) if a.recommended_rpm else None,
         "reasons": list(a.reasons),
+        "bending_hz": cfg.rotor.bending_hz,
+        "rigid_limit_rpm": None if limit is None else round(limit, 1),
         "speeds": [
             {
                 "rpm": round(r.rpm, 1),
@@ -48,6 +55,18 @@ def run(args: argparse.Namespace) -> int:
     print("balance between " + (f"{rec[0]:.0f} and {rec[1]:.0f} rpm" if rec else "- (none found)"))
     for reason in a.reasons:
         print(f"  - {reason}")
+    f_ff = cfg.rotor.bending_hz
+    if limit is not None and f_ff is not None:
+        if rec is not None and limit < rec[0]:
+            then = ": no recommended speed is below it; the rotor needs a flexible model"
+        elif rec is not None and limit < rec[1]:
+            then = f": balance between {rec[0]:.0f} and {limit:.0f} rpm"
+        else:
+            then = ""
+        print(
+            f"  - the rotor's first bending frequency is {f_ff:g} Hz ({60 * f_ff:.0f} rpm): "
+            f"the rigid model stays within 1 % up to {limit:.0f} rpm{then}"
+        )
     print("     rpm  x top mode  g mm per m/s2  shift for C +-5 %  ")
     for r in a.rows[:: max(1, len(a.rows) // 12)]:
         flag = "  near a natural frequency" if r.near_resonance else ""

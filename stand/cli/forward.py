@@ -40,14 +40,19 @@ def run(args: argparse.Namespace) -> int:
     if len(args.unbalance) != 2:
         n = len(args.unbalance)
         raise UsageError(f"stand forward: expected --unbalance twice (plane 1, plane 2), got {n}")
-    _, params = load_config(args.config)
+    cfg, params = load_config(args.config)
     g_mm = np.array([u[0] for u in args.unbalance])
     U = unbalance_from_polar(g_mm * 1e-6, [u[1] for u in args.unbalance])
     omega = float(rpm_to_rad_s(args.rpm))
     A = forward(params, omega, U)
     amp, phase = phasor_to_polar(A)
     fn_hz = natural_frequencies(params) / (2 * math.pi)
+    from stand.pipeline import rigid_note
+
     warnings = speed_diagnostics(params, omega)
+    bends = rigid_note(cfg, params, omega)
+    if bends is not None:
+        warnings.append(bends)
     if args.json:
         dump_json(
             {
