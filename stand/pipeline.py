@@ -34,8 +34,8 @@ from stand.core.balance import (
     static_couple,
 )
 from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, config_digest
-from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError, UsageError
-from stand.matrix import SAME_SPEED, parse_matrix
+from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError
+from stand.matrix import parse_matrix
 from stand.measure import Measurement, measure
 from stand.result import (
     Check,
@@ -351,7 +351,7 @@ def solve_recording(
     """
     from stand.drivers.recording import read_streams
 
-    with _naming(path):
+    with named_errors(path):
         rec, streams = read_streams(path)
     if config:
         cfg, params, text = load_config_text(config)
@@ -363,7 +363,7 @@ def solve_recording(
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
     check_matrix(options, cfg, live=True)
-    with _naming(path):
+    with named_errors(path):
         m = measure_streams(streams, cfg, params, options)
     if adjust is not None:
         m = adjust(m)
@@ -385,89 +385,6 @@ def solve_recording(
         m, cfg, params, stream_warnings=streams.warnings, provenance=prov,
         options=options, streams=streams,
     )  # fmt: skip
-
-
-def check_against(
-    previous: str,
-    cfg: Any,
-    params: StandParameters,
-    after: Measurement,
-    *,
-    strict: bool = True,
-    matrix: Any = None,
-) -> Check:
-    """The run before the correction, measured with the same stand (this config).
-
-    ``strict``: refuse a previous run of another rotor or stand (its stored
-    config) or of another speed (beyond :data:`stand.matrix.SAME_SPEED`): its URR
-    would compare two different things.  ``matrix``: the influence matrix the
-    check run was solved with, if any (the run before is solved with it too).
-
-    Raises
-    ------
-    UsageError
-        The previous run is of another rotor, stand or speed (and ``strict``).
-    """
-    from stand.drivers.recording import read_streams
-
-    with _naming(previous):
-        rec, streams = read_streams(previous)
-    if strict and rec.meta.get("config_toml"):
-        _same_rotor_and_stand(previous, stored_config(rec.meta, previous)[0], cfg)
-    with _naming(previous):
-        before = measure_streams(streams, cfg, params, SolveOptions(matrix=matrix))
-    if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > SAME_SPEED:
-        raise UsageError(
-            f"--check {previous}: that run turned at {before.omega_rad_s * 30 / math.pi:.0f} rpm, "
-            f"this one at {after.omega_rad_s * 30 / math.pi:.0f} rpm: check at the same speed "
-            "(or say --check-any)"
-        )
-    b, a = before.solution.U_kg_m, after.solution.U_kg_m
-    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
-
-
-SAME_STAND = ("M1", "M2", "C1", "C2", "H1", "H2")
-SAME_ROTOR = ("M3", "J3", "a", "b", "c", "d", "R1", "R2")
-"""What makes a check run's stand and rotor the same as the run before (names, dates and
-the sensors' calibration may change between them)."""
-
-
-def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
-    """Refuse a previous run whose stored rotor (or rotor type) or stand differs from this
-    config's."""
-    t, o = theirs.rotor.type, ours.rotor.type
-    if t and o and t != o:
-        raise UsageError(
-            f"--check {previous}: that run is of rotor type {t!r}, this one {o!r} "
-            "(or say --check-any)"
-        )
-    for table in ("rotor", "stand"):
-        a, b = getattr(theirs, table).model_dump(), getattr(ours, table).model_dump()
-        keys = SAME_STAND if table == "stand" else SAME_ROTOR
-        diff = [k for k in keys if not math.isclose(a.get(k, 0.0), b[k], rel_tol=1e-9)]
-        if diff:
-            k = diff[0]
-            raise UsageError(
-                f"--check {previous}: that run is of another {table} ({k} = {a.get(k):g} there, "
-                f"{b[k]:g} here): its unbalance is not this rotor's before the correction "
-                "(or say --check-any)"
-            )
-
-
-def check_notes(check: Check) -> list[Diagnostic]:
-    """What a check says beyond its numbers: a correction that made a plane worse."""
-    return [
-        Diagnostic(
-            "correction_made_worse",
-            f"plane {i + 1}: the unbalance grew after the correction (URR {100 * u:.0f} %): "
-            "was it added where material should have come off (or the other way round), at "
-            "the mirrored angle (the angle counts against the direction of rotation), or in "
-            "the other plane?",
-            float(u),
-        )
-        for i, u in enumerate(check.urr)
-        if u is not None and u < 0
-    ]
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:
@@ -519,10 +436,10 @@ def measure_recording(
     """
     from stand.drivers.recording import read_streams
 
-    with _naming(path):
+    with named_errors(path):
         rec, streams = read_streams(path)
     cfg, params, text = load_config_text(config) if config else stored_config(rec.meta, rec.path)
-    with _naming(path):
+    with named_errors(path):
         if raw_sensors:
             m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
         else:
@@ -546,7 +463,7 @@ def correction_masses(run: str, config: str | None = None) -> list[tuple[int, fl
 
 
 @contextmanager
-def _naming(path: str) -> Iterator[None]:
+def named_errors(path: str) -> Iterator[None]:
     """Measuring errors of a recorded run name its file (its node and figure they name)."""
     try:
         yield

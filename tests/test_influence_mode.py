@@ -201,3 +201,16 @@ def test_influence_mode_balances_the_demo_live(
     assert main(["solve", first, "--json"]) == 0  # reprocessed with the matrix it stores
     again = json.loads(capsys.readouterr().out)
     assert again["provenance"]["influence_matrix"] == f"{first} (stored matrix)"
+
+
+def test_a_runs_file_mixing_typed_and_recorded_runs_is_refused(
+    trial_runs: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    runs = trial_runs / "mixed.toml"
+    runs.write_text(
+        '[[runs]]\nfile = "r0.h5"\n[[runs]]\nsensors = [[1.0, 0.0], [1.0, 0.0]]\n'
+        "trial = { plane = 1, mass_g = 20.0, angle_deg = 0.0 }\n"
+    )
+    assert main(["influence", str(runs)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mixed: one kind per runs file" in err and str(runs) in err

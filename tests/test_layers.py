@@ -31,6 +31,7 @@ APP = DRIVERS | {
     "stand.matrix",
     "stand.influence",
     "stand.archive",
+    "stand.check",
 }
 
 ALLOWED: dict[str, set[str]] = {
@@ -56,6 +57,7 @@ ALLOWED: dict[str, set[str]] = {
     "stand/pipeline.py": NUMERIC | APP | {"stand.config"},
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},
     "stand/influence.py": NUMERIC | APP,
+    "stand/check.py": NUMERIC | APP,
     # the archive: results into a database (SQLAlchemy; schema migrations by Alembic)
     "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},
     "stand/evaluate.py": NUMERIC | APP | {"stand.sim"},

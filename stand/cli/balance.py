@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 from stand.cli.common import DEFAULT_TARGET_PCT, add_live_measure_arguments
@@ -39,6 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from stand.check import with_check
     from stand.cli.common import (
         archive_live,
         measure_live_from_args,
@@ -46,7 +46,6 @@ def run(args: argparse.Namespace) -> int:
         targets_from,
     )
     from stand.cli.format import show
-    from stand.pipeline import check_against, check_notes
     from stand.result import to_json
 
     if args.report:  # refuse a report path that cannot be written before measuring
@@ -60,11 +59,9 @@ def run(args: argparse.Namespace) -> int:
         args, "balance", targets_from(args, TOLERANCE_SHARE), options
     )
     if args.check:
-        check = check_against(
-            args.check, cfg, params, result.measurement,
-            strict=not args.check_any, matrix=options.matrix,
-        )  # fmt: skip
-        result = replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
+        result = with_check(
+            result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
+        )
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)
     out["report"] = report

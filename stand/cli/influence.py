@@ -98,7 +98,9 @@ def _entries(path: str) -> list[Any]:
         run_file = None if e.file is None else str(Path(path).parent / e.file)
         out.append((run_file, typed, trial, e.trial_left_on))
     if any(f is None for f, *_ in out) and any(f is not None for f, *_ in out):
-        raise ConfigError("mix no typed and recorded runs: one kind per file", source=path)
+        raise ConfigError(
+            "typed-in and recorded runs are mixed: one kind per runs file", source=path
+        )
     return out
 
 

@@ -38,11 +38,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
 
     from stand.drivers.files import check_output
     from stand.errors import UsageError
-    from stand.pipeline import check_against, check_notes, load_config_text, solve_recording
+    from stand.pipeline import load_config_text, solve_recording
     from stand.report import render
 
     if not args.out and not args.pdf:
@@ -62,11 +61,11 @@ def run(args: argparse.Namespace) -> int:
             from stand.drivers.recording import read_recording
 
             cfg, params, _ = stored_config(read_recording(args.run).meta, args.run)
-        check = check_against(
-            args.check, cfg, params, result.measurement,
-            strict=not args.check_any, matrix=options.matrix,
-        )  # fmt: skip
-        result = replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
+        from stand.check import with_check
+
+        result = with_check(
+            result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
+        )
     page = render(result)
     if args.out:
         write_text_output(args.out, page, force=args.force, inputs=inputs)
