@@ -4,6 +4,7 @@ Tables (SI units, the seed's symbols)::
 
     [stand]   M1 M2 C1 C2 [H1 H2 reference_angle_deg]
     [rotor]   M3 J3 a b c d R1 R2 [type bending_hz]
+    [rotor.shaft] (optional) the shaft M3, J3, a..d and bending_hz follow from
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
     [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
@@ -79,17 +80,62 @@ class StandTable(BaseModel):
     """The date of its last calibration (YYYY-MM-DD; stand calibrate writes it)."""
 
 
-class RotorTable(BaseModel):
-    """``[rotor]``: mass (kg), inertia (kg m^2), lengths and radii (m)."""
+Positive = Annotated[FiniteFloat, Field(gt=0.0, le=1e12)]
+Pair = Annotated[list[Length], Field(min_length=2, max_length=2)]
+
+
+class ShaftSection(BaseModel):
+    """One section of ``[rotor.shaft] sections`` [m, kg/m]."""
 
     model_config = STRICT
 
-    M3: Mass
-    J3: Inertia
-    a: Length
-    b: Length
-    c: Length
-    d: Length
+    length_m: Annotated[FiniteFloat, Field(gt=0.0, le=1e3)]
+    diameter_m: Annotated[FiniteFloat, Field(gt=0.0, le=1e2)]
+    bore_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e2)] = 0.0
+    added_kg_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e6)] = 0.0
+    """Mass without stiffness: flights, windings [kg/m]."""
+
+
+class ShaftMass(BaseModel):
+    """A disc, hub or coupling on the shaft [m from the left end, kg, kg m^2]."""
+
+    model_config = STRICT
+
+    at_m: Length
+    kg: Annotated[FiniteFloat, Field(ge=0.0, le=1e6)]
+    J_kg_m2: Annotated[FiniteFloat, Field(ge=0.0, le=1e9)] = 0.0
+
+
+class ShaftTable(BaseModel):
+    """``[rotor.shaft]``: the shaft the rotor values follow from (:mod:`stand.core.shaft`)."""
+
+    model_config = STRICT
+
+    E_pa: Positive
+    density_kg_m3: Positive
+    sections: Annotated[list[ShaftSection], Field(min_length=1, max_length=1000)]
+    support_positions_m: Pair
+    plane_positions_m: Pair
+    masses: list[ShaftMass] = []
+
+
+SHAFT_AGREE = 0.01
+"""Rotor values given beside a ``[rotor.shaft]`` table agree with it within 1 % (lengths:
+1 % of the support span), or the config is refused."""
+
+
+class RotorTable(BaseModel):
+    """``[rotor]``: mass (kg), inertia (kg m^2), lengths and radii (m); M3, J3 and a, b, c,
+    d may instead follow from a ``[rotor.shaft]`` table."""
+
+    model_config = STRICT
+
+    M3: Mass | None = None
+    J3: Inertia | None = None
+    a: Length | None = None
+    b: Length | None = None
+    c: Length | None = None
+    d: Length | None = None
     R1: Length
     R2: Length
     type: Name | None = None
@@ -97,6 +143,7 @@ class RotorTable(BaseModel):
     bending_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e6)] | None = None
     """The rotor's first free-free bending frequency [Hz] (optional): the rigid model's
     limit is judged against it (:mod:`stand.core.flexible`)."""
+    shaft: ShaftTable | None = None
 
 
 class ToleranceTable(BaseModel):
@@ -187,7 +234,7 @@ class Config(BaseModel):
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
-                    "bending_hz"):  # fmt: skip
+                    "bending_hz", "shaft"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 
@@ -253,8 +300,52 @@ def config_from_dict(
     ConfigError
         Naming ``source``, the first bad key and what is wrong with it.
     """
-    cfg = validate(Config, data, source)
+    cfg = with_shaft(validate(Config, data, source), source)
     return cfg, parameters_of(cfg, source)
+
+
+def with_shaft(cfg: Config, source: str) -> Config:
+    """The config with ``M3, J3, a, b, c, d`` (and ``bending_hz``) from its ``[rotor.shaft]``
+    table; values given as well must agree within :data:`SHAFT_AGREE`.  Without a shaft
+    table, every one of them must be given."""
+    from stand.core.shaft import PointMass, Section, shaft_rotor
+    from stand.errors import ModelError
+
+    r = cfg.rotor
+    keys = ("M3", "J3", "a", "b", "c", "d")
+    if r.shaft is None:
+        missing = [k for k in keys if getattr(r, k) is None]
+        if missing:
+            raise ConfigError(
+                "missing (give it, or describe the shaft in a [rotor.shaft] table)",
+                source=source,
+                key=f"rotor.{missing[0]}",
+            )
+        return cfg
+    s = r.shaft
+    try:
+        got = shaft_rotor(
+            [Section(**x.model_dump()) for x in s.sections], s.E_pa, s.density_kg_m3,
+            (s.support_positions_m[0], s.support_positions_m[1]),
+            (s.plane_positions_m[0], s.plane_positions_m[1]),
+            [PointMass(**m.model_dump()) for m in s.masses],
+        )  # fmt: skip
+    except ModelError as exc:
+        raise ConfigError(str(exc), source=source, key="rotor.shaft") from None
+    span = abs(s.support_positions_m[1] - s.support_positions_m[0])
+    derived = {k: getattr(got, k) for k in keys} | {"bending_hz": got.bending_hz}
+    for k, value in derived.items():
+        given = getattr(r, k)
+        scale = span if k in ("a", "b", "c", "d") else abs(value)
+        if given is not None and abs(given - value) > SHAFT_AGREE * scale:
+            raise ConfigError(
+                f"{given:g} given, the shaft gives {value:.6g}: they differ by more than "
+                f"{100 * SHAFT_AGREE:g} %",
+                source=source,
+                key=f"rotor.{k}",
+            )
+    update = {k: v for k, v in derived.items() if getattr(r, k) is None}
+    return cfg.model_copy(update={"rotor": r.model_copy(update=update)})
 
 
 def to_toml(tables: dict[str, dict[str, Any]]) -> str:

@@ -78,7 +78,7 @@ def _case(tmp_path: Path, frames: Frames, case: str) -> tuple[list[str], str]:
         f.data[rows, 2:] = np.array([0x00, 0x80] * 3, np.uint8)
         return [str(_log(tmp_path, f)), "--config", cfg], "node 1: all 31998 samples are invalid"
     bad_cfg = {
-        "config missing a key": (DEMO_CFG.replace("M3 = 60.0", ""), "[rotor.M3]: Field required"),
+        "config missing a key": (DEMO_CFG.replace("M3 = 60.0", ""), "[rotor.M3]: missing (give it"),
         "wrong type": (DEMO_CFG.replace("M3 = 60.0", 'M3 = "60"'), "[rotor.M3]: Input should be"),
         "negative mass": (DEMO_CFG.replace("M1 = 8.0", "M1 = -8.0"), "[stand.M1]"),
         "b + c = 0": (

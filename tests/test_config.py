@@ -55,7 +55,7 @@ def test_integers_are_numbers(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("edit", "where", "what"),
     [
-        (("J3 = 21.0\n", ""), "[rotor.J3]", "Field required"),
+        (("J3 = 21.0\n", ""), "[rotor.J3]", "missing (give it, or describe the shaft"),
         (("R2 = 0.08", 'R2 = "0.08"'), "[rotor.R2]", "valid number"),
         (("R2 = 0.08", "R2 = true"), "[rotor.R2]", "valid number"),
         (("C1 = 4.5e4", "C1 = inf"), "[stand.C1]", "finite"),

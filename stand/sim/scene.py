@@ -36,6 +36,7 @@ from stand.config import (
     parameters_of,
     read_toml,
     validate,
+    with_shaft,
 )
 from stand.core.model import StandParameters
 from stand.errors import ConfigError
@@ -307,6 +308,8 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
             source=str(path),
             key="run.physics",
         )
+    # a shaft table gives the rotor's values (the simulated rotor is rigid: issue 13)
+    scene = scene.model_copy(update={"rotor": with_shaft(scene.config(), str(path)).rotor})
     params = parameters_of(scene.config(), str(path))
     return scene, params, str(path)
 

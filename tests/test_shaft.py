@@ -1,0 +1,120 @@
+"""A rotor described by its shaft ([rotor.shaft]): rigid-body values and the first free-free
+bending frequency, and the rigid model's limit judged from them."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from stand.cli import main
+from stand.core.shaft import PointMass, Section, free_free_bending_hz, rigid_values, shaft_rotor
+
+ROOT = Path(__file__).resolve().parents[1]
+E, RHO = 2.11e11, 7810.0
+BETA1 = 4.730040744862704
+"""First root of cos(x) cosh(x) = 1: the free-free beam's first bending mode."""
+
+
+def _exact_hz(L: float, D: float) -> float:
+    second, A = math.pi / 64 * D**4, math.pi / 4 * D**2
+    return BETA1**2 / (2 * math.pi * L**2) * math.sqrt(E * second / (RHO * A))
+
+
+@pytest.mark.parametrize(("elements", "tol"), [(10, 5e-5), (20, 3e-6), (60, 3e-8)])
+def test_the_beam_elements_converge_on_the_exact_free_free_frequency(
+    elements: int, tol: float
+) -> None:
+    """Cubic Hermite elements converge as h^4: the error falls 16-fold per halving (measured:
+    3.4e-5 with 10, 2.2e-6 with 20, 2.4e-8 with 60 elements on the 1.7 m shaft)."""
+    for L, D in ((1.7, 0.060), (1.0, 0.060), (3.0, 0.150)):
+        got = free_free_bending_hz([Section(L, D)], E, RHO, elements=elements)
+        assert got == pytest.approx(_exact_hz(L, D), rel=tol)
+
+
+def test_split_sections_and_a_bore_are_the_same_shaft() -> None:
+    one = free_free_bending_hz([Section(1.7, 0.06, 0.02)], E, RHO)
+    three = free_free_bending_hz(
+        [Section(0.5, 0.06, 0.02), Section(0.7, 0.06, 0.02), Section(0.5, 0.06, 0.02)], E, RHO
+    )
+    assert three == pytest.approx(one, rel=1e-6)
+    # a hollow shaft is stiffer for its mass: f scales as sqrt(I/A) = sqrt(D^2 + d^2) / 4
+    assert one / _exact_hz(1.7, 0.06) == pytest.approx(math.hypot(0.06, 0.02) / 0.06, rel=1e-6)
+
+
+def test_rigid_values_of_a_shaft_with_a_disc() -> None:
+    M, x, J = rigid_values([Section(2.0, 0.05)], RHO)
+    m = RHO * math.pi / 4 * 0.05**2 * 2.0
+    assert (M, x) == (pytest.approx(m), pytest.approx(1.0))
+    assert J == pytest.approx(m * (3 * 0.025**2 + 2.0**2) / 12)
+    M2, x2, J2 = rigid_values([Section(2.0, 0.05)], RHO, [PointMass(1.5, m, 0.3)])
+    assert M2 == pytest.approx(2 * m) and x2 == pytest.approx(1.25)
+    assert J2 == pytest.approx(J + m * 0.25**2 + m * 0.25**2 + 0.3)
+
+
+def _config(folder: Path, length: float, added: float, *, extra: str = "") -> Path:
+    text = (ROOT / "examples" / "demo-stand.toml").read_text()
+    head, rest = text.split("[rotor]\n", 1)
+    kept = [ln for ln in rest.splitlines() if ln.split("=")[0].strip() not in "M3 J3 a b c d"]
+    table = (
+        "[rotor.shaft]\nE_pa = 2.11e11\ndensity_kg_m3 = 7810.0\n"
+        f"sections = [ {{ length_m = {length}, diameter_m = 0.060, added_kg_m = {added} }} ]\n"
+        f"support_positions_m = [0.0, {length}]\n"
+        f"plane_positions_m = [{0.1 * length}, {0.9 * length}]\n"
+    )
+    path = folder / f"shaft-{length}-{added}.toml"
+    path.write_text(head + "[rotor]\n" + extra + "\n".join(kept) + "\n" + table)
+    return path
+
+
+def test_a_shaft_table_gives_the_rotor_and_its_bending_frequency(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cfg = _config(tmp_path, 1.7, 12.0)
+    got = shaft_rotor([Section(1.7, 0.06, 0.0, 12.0)], E, RHO, (0.0, 1.7), (0.17, 1.53))
+    assert main(["advise", "--config", str(cfg), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["bending_hz"] == pytest.approx(got.bending_hz) == pytest.approx(77.32, abs=0.01)
+    assert got.M3 == pytest.approx((RHO * math.pi * 0.03**2 + 12.0) * 1.7)
+    assert (got.a, got.b, got.c, got.d) == pytest.approx((0.17, 0.68, 0.68, 0.17))
+
+
+@pytest.mark.parametrize(("length", "added", "fires"), [(1.7, 12.0, True), (1.0, 0.0, False)])
+def test_the_shaft_s_rigid_limit_warns_on_the_long_auger_not_on_the_short_shaft(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], length: float, added: float, fires: bool
+) -> None:
+    cfg = str(_config(tmp_path, length, added))
+    argv = ["forward", "--config", cfg, "--rpm", "900", "--unbalance", "5000@30"]
+    assert main([*argv, "--unbalance", "3000@200", "--json"]) == 0
+    codes = [w["code"] for w in json.loads(capsys.readouterr().out)["warnings"]]
+    assert ("flexible_rotor" in codes) == fires
+
+
+@pytest.mark.parametrize(
+    ("extra", "key", "says"),
+    [
+        ("M3 = 60.0\n", "[rotor.M3]", "60 given, the shaft gives 57.9398"),
+        ("b = 0.5\n", "[rotor.b]", "0.5 given, the shaft gives 0.68"),
+        ("bending_hz = 90.0\n", "[rotor.bending_hz]", "90 given, the shaft gives 77.3"),
+    ],
+)
+def test_values_given_beside_the_shaft_must_agree_within_1_percent(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: str, key: str, says: str
+) -> None:
+    assert main(["advise", "--config", str(_config(tmp_path, 1.7, 12.0, extra=extra))]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and key in err and says in err, err
+    ok = _config(tmp_path, 1.7, 12.0, extra="M3 = 58.0\n")  # 0.1 % off: taken
+    assert main(["advise", "--config", str(ok)]) == 0
+
+
+def test_without_a_shaft_every_rotor_value_is_needed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (ROOT / "examples" / "demo-stand.toml").read_text().replace("J3 = 21.0", "")
+    (tmp_path / "no-j3.toml").write_text(text)
+    assert main(["advise", "--config", str(tmp_path / "no-j3.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "[rotor.J3]" in err and "[rotor.shaft]" in err
