@@ -332,3 +332,23 @@ def test_hotelling_s_region_and_test_keep_their_95_percent_over_many_batches() -
         held += mean_unbalance(mu + z).holds(mu)
         alarms += mean_unbalance(z).systematic
     assert abs(held / 4000 - 0.95) < 0.014 and abs(alarms / 4000 - 0.05) < 0.014
+
+
+def test_an_archive_of_a_newer_schema_and_runs_that_are_not_files_are_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import sqlite3
+
+    url = _url(tmp_path)
+    assert main(["history", "--archive", url]) == 0
+    with sqlite3.connect(tmp_path / "archive.sqlite") as db:
+        db.execute("UPDATE alembic_version SET version_num = '9999'")
+    capsys.readouterr()
+    assert main(["history", "--archive", url]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "schema is not one this software knows" in err
+    other = f"sqlite:///{tmp_path / 'other.sqlite'}"
+    for path, says in ((tmp_path / "nope.h5", "no such file"), (tmp_path, "is a directory")):
+        assert main(["archive", "import", str(path), "--archive", other]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and says in err, err

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive.store import Archive, default_url
+from stand.errors import StandError
 from stand.result import Result, json_text, to_json
 
 __all__ = ["Archive", "archive_result", "default_url", "file_digest", "url_for"]
@@ -37,11 +38,18 @@ def url_for(option: str | None, cfg: Any = None) -> str:
 
 
 def file_digest(path: str | Path) -> str:
-    """SHA-256 of a file, read in 1 MiB chunks."""
+    """SHA-256 of a file, read in 1 MiB chunks (RecordingError naming it if unreadable)."""
+    from stand.drivers.files import check_input
+    from stand.errors import RecordingError
+
+    check_input(path)
     h = hashlib.sha256()
-    with open(path, "rb") as f:
-        while chunk := f.read(READ_CHUNK):
-            h.update(chunk)
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(READ_CHUNK):
+                h.update(chunk)
+    except OSError as exc:
+        raise RecordingError(f"cannot read it ({exc.strerror})", path=str(path)) from exc
     return h.hexdigest()
 
 
@@ -154,6 +162,11 @@ def verify(url: str) -> tuple[int, list[dict[str, Any]]]:
         p = Path(path)
         if not p.is_file():
             problems.append({"id": run_id, "run_file": path, "problem": "missing"})
-        elif file_digest(p) != digest:
+            continue
+        try:
+            same = file_digest(p) == digest
+        except StandError:
+            same = False  # unreadable counts as altered: it no longer gives the run
+        if not same:
             problems.append({"id": run_id, "run_file": path, "problem": "altered"})
     return len(listed), problems

@@ -75,10 +75,14 @@ class Archive:
         except SQLAlchemyError as exc:
             self.close()
             raise ArchiveError(_reason(exc), url=self.shown) from exc
+        except ArchiveError:
+            self.close()
+            raise
 
     def _migrate(self) -> None:
         from alembic import command
         from alembic.config import Config
+        from alembic.util.exc import CommandError
 
         cfg = Config()
         cfg.set_main_option("script_location", str(MIGRATIONS))
@@ -86,7 +90,14 @@ class Archive:
             if not self.sqlite:  # one migrating process at a time on a shared server
                 conn.exec_driver_sql("SELECT pg_advisory_xact_lock(727274)")
             cfg.attributes["connection"] = conn
-            command.upgrade(cfg, "head")
+            try:
+                command.upgrade(cfg, "head")
+            except CommandError as exc:  # a revision this software does not know
+                raise ArchiveError(
+                    f"its schema is not one this software knows ({exc}): a newer version "
+                    "of stand made it",
+                    url=self.shown,
+                ) from exc
 
     @contextmanager
     def transaction(self) -> Iterator[Any]:
