@@ -1,0 +1,144 @@
+"""The flexible stand: the shaft as beam elements lying in the two elastic supports.
+
+The shaft (:mod:`stand.core.shaft`) is cut into cubic Hermite beam elements
+in the measuring plane (Rayleigh beam: Euler-Bernoulli bending with the
+sections' rotary inertia, so that a stiff shaft has exactly the rigid
+rotor's ``J3``), with nodes at the section ends, the supports, the
+correction planes and the point masses.  Each support adds its moving mass
+``M_i``, stiffness ``C_i`` and damping ``H_i`` at its node, as in the seed's
+model.  At steady speed ``w``, with ``X`` the nodes' complex amplitudes::
+
+    (K - w^2 M + i w H) X = w^2 F U,        A_i = -w^2 X_support_i
+
+(``F`` puts each plane's unbalance force on its node), which is the stand
+model's forward with a bending rotor; as the shaft stiffens it tends to the
+rigid :func:`stand.core.model.forward` as ``1 / E`` (tested).  The forward is
+linear in ``U``: ``A = H(w) U``, and the inverse is ``U = H(w)^-1 A``.
+
+Not yet used by the commands: the next step wires it to ``[rotor.shaft]``
+everywhere a rotor is (issue 13).  Pure numerics: arrays in, arrays out.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from stand.core.model import ComplexArray, StandParameters
+from stand.core.shaft import ELEMENTS, PointMass, Section
+from stand.errors import ModelError
+
+
+@dataclass(frozen=True)
+class BeamRotor:
+    """The shaft's beam model: node positions [m], stiffness and mass matrices (2 dof per
+    node: displacement, rotation), and the nodes of the supports and the planes."""
+
+    x_m: NDArray[np.float64]
+    K: NDArray[np.float64]
+    M: NDArray[np.float64]
+    support_nodes: tuple[int, int]
+    plane_nodes: tuple[int, int]
+
+
+def _element(h: float, mu: float, EI: float, rho_I: float) -> tuple[NDArray[np.float64], ...]:
+    """Stiffness and mass (consistent translation + rotary inertia) of one element."""
+    k = EI / h**3 * np.array(
+        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+         [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    )  # fmt: skip
+    m = mu * h / 420 * np.array(
+        [[156, 22 * h, 54, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+         [54, 13 * h, 156, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]
+    )  # fmt: skip
+    r = rho_I / (30 * h) * np.array(
+        [[36, 3 * h, -36, 3 * h], [3 * h, 4 * h * h, -3 * h, -h * h],
+         [-36, -3 * h, 36, -3 * h], [3 * h, -h * h, -3 * h, 4 * h * h]]
+    )  # fmt: skip
+    return k, m + r
+
+
+def beam_rotor(
+    sections: Sequence[Section],
+    E_pa: float,
+    density_kg_m3: float,
+    support_positions_m: tuple[float, float],
+    plane_positions_m: tuple[float, float],
+    masses: Sequence[PointMass] = (),
+    elements: int = ELEMENTS,
+) -> BeamRotor:
+    """The beam model of a shaft in its supports (see the module docstring)."""
+    bounds, x = [0.0], 0.0
+    for s in sections:
+        x += s.length_m
+        bounds.append(x)
+    total = bounds[-1]
+    marks = [*support_positions_m, *plane_positions_m, *(p.at_m for p in masses)]
+    if not all(0.0 <= m <= total for m in marks):
+        raise ModelError(f"supports, planes and masses must lie on the shaft (0 to {total} m)")
+    cuts = sorted(set(bounds) | set(marks))
+    nodes = [0.0]
+    for lo, hi in itertools.pairwise(cuts):
+        n = max(1, math.ceil(elements * (hi - lo) / total - 1e-9))
+        nodes += [lo + (hi - lo) * (k + 1) / n for k in range(n)]
+    grid = np.array(nodes)
+    dof = 2 * len(grid)
+    K, M = np.zeros((dof, dof)), np.zeros((dof, dof))
+    for e in range(len(grid) - 1):
+        mid = 0.5 * (grid[e] + grid[e + 1])
+        j = min(int(np.searchsorted(bounds, mid)) - 1, len(sections) - 1)
+        s = sections[max(j, 0)]
+        area = math.pi / 4 * (s.diameter_m**2 - s.bore_m**2)
+        second = math.pi / 64 * (s.diameter_m**4 - s.bore_m**4)
+        mu = density_kg_m3 * area + s.added_kg_m
+        k, m = _element(grid[e + 1] - grid[e], mu, E_pa * second, density_kg_m3 * second)
+        K[2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += k
+        M[2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += m
+
+    def node(at: float) -> int:
+        return int(np.argmin(np.abs(grid - at)))
+
+    for p in masses:
+        i = node(p.at_m)
+        M[2 * i, 2 * i] += p.kg
+        M[2 * i + 1, 2 * i + 1] += p.J_kg_m2
+    return BeamRotor(
+        x_m=grid,
+        K=K,
+        M=M,
+        support_nodes=(node(support_positions_m[0]), node(support_positions_m[1])),
+        plane_nodes=(node(plane_positions_m[0]), node(plane_positions_m[1])),
+    )
+
+
+def receptance(rotor: BeamRotor, p: StandParameters, omega_rad_s: float) -> ComplexArray:
+    """``H`` with ``A = H U``: support accelerations [m/s^2] per unbalance [kg m], 2 x 2."""
+    w = float(omega_rad_s)
+    D = rotor.K - w * w * rotor.M + 0j
+    for i, (m, c, h) in zip(
+        rotor.support_nodes, ((p.M1, p.C1, p.H1), (p.M2, p.C2, p.H2)), strict=True
+    ):
+        D[2 * i, 2 * i] += c - w * w * m + 1j * w * h
+    F = np.zeros((D.shape[0], 2), complex)
+    for j, i in enumerate(rotor.plane_nodes):
+        F[2 * i, j] = w * w
+    try:
+        X = np.linalg.solve(D, F)
+    except np.linalg.LinAlgError as exc:
+        raise ModelError(f"no steady state at {w:g} rad/s (a natural frequency)") from exc
+    rows = [2 * i for i in rotor.support_nodes]
+    H: ComplexArray = np.asarray(-w * w * X[rows, :], dtype=np.complex128)
+    return H
+
+
+def forward_beam(
+    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, U_kg_m: Sequence[complex]
+) -> ComplexArray:
+    """Support acceleration phasors [m/s^2] of the flexible stand for unbalances ``U``."""
+    out: ComplexArray = receptance(rotor, p, omega_rad_s) @ np.asarray(U_kg_m, dtype=complex)
+    return out
