@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core.model import ComplexArray, StandParameters
-from stand.core.shaft import ELEMENTS, PointMass, Section
+from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
 from stand.errors import ModelError
 
 
@@ -44,23 +44,6 @@ class BeamRotor:
     M: NDArray[np.float64]
     support_nodes: tuple[int, int]
     plane_nodes: tuple[int, int]
-
-
-def _element(h: float, mu: float, EI: float, rho_I: float) -> tuple[NDArray[np.float64], ...]:
-    """Stiffness and mass (consistent translation + rotary inertia) of one element."""
-    k = EI / h**3 * np.array(
-        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
-         [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
-    )  # fmt: skip
-    m = mu * h / 420 * np.array(
-        [[156, 22 * h, 54, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
-         [54, 13 * h, 156, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]
-    )  # fmt: skip
-    r = rho_I / (30 * h) * np.array(
-        [[36, 3 * h, -36, 3 * h], [3 * h, 4 * h * h, -3 * h, -h * h],
-         [-36, -3 * h, 36, -3 * h], [3 * h, -h * h, -3 * h, 4 * h * h]]
-    )  # fmt: skip
-    return k, m + r
 
 
 def beam_rotor(
@@ -96,7 +79,7 @@ def beam_rotor(
         area = math.pi / 4 * (s.diameter_m**2 - s.bore_m**2)
         second = math.pi / 64 * (s.diameter_m**4 - s.bore_m**4)
         mu = density_kg_m3 * area + s.added_kg_m
-        k, m = _element(grid[e + 1] - grid[e], mu, E_pa * second, density_kg_m3 * second)
+        k, m = beam_element(grid[e + 1] - grid[e], mu, E_pa * second, density_kg_m3 * second)
         K[2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += k
         M[2 * e : 2 * e + 4, 2 * e : 2 * e + 4] += m
 

@@ -23,6 +23,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from stand.errors import ModelError
 
@@ -98,6 +99,29 @@ def rigid_values(
     return M, x_cm, J
 
 
+def beam_element(
+    h: float, mu: float, EI: float, rho_I: float = 0.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Stiffness and mass of one cubic Hermite beam element of length ``h`` [m]: bending
+    stiffness ``EI`` [N m^2], mass per length ``mu`` [kg/m] (consistent), and the section's
+    rotary inertia per length ``rho_I`` [kg m] (Rayleigh; 0: Euler-Bernoulli).  Degrees of
+    freedom: displacement and rotation at each end."""
+    k = EI / h**3 * np.array(
+        [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
+         [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
+    )  # fmt: skip
+    m = mu * h / 420 * np.array(
+        [[156, 22 * h, 54, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
+         [54, 13 * h, 156, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]
+    )  # fmt: skip
+    if rho_I:
+        m = m + rho_I / (30 * h) * np.array(
+            [[36, 3 * h, -36, 3 * h], [3 * h, 4 * h * h, -3 * h, -h * h],
+             [-36, -3 * h, 36, -3 * h], [3 * h, -h * h, -3 * h, 4 * h * h]]
+        )  # fmt: skip
+    return k, m
+
+
 def free_free_bending_hz(
     sections: Sequence[Section],
     E_pa: float,
@@ -121,14 +145,7 @@ def free_free_bending_hz(
     dof = 2 * len(nodes)
     K, Mm = np.zeros((dof, dof)), np.zeros((dof, dof))
     for e, (h, mu, EI) in enumerate(props):
-        ke = EI / h**3 * np.array(
-            [[12, 6 * h, -12, 6 * h], [6 * h, 4 * h * h, -6 * h, 2 * h * h],
-             [-12, -6 * h, 12, -6 * h], [6 * h, 2 * h * h, -6 * h, 4 * h * h]]
-        )  # fmt: skip
-        me = mu * h / 420 * np.array(
-            [[156, 22 * h, 54, -13 * h], [22 * h, 4 * h * h, 13 * h, -3 * h * h],
-             [54, 13 * h, 156, -22 * h], [-13 * h, -3 * h * h, -22 * h, 4 * h * h]]
-        )  # fmt: skip
+        ke, me = beam_element(h, mu, EI)
         i = 2 * e
         K[i : i + 4, i : i + 4] += ke
         Mm[i : i + 4, i : i + 4] += me
