@@ -145,6 +145,22 @@ class RotorTable(BaseModel):
     limit is judged against it (:mod:`stand.core.flexible`)."""
     shaft: ShaftTable | None = None
 
+    def beam(self) -> Any:
+        """The shaft's beam model (:class:`stand.core.beam.BeamRotor`), or None without a
+        ``[rotor.shaft]`` table (a rigid rotor)."""
+        if self.shaft is None:
+            return None
+        from stand.core.beam import beam_rotor
+        from stand.core.shaft import PointMass, Section
+
+        s = self.shaft
+        return beam_rotor(
+            [Section(**x.model_dump()) for x in s.sections], s.E_pa, s.density_kg_m3,
+            (s.support_positions_m[0], s.support_positions_m[1]),
+            (s.plane_positions_m[0], s.plane_positions_m[1]),
+            [PointMass(**m.model_dump()) for m in s.masses],
+        )  # fmt: skip
+
 
 class ToleranceTable(BaseModel):
     """``[tolerance]``: ISO 21940-11 balance quality grade and the maximum service speed."""

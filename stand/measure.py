@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from stand.core import Diagnostic, StandParameters, solve_unbalance
+from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import UnbalanceSolution
@@ -187,6 +188,7 @@ def measure(
     sensor_delay_s: tuple[float, float] = (0.0, 0.0),
     clock_tolerance: float = CLOCK_TOLERANCE,
     influence: InfluenceMap | None = None,
+    beam: BeamRotor | None = None,
 ) -> Measurement:
     """The unbalance of both planes from a run's streams (nodes 1 and 2).
 
@@ -195,7 +197,8 @@ def measure(
     else a node's sample rate or clock is wrong and the run is refused.
     ``influence``: a measured influence matrix takes the stand model's place in
     the inverse (:func:`stand.core.influence.solve_influence`); the model still
-    judges the supports' linearity.
+    judges the supports' linearity.  ``beam``: the rotor bends, and the flexible
+    stand (:func:`stand.core.beam.solve_beam`) inverts instead of the rigid one.
 
     Raises
     ------
@@ -278,10 +281,12 @@ def measure(
     supports, cov, jitter_notes = _with_edge_jitter(supports, windows)
     warnings.extend(jitter_notes)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
-    if influence is None:
-        sol = solve_unbalance(p, omega, A, cov)
-    else:
+    if influence is not None:
         sol = solve_influence(influence, A, cov)
+    elif beam is not None:
+        sol = solve_beam(beam, p, omega, A, cov)
+    else:
+        sol = solve_unbalance(p, omega, A, cov)
     dof = min(ph.noise_dof for ph in supports)
     cov_U = np.asarray(sol.cov_U).real if sol.cov_U is not None else np.zeros((4, 4))
     radius = np.array(

@@ -274,8 +274,10 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
     m = measure(
         streams, params, **cfg.measure_options(), taper=options.taper, gate=options.gate,
         influence=None if options.matrix is None else options.matrix.imap,
+        beam=cfg.rotor.beam(),
     )  # fmt: skip
-    notes = [rigid_note(cfg, params, m.omega_rad_s)]
+    flexible = cfg.rotor.shaft is not None and options.matrix is None
+    notes = [None if flexible else rigid_note(cfg, params, m.omega_rad_s)]
     if options.matrix is not None:
         notes.append(options.matrix.speed_note(m.omega_rad_s))
     if any(notes):

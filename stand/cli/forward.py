@@ -44,15 +44,23 @@ def run(args: argparse.Namespace) -> int:
     g_mm = np.array([u[0] for u in args.unbalance])
     U = unbalance_from_polar(g_mm * 1e-6, [u[1] for u in args.unbalance])
     omega = float(rpm_to_rad_s(args.rpm))
-    A = forward(params, omega, U)
-    amp, phase = phasor_to_polar(A)
-    fn_hz = natural_frequencies(params) / (2 * math.pi)
-    from stand.pipeline import rigid_note
+    beam = cfg.rotor.beam()
+    if beam is None:  # the rigid rotor
+        from stand.pipeline import rigid_note
 
-    warnings = speed_diagnostics(params, omega)
-    bends = rigid_note(cfg, params, omega)
-    if bends is not None:
-        warnings.append(bends)
+        A = forward(params, omega, U)
+        fn_hz = natural_frequencies(params) / (2 * math.pi)
+        warnings = speed_diagnostics(params, omega)
+        bends = rigid_note(cfg, params, omega)
+        if bends is not None:
+            warnings.append(bends)
+    else:  # [rotor.shaft]: the rotor bends
+        from stand.core.beam import forward_beam, natural_frequencies_beam, solve_beam
+
+        A = forward_beam(beam, params, omega, U)
+        fn_hz = natural_frequencies_beam(beam, params, 3) / (2 * math.pi)
+        warnings = solve_beam(beam, params, omega, A).diagnostics
+    amp, phase = phasor_to_polar(A)
     if args.json:
         dump_json(
             {

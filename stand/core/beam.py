@@ -15,8 +15,8 @@ model's forward with a bending rotor; as the shaft stiffens it tends to the
 rigid :func:`stand.core.model.forward` as ``1 / E`` (tested).  The forward is
 linear in ``U``: ``A = H(w) U``, and the inverse is ``U = H(w)^-1 A``.
 
-Not yet used by the commands: the next step wires it to ``[rotor.shaft]``
-everywhere a rotor is (issue 13).  Pure numerics: arrays in, arrays out.
+Used wherever a config or scene has a ``[rotor.shaft]`` table
+(:meth:`stand.config.RotorTable.beam`).  Pure numerics: arrays in, arrays out.
 """
 
 from __future__ import annotations
@@ -24,11 +24,13 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from stand.core.inverse import RESONANCE_BAND, Diagnostic, UnbalanceSolution, speed_diagnostics
 from stand.core.model import ComplexArray, StandParameters
 from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
 from stand.errors import ModelError
@@ -120,8 +122,50 @@ def receptance(rotor: BeamRotor, p: StandParameters, omega_rad_s: float) -> Comp
 
 
 def forward_beam(
-    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, U_kg_m: Sequence[complex]
+    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, U_kg_m: ArrayLike
 ) -> ComplexArray:
     """Support acceleration phasors [m/s^2] of the flexible stand for unbalances ``U``."""
     out: ComplexArray = receptance(rotor, p, omega_rad_s) @ np.asarray(U_kg_m, dtype=complex)
     return out
+
+
+def natural_frequencies_beam(rotor: BeamRotor, p: StandParameters, count: int = 4) -> Any:
+    """The lowest undamped natural frequencies of the flexible stand [rad/s]: the two
+    rigid-body modes on the supports, then the bending modes."""
+    from scipy.linalg import eigh
+
+    K, M = rotor.K.copy(), rotor.M.copy()
+    for i, (m, c) in zip(rotor.support_nodes, ((p.M1, p.C1), (p.M2, p.C2)), strict=True):
+        K[2 * i, 2 * i] += c
+        M[2 * i, 2 * i] += m
+    lam = eigh(K, M, eigvals_only=True, subset_by_index=[0, count - 1])
+    return np.sqrt(np.maximum(lam, 0.0))
+
+
+def solve_beam(
+    rotor: BeamRotor,
+    p: StandParameters,
+    omega_rad_s: float,
+    A: Any,
+    cov_A: Any = None,
+) -> UnbalanceSolution:
+    """The unbalances from the support phasors through the flexible stand: ``U = H^-1 A``,
+    the covariance propagated as for the rigid model, the speed judged against the flexible
+    stand's natural frequencies (:func:`natural_frequencies_beam`)."""
+    from stand.core.influence import InfluenceMap, solve_influence
+
+    sol = solve_influence(InfluenceMap(receptance(rotor, p, omega_rad_s)), A, cov_A)
+    wn = natural_frequencies_beam(rotor, p, 3)
+    notes = speed_diagnostics(p, omega_rad_s, wn[:2])  # the modes on the supports
+    if omega_rad_s > wn[2] / RESONANCE_BAND:
+        notes.append(
+            Diagnostic(
+                "near_bending_mode",
+                f"speed {omega_rad_s * 30 / math.pi:.0f} rpm is within a factor "
+                f"{RESONANCE_BAND:g} of the rotor's first bending mode in the stand, "
+                f"{wn[2] / (2 * math.pi):.3g} Hz ({wn[2] * 30 / math.pi:.0f} rpm): the answer "
+                "rests on the shaft's description there; balance well below it",
+                float(omega_rad_s / wn[2]),
+            )
+        )
+    return replace(sol, diagnostics=notes)

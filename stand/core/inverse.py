@@ -202,10 +202,13 @@ def real_form(G: ArrayLike) -> NDArray[np.float64]:
     return R
 
 
-def speed_diagnostics(p: StandParameters, omega_rad_s: float) -> list[Diagnostic]:
-    """Warnings about the balancing speed against the stand's natural frequencies."""
+def speed_diagnostics(
+    p: StandParameters, omega_rad_s: float, wn_rad_s: ArrayLike | None = None
+) -> list[Diagnostic]:
+    """Warnings about the balancing speed against the stand's natural frequencies (the rigid
+    rotor's two, or ``wn_rad_s`` given: a flexible stand's)."""
     out: list[Diagnostic] = []
-    wn = natural_frequencies(p)
+    wn = natural_frequencies(p) if wn_rad_s is None else np.asarray(wn_rad_s, dtype=float)
     w = float(omega_rad_s)
     ratios = w / wn
     near = [k for k, r in enumerate(ratios) if 1 / RESONANCE_BAND < r < RESONANCE_BAND]

@@ -23,7 +23,14 @@ from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.drivers.protocol import Frames
-from stand.sim.physics import SceneSpeed, closed_form, edge_times, integrated, support_force
+from stand.sim.physics import (
+    SceneSpeed,
+    closed_form,
+    edge_times,
+    integrated,
+    steady_forward,
+    support_force,
+)
 from stand.sim.scene import Scene, per_node, unbalance_kg_m
 
 FULL_SCALE = 32767
@@ -115,6 +122,15 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     t_end = t_start + scene.run.seconds
     q_r, phi = unbalance_kg_m(scene)
     U = unbalance_from_polar(q_r, phi)
+    beam = scene.rotor.beam()  # a [rotor.shaft] table: the rotor bends
+    if beam is not None and (scene.needs_integration or speed.ripple or speed.drift_per_s):
+        from stand.errors import ConfigError
+
+        raise ConfigError(
+            "a bending rotor ([rotor.shaft]) is simulated at one steady speed for now: no "
+            "run-up, speed ripple or drift, nonlinear supports or integrated physics",
+            key="rotor.shaft",
+        )
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
     offset = per_node(e.clock.offset_s) if e.clock else [0.0, 0.0]
     gain = per_node(e.sensor.gain) if e.sensor else [1.0, 1.0]
@@ -156,7 +172,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
         )
         a_phys = [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]]
     else:
-        a_phys = [closed_form(p, speed, U, s)[:, i] for i, s in enumerate(seen)]
+        a_phys = [closed_form(p, speed, U, s, beam)[:, i] for i, s in enumerate(seen)]
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:
@@ -165,7 +181,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     blocks: list[Frames] = []
     truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
     w0 = speed.omega0_rad_s
-    A_true = forward(p, w0, U) * np.array(
+    A_true = steady_forward(p, beam, w0, U) * np.array(
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
     )
     truth["A_m_s2"] = A_true
