@@ -352,3 +352,15 @@ def test_an_archive_of_a_newer_schema_and_runs_that_are_not_files_are_one_line(
         assert main(["archive", "import", str(path), "--archive", other]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and says in err, err
+
+
+@pytest.mark.realtime
+def test_an_archive_that_fails_loses_neither_the_run_nor_its_report(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "r.h5"
+    bad = "postgresql+psycopg://nobody@127.0.0.1:1/none"  # nothing listens on port 1
+    assert main(["balance", "--scene", "demo", "--out", str(run), "--quiet", "--archive", bad]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "stand archive import it later" in err and str(run) in err
+    assert run.is_file() and run.with_suffix(".html").is_file()

@@ -67,7 +67,6 @@ def run(args: argparse.Namespace) -> int:
     out["report"] = report
     show(out, args.json)  # the answer first: the report takes a moment
     sys.stdout.flush()
-    archive_live(args, result, cfg)
     from stand.cli.common import write_text_output
     from stand.report import render
 
@@ -75,4 +74,5 @@ def run(args: argparse.Namespace) -> int:
     write_text_output(report, render(result), force=args.force, inputs=inputs)
     if not args.json:
         print(f"report: {report}")
+    archive_live(args, result, cfg)  # last: an archive that fails loses neither run nor report
     return 0
