@@ -41,11 +41,11 @@ def run(args: argparse.Namespace) -> int:
     from stand.check import with_check
     from stand.cli.common import (
         archive_live,
-        measure_live_from_args,
         solve_options,
         targets_from,
     )
     from stand.cli.format import show
+    from stand.cli.panel import measure_live_from_args
     from stand.result import to_json
 
     if args.report:  # refuse a report path that cannot be written before measuring

@@ -14,11 +14,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from stand.cli.common import (
         archive_live,
-        measure_live_from_args,
         solve_options,
         targets_from,
     )
     from stand.cli.format import show
+    from stand.cli.panel import measure_live_from_args
     from stand.result import to_json
 
     result, cfg, _ = measure_live_from_args(

@@ -4,11 +4,14 @@ On a terminal the panel is redrawn in place at each live solve: speed, each
 plane's unbalance and angle, its 95 % interval against the precision goal,
 its tolerance, the supports' 1x; what the measurement is waiting for.
 Elsewhere (a pipe, a log file) the same figures go out as one line per
-solve (:func:`progress_line`).
+solve (:func:`progress_line`).  :func:`measure_live_from_args` runs the live
+measurement the options of ``stand measure`` and ``stand balance`` ask for,
+with this display.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from typing import Any
 
@@ -160,3 +163,41 @@ class LiveDisplay:
         if self.live is not None:
             return self._redraw()
         self._say(f"  {elapsed:5.1f} s  waiting: {why}")
+
+
+def measure_live_from_args(
+    args: argparse.Namespace, command: str, targets: Any, options: Any
+) -> tuple[Any, Any, Any]:
+    """``stand measure`` and ``stand balance``: the live run the options ask for, with its
+    progress on stderr (a fixed panel on a terminal, else a line per solve); returns the
+    :class:`stand.result.Result`, config and parameters."""
+    from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path, scene_masses
+    from stand.live import live_source, measure_live
+
+    check_live_arguments(args, command)
+    source = live_source(
+        args.scene, args.config, command, scene_masses(args), getattr(args, "rpm", None)
+    )
+    kwargs = source.scene_bus
+    if kwargs is None:
+        kwargs = bus_kwargs(args, source.bus_table)
+    path = run_path(args)
+    job = job_from(args)
+    show = LiveDisplay(source, path, quiet=args.quiet)
+    with show:
+        result, session = measure_live(
+            source,
+            kwargs,
+            path,
+            options,
+            targets,
+            max_seconds=args.max_seconds,
+            silence_timeout_s=args.timeout,
+            on_start=show.start,
+            on_progress=show.progress,
+            on_wait=show.wait,
+            job=job,
+        )
+    if session.failure is not None and not args.quiet:
+        print(f"stand: {session.failure}", file=sys.stderr)
+    return result, source.cfg, source.params
