@@ -118,6 +118,21 @@ class ShaftTable(BaseModel):
     plane_positions_m: Pair
     masses: list[ShaftMass] = []
 
+    def core_args(self) -> tuple[Any, ...]:
+        """The table as :func:`stand.core.shaft.shaft_rotor` and
+        :func:`stand.core.beam.beam_rotor` take it: sections, E, density, support and plane
+        positions, point masses."""
+        from stand.core.shaft import PointMass, Section
+
+        return (
+            [Section(**x.model_dump()) for x in self.sections],
+            self.E_pa,
+            self.density_kg_m3,
+            (self.support_positions_m[0], self.support_positions_m[1]),
+            (self.plane_positions_m[0], self.plane_positions_m[1]),
+            [PointMass(**m.model_dump()) for m in self.masses],
+        )
+
 
 SHAFT_AGREE = 0.01
 """Rotor values given beside a ``[rotor.shaft]`` table agree with it within 1 % (lengths:
@@ -151,15 +166,8 @@ class RotorTable(BaseModel):
         if self.shaft is None:
             return None
         from stand.core.beam import beam_rotor
-        from stand.core.shaft import PointMass, Section
 
-        s = self.shaft
-        return beam_rotor(
-            [Section(**x.model_dump()) for x in s.sections], s.E_pa, s.density_kg_m3,
-            (s.support_positions_m[0], s.support_positions_m[1]),
-            (s.plane_positions_m[0], s.plane_positions_m[1]),
-            [PointMass(**m.model_dump()) for m in s.masses],
-        )  # fmt: skip
+        return beam_rotor(*self.shaft.core_args())
 
 
 class ToleranceTable(BaseModel):
@@ -324,7 +332,7 @@ def with_shaft(cfg: Config, source: str) -> Config:
     """The config with ``M3, J3, a, b, c, d`` (and ``bending_hz``) from its ``[rotor.shaft]``
     table; values given as well must agree within :data:`SHAFT_AGREE`.  Without a shaft
     table, every one of them must be given."""
-    from stand.core.shaft import PointMass, Section, shaft_rotor
+    from stand.core.shaft import shaft_rotor
     from stand.errors import ModelError
 
     r = cfg.rotor
@@ -340,12 +348,7 @@ def with_shaft(cfg: Config, source: str) -> Config:
         return cfg
     s = r.shaft
     try:
-        got = shaft_rotor(
-            [Section(**x.model_dump()) for x in s.sections], s.E_pa, s.density_kg_m3,
-            (s.support_positions_m[0], s.support_positions_m[1]),
-            (s.plane_positions_m[0], s.plane_positions_m[1]),
-            [PointMass(**m.model_dump()) for m in s.masses],
-        )  # fmt: skip
+        got = shaft_rotor(*s.core_args())
     except ModelError as exc:
         raise ConfigError(str(exc), source=source, key="rotor.shaft") from None
     span = abs(s.support_positions_m[1] - s.support_positions_m[0])

@@ -90,11 +90,37 @@ class LoadedMatrix:
 
     def check(self, rotor_type: str | None, *, live: bool) -> None:
         """Refuse it for another rotor type, or typed-in readings on the stand."""
-        check_matrix(self.stored, self.path, rotor_type, live=live)
+        stored, path = self.stored, self.path
+        if live and stored.readings != "support acceleration":
+            raise ConfigError(
+                "made from typed-in readings (another instrument's units): the stand's own "
+                "runs need a matrix made from recorded runs",
+                source=path,
+                key="readings",
+            )
+        if stored.rotor_type and rotor_type and stored.rotor_type != rotor_type:
+            raise ConfigError(
+                f"measured on rotor type {stored.rotor_type!r}, the config's is {rotor_type!r}",
+                source=path,
+                key="rotor_type",
+            )
 
     def speed_note(self, omega_rad_s: float) -> Diagnostic | None:
-        """A warning when used away from the speed it was measured at."""
-        return speed_note(self.stored, self.path, omega_rad_s)
+        """A warning when used more than ``SAME_SPEED`` away from the speed it was measured at."""
+        if self.stored.rpm is None:
+            return None
+        rpm = omega_rad_s * 30 / math.pi
+        off = rpm / self.stored.rpm - 1
+        if abs(off) <= SAME_SPEED:
+            return None
+        return Diagnostic(
+            "matrix_speed",
+            f"the influence matrix {self.path} was measured at {self.stored.rpm:.0f} rpm, this "
+            f"run is at {rpm:.0f} rpm ({100 * off:+.0f} %): the stand answers differently at "
+            "another speed, so the correction may be off; run at the matrix's speed or make "
+            "trial runs at this one",
+            off,
+        )
 
     def run_attrs(self) -> dict[str, str]:
         """What a run solved with it stores, so that it is reprocessed with it."""
@@ -145,37 +171,3 @@ def parse_matrix(text: str, path: str) -> LoadedMatrix:
         return LoadedMatrix(InfluenceMap(alpha, cov), m, path, text)
     except (ModelError, ValueError) as exc:
         raise ConfigError(str(exc), source=path, key="alpha_per_kg_m") from None
-
-
-def check_matrix(stored: StoredMatrix, path: str, rotor_type: str | None, *, live: bool) -> None:
-    """Refuse a matrix of another rotor type, or of typed-in readings on the stand."""
-    if live and stored.readings != "support acceleration":
-        raise ConfigError(
-            "made from typed-in readings (another instrument's units): the stand's own "
-            "runs need a matrix made from recorded runs",
-            source=path,
-            key="readings",
-        )
-    if stored.rotor_type and rotor_type and stored.rotor_type != rotor_type:
-        raise ConfigError(
-            f"measured on rotor type {stored.rotor_type!r}, the config's is {rotor_type!r}",
-            source=path,
-            key="rotor_type",
-        )
-
-
-def speed_note(stored: StoredMatrix, path: str, omega_rad_s: float) -> Diagnostic | None:
-    """A warning when the matrix is used more than ``SAME_SPEED`` away from its speed."""
-    if stored.rpm is None:
-        return None
-    rpm = omega_rad_s * 30 / math.pi
-    off = rpm / stored.rpm - 1
-    if abs(off) <= SAME_SPEED:
-        return None
-    return Diagnostic(
-        "matrix_speed",
-        f"the influence matrix {path} was measured at {stored.rpm:.0f} rpm, this run is at "
-        f"{rpm:.0f} rpm ({100 * off:+.0f} %): the stand answers differently at another speed, "
-        "so the correction may be off; run at the matrix's speed or make trial runs at this one",
-        off,
-    )
