@@ -5,6 +5,7 @@ from __future__ import annotations
 import cmath
 import datetime as dt
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,26 +64,50 @@ def _plane(p: Any) -> dict[str, Any]:
     }
 
 
-def history(url: str, f: Filters) -> list[dict[str, Any]]:
-    """The runs that match, oldest first, each with its planes, the run it checks and the
-    runs that check it."""
+IN_CHUNK = 500
+"""Runs asked for at a time in an ``IN (...)`` list (databases bound its length)."""
+
+
+def select_runs(conn: Any, f: Filters) -> list[Any]:
+    """The runs that match (every column but the result's JSON), oldest first."""
     import sqlalchemy as sa
 
     cols = [c for c in runs.c if c.name != "result_json"]
     q = sa.select(*cols).where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
     if f.limit is not None:
         q = q.limit(f.limit)
+    return list(conn.execute(q).all())
+
+
+def chunks(ids: list[int]) -> Iterator[list[int]]:
+    """``ids`` in pieces of at most :data:`IN_CHUNK`."""
+    for k in range(0, len(ids), IN_CHUNK):
+        yield ids[k : k + IN_CHUNK]
+
+
+def plane_rows(conn: Any, ids: list[int]) -> Iterator[Any]:
+    """The plane rows of these runs, plane 1 before plane 2 within each run."""
+    import sqlalchemy as sa
+
+    for part in chunks(ids):
+        yield from conn.execute(
+            sa.select(planes).where(planes.c.run_id.in_(part)).order_by(planes.c.plane)
+        )
+
+
+def history(url: str, f: Filters) -> list[dict[str, Any]]:
+    """The runs that match, oldest first, each with its planes, the run it checks and the
+    runs that check it."""
+    import sqlalchemy as sa
+
     with Archive(url) as archive, archive.transaction() as conn:
-        found = conn.execute(q).all()
+        found = select_runs(conn, f)
         ids = [r.id for r in found]
         by_run: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
         checked_by: dict[int, list[int]] = {i: [] for i in ids}
-        for chunk in range(0, len(ids), 500):  # IN lists of bounded length
-            part = ids[chunk : chunk + 500]
-            for p in conn.execute(
-                sa.select(planes).where(planes.c.run_id.in_(part)).order_by(planes.c.plane)
-            ):
-                by_run[p.run_id].append(_plane(p))
+        for p in plane_rows(conn, ids):
+            by_run[p.run_id].append(_plane(p))
+        for part in chunks(ids):
             for c in conn.execute(
                 sa.select(runs.c.id, runs.c.checks_run_id).where(runs.c.checks_run_id.in_(part))
             ):

@@ -142,30 +142,22 @@ def _rotors(rows: list[Any]) -> list[Any]:
 
 def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]:
     """The statistics of one rotor type's archived runs (JSON-ready, g mm and degrees)."""
-    import sqlalchemy as sa
-
-    from stand.archive.query import Filters, _where
-    from stand.archive.schema import planes, runs
+    from stand.archive.query import Filters, plane_rows, select_runs
     from stand.archive.store import Archive
 
     f = filters or Filters()
     f = Filters(**{**f.__dict__, "rotor_type": rotor_type, "limit": None})
-    cols = [c for c in runs.c if c.name != "result_json"]
     with Archive(url) as archive, archive.transaction() as conn:
-        rows = conn.execute(
-            sa.select(*cols).where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
-        ).all()
+        rows = select_runs(conn, f)
         ids = [r.id for r in rows]
         U: dict[int, list[complex]] = {i: [0j, 0j] for i in ids}
         r95: dict[int, list[float]] = {i: [0.0, 0.0] for i in ids}
         per: list[list[float]] = [[], []]
-        for k in range(0, len(ids), 500):
-            q = sa.select(planes).where(planes.c.run_id.in_(ids[k : k + 500]))
-            for p in conn.execute(q):
-                U[p.run_id][p.plane - 1] = complex(p.U_re_kg_m, p.U_im_kg_m)
-                r95[p.run_id][p.plane - 1] = p.radius95_kg_m
-                if p.permissible_kg_m is not None:
-                    per[p.plane - 1].append(p.permissible_kg_m)
+        for p in plane_rows(conn, ids):
+            U[p.run_id][p.plane - 1] = complex(p.U_re_kg_m, p.U_im_kg_m)
+            r95[p.run_id][p.plane - 1] = p.radius95_kg_m
+            if p.permissible_kg_m is not None:
+                per[p.plane - 1].append(p.permissible_kg_m)
     rotors = _rotors(rows)
     checks: dict[int, list[Any]] = {}
     for r in rows:
