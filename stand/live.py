@@ -232,14 +232,17 @@ class Progress:
     targets_kg_m: tuple[float, float]
 
 
-def _next_check(elapsed: float, m: Any, goal: tuple[float, float], min_revs: int) -> float:
+def _next_check(
+    elapsed: float, m: Any, goal: tuple[float, float], min_revs: int, most_s: float | None
+) -> float:
     """When the next solve is due [s from the start]: when precision is predicted, within
-    the bounds :data:`MIN_INTERVAL_S` and ``max(1 s, GROWTH x elapsed)``."""
+    the bounds :data:`MIN_INTERVAL_S` and ``max(1 s, GROWTH x elapsed)`` (or ``most_s``)."""
     revs = min(int(w.revolutions) for w in m.windows)
     # the 95 % radius falls as 1 / sqrt(revolutions): when will it meet the target?
     ratio = max(float(m.radius95_kg_m[i]) / max(goal[i], 1e-300) for i in range(2))
     due = elapsed * max(ratio**2, min_revs / max(revs, 1))
-    return float(elapsed + min(max(due - elapsed, MIN_INTERVAL_S), max(1.0, GROWTH * elapsed)))
+    most = max(1.0, GROWTH * elapsed) if most_s is None else max(most_s, MIN_INTERVAL_S)
+    return float(elapsed + min(max(due - elapsed, MIN_INTERVAL_S), most))
 
 
 def measure_until_precise(
@@ -252,11 +255,16 @@ def measure_until_precise(
     max_seconds: float,
     on_progress: Callable[[Progress], None] | None = None,
     on_wait: Callable[[float, str], None] | None = None,
+    stop: threading.Event | None = None,
+    max_interval_s: float | None = None,
 ) -> Result:
     """Measure live until both planes' 95 % radii meet ``targets(U)`` [kg m] or time is up.
 
     Returns the result of the whole run (solved once more from its streams
     when the session has closed), with ``live`` saying what stopped it.
+    ``stop`` set by another thread ends the run by hand ("stopped by hand");
+    ``max_interval_s`` caps the time between solves (a screen that wants an
+    estimate at least so often) [s].
     """
     from stand.measure import MIN_REVS
 
@@ -270,6 +278,9 @@ def measure_until_precise(
             break
         if session.stop_signal is not None:
             stopped_by = "interrupted"
+            break
+        if stop is not None and stop.is_set():
+            stopped_by = "stopped by hand"
             break
         elapsed = session.elapsed_s
         if elapsed < next_check:
@@ -294,7 +305,7 @@ def measure_until_precise(
         if not short and all(m.radius95_kg_m[i] <= goal[i] for i in range(2)):
             stopped_by = "precision"
             break
-        next_check = _next_check(elapsed, m, goal, MIN_REVS)
+        next_check = _next_check(elapsed, m, goal, MIN_REVS, max_interval_s)
     elapsed = session.elapsed_s
     streams = session.close()
     if streams is None:
@@ -409,9 +420,12 @@ def measure_live(
     on_progress: Callable[[Progress], None] | None = None,
     on_wait: Callable[[float, str], None] | None = None,
     job: Job | None = None,
+    stop: threading.Event | None = None,
+    max_interval_s: float | None = None,
 ) -> tuple[Result, LiveSession]:
     """One live session measured until precise: the result, and the session (closed).
-    ``job`` (serial, order, operator, note) is recorded with the run."""
+    ``job`` (serial, order, operator, note) is recorded with the run; ``stop`` and
+    ``max_interval_s`` as in :func:`measure_until_precise`."""
     from stand.drivers.recording import JOB_ATTR
 
     cfg, params = source.cfg, source.params
@@ -438,5 +452,7 @@ def measure_live(
             max_seconds=max_seconds,
             on_progress=on_progress,
             on_wait=on_wait,
+            stop=stop,
+            max_interval_s=max_interval_s,
         )
     return result, session
