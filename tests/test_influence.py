@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from stand.calib.influence import (
@@ -66,6 +66,10 @@ def test_trials_left_on_or_taken_off_give_the_same_matrix(
     a: list[complex], v: list[complex], left_on: list[bool]
 ) -> None:
     alpha = np.array(a).reshape(3, 2)  # 3 sensors, 2 planes: least squares
+    # planes that act alike (rank < 2, e.g. every coefficient equal) have no one unbalance
+    # to compare with (their warning is tested below); condition 1e4 amplifies the
+    # matrix's 1e-15 relative error to about 1e-11, well inside rtol 1e-8
+    assume(np.linalg.cond(alpha) < 1e4)
     V0 = np.array(v)
     trials = [Trial(1, 0.002, 30.0), Trial(2, 0.003, 200.0)]
     got, _ = influence_matrix(_synthetic(alpha, V0, trials, left_on))
