@@ -242,3 +242,17 @@ class ArchiveError(StandError, OSError):
     def __init__(self, message: str, *, url: str):
         self.url = url
         super().__init__(f"archive {url}: {message}")
+
+
+class StationBusyError(StandError, RuntimeError):
+    """The station measures already: one measurement at a time, whichever screen asks.
+
+    Attributes
+    ----------
+    running : str
+        What is being measured (the job and the kind of run).
+    """
+
+    def __init__(self, message: str, *, running: str):
+        self.running = running
+        super().__init__(message)

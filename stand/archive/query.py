@@ -131,3 +131,12 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
         }
         for r in found
     ]
+
+
+def run_file(url: str, run_id: int) -> str | None:
+    """The run file archived as ``run_id`` (None if there is no such run)."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        found = conn.execute(sa.select(runs.c.run_file).where(runs.c.id == run_id)).first()
+    return None if found is None else str(found.run_file)

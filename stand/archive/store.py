@@ -24,12 +24,17 @@ BUSY_TIMEOUT_S = 60.0
 MIGRATIONS = Path(__file__).resolve().parent / "migrations"
 
 
-def default_url() -> str:
-    """``sqlite:///`` the file ``archive.sqlite`` in the user's data directory."""
+def data_folder() -> Path:
+    """The user's data folder (``~/.local/share/stand`` on Linux): the default archive, and
+    the station's runs."""
     import platformdirs
 
-    folder = platformdirs.user_data_path("stand", appauthor=False)
-    return f"sqlite:///{folder / 'archive.sqlite'}"
+    return platformdirs.user_data_path("stand", appauthor=False)
+
+
+def default_url() -> str:
+    """``sqlite:///`` the file ``archive.sqlite`` in the user's data directory."""
+    return f"sqlite:///{data_folder() / 'archive.sqlite'}"
 
 
 def _safe(url: str) -> str:

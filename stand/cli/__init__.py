@@ -49,6 +49,7 @@ SUBCOMMANDS: dict[str, str] = {
     "archive": "the archive of runs: import runs recorded before, verify the run files",
     "history": "find archived runs by serial, rotor type, order, operator, date, verdict",
     "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
+    "station": "the operator station: a web screen at the stand (measure, correct, check)",
 }
 """Each subcommand and its one-line help; its module ``stand.cli.<name>`` is imported only
 when it is the one chosen, so ``stand --help`` and ``stand --version`` import none."""

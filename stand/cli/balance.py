@@ -6,10 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from stand.cli.common import DEFAULT_TARGET_PCT, add_live_measure_arguments
-
-TOLERANCE_SHARE = 0.10
-"""Default precision target: 95 % interval within 10 % of each plane's ISO tolerance."""
+from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE, add_live_measure_arguments
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -267,6 +267,9 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
 
 DEFAULT_TARGET_PCT = 5.0
 """Live precision target without a tolerance: 5 % of each plane's unbalance."""
+TOLERANCE_SHARE = 0.10
+"""Balancing's precision target: the 95 % interval within 10 % of each plane's ISO
+tolerance (``stand balance`` and the station)."""
 
 
 def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: str) -> None:

@@ -1,0 +1,71 @@
+"""The operator station: a local web application at the stand (see stand.station)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--config-dir",
+        metavar="DIR",
+        help="the rotor types: one configuration (NAME.toml) each (default: the built-in "
+        "demo auger)",
+    )
+    p.add_argument(
+        "--runs-dir",
+        metavar="DIR",
+        help="where runs and their reports are written (default: runs/ in the user's data "
+        "folder, beside the archive)",
+    )
+    p.add_argument("--archive", metavar="URL", help="the archive (default: the user's archive)")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (default: %(default)s)")
+    p.add_argument("--port", type=int, default=8080, help="port (default: %(default)s)")
+    p.add_argument("--token", help="required with a --host beyond this machine")
+    p.add_argument("--token-file", metavar="FILE", help="the token, in a file's first line")
+    p.add_argument("--no-browser", action="store_true", help="do not open a browser")
+    p.add_argument(
+        "--max-seconds",
+        type=float,
+        default=120.0,
+        help="the longest run, precise or not [s] (default: %(default)s)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
+    from stand.errors import UsageError
+    from stand.station.safety import check_bind, read_token
+
+    token = read_token(args.token, args.token_file)
+    check_bind(args.host, token)
+    if not 0 < args.port < 65536:
+        raise UsageError(f"--port must be 1 to 65535, got {args.port}")
+    if not args.max_seconds > 0:
+        raise UsageError(f"--max-seconds must be > 0, got {args.max_seconds}")
+    config_dir = Path(args.config_dir or Path(__file__).parents[1] / "data" / "rotors")
+    if not config_dir.is_dir():
+        raise UsageError(f"--config-dir {config_dir}: not a folder")
+    from stand.archive import url_for
+    from stand.archive.store import data_folder
+    from stand.pipeline import precision_targets
+    from stand.station.pages import serve
+    from stand.station.service import Station
+
+    url = url_for(args.archive)
+    runs = Path(args.runs_dir) if args.runs_dir else data_folder() / "runs"
+
+    def targets(cfg: object, params: object, U: object) -> tuple[float, float]:
+        return precision_targets(
+            cfg, params, U,  # type: ignore[arg-type]
+            tolerance_share=TOLERANCE_SHARE, default_pct=DEFAULT_TARGET_PCT,
+        )  # fmt: skip
+
+    station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
+    where = f"http://{args.host}:{args.port}/" + (f"?token={token}" if token else "")
+    print(f"station at {where} (rotor types in {config_dir}; runs in {runs}; Ctrl-C ends)",
+          file=sys.stderr)  # fmt: skip
+    serve(station, host=args.host, port=args.port, token=token, show=not args.no_browser)
+    return 0

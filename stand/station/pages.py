@@ -1,0 +1,375 @@
+"""The station's screens (NiceGUI): Start, Measure, Correct, Check, History.
+
+Each screen formats what :class:`stand.station.service.Station` holds; none
+measures.  One page frame (the header with the five screens) hosts the
+screens as NiceGUI sub pages; the live screens redraw from the station's
+snapshot four times a second.  Large type and large buttons: the station is
+read from two metres and worked with a keyboard or a finger.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from nicegui import app, ui
+
+from stand.errors import StandError
+from stand.result import Job, to_json
+from stand.station.face import SEEN_FROM, face_svg
+from stand.station.service import BUS, Station
+from stand.station.views import (
+    ANGLE_NOTE,
+    check_rows,
+    instructions,
+    live_numbers,
+    plane_status,
+    planes_live,
+    polar_chart,
+)
+from stand.units import Display
+
+REFRESH_S = 0.25
+"""How often a live screen looks at the station's state [s]."""
+SCREENS = (("/", "Start"), ("/measure", "Measure"), ("/correct", "Correct"),
+           ("/check", "Check"), ("/history", "History"))  # fmt: skip
+STYLE = """
+<style>
+  body { font-size: 20px; }
+  .big { font-size: 2.2rem; font-weight: 700; line-height: 1.25; }
+  .huge { font-size: 3rem; font-weight: 800; }
+  .pass { color: #1b5e20; } .fail { color: #b71c1c; }
+  .q-field__native, .q-field__label, .q-item__label { font-size: 1.25rem !important; }
+  .q-btn { font-size: 1.2rem; }
+  .q-table th, .q-table td { font-size: 1.2rem !important; }
+  .q-table a { color: #1565c0; text-decoration: underline; }
+</style>
+"""
+
+
+def _units(station: Station) -> Display:
+    s = station.snapshot()
+    out = _out(s.result)
+    return Display.of(out) if out else Display()
+
+
+def _out(result: Any) -> dict[str, Any] | None:
+    return None if result is None else to_json(result)
+
+
+def _guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], None]:
+    """Run ``action``; an error the station raises on purpose is said in a notification."""
+
+    def run() -> None:
+        try:
+            action()
+        except StandError as exc:
+            ui.notify(str(exc), type="negative", multi_line=True, timeout=8000)
+            return
+        if then:
+            ui.navigate.to(then)
+
+    return run
+
+
+def frame(station: Station) -> None:
+    """The page frame: the header with the screens, then the screen the address names."""
+    ui.add_head_html(STYLE)
+    with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
+        ui.label("Balancing station").classes("text-h5 q-mr-lg")
+        for path, name in SCREENS:
+            ui.button(name, on_click=lambda p=path: ui.navigate.to(p)).props(
+                "flat color=white size=lg"
+            ).mark(f"nav-{name.lower()}")
+        ui.space()
+        status = ui.label().classes("text-h6").mark("status")
+
+        def show_status() -> None:
+            s = station.snapshot()
+            who = s.job.serial or "-"
+            status.text = {
+                "idle": "ready",
+                "measuring": f"measuring {who} ({s.kind} run)",
+                "done": f"{who}: {s.kind} run done",
+                "failed": f"{who}: {s.kind} run failed",
+            }[s.phase]
+
+        ui.timer(REFRESH_S, show_status)
+    ui.sub_pages({
+        "/": lambda: start_screen(station),
+        "/measure": lambda: measure_screen(station),
+        "/correct": lambda: correct_screen(station),
+        "/check": lambda: check_screen(station),
+        "/history": lambda: history_screen(station),
+    }).classes("w-full q-pa-md")  # fmt: skip
+
+
+def start_screen(station: Station) -> None:
+    """Start: the rotor type, the job, the source."""
+    types = station.rotor_types()
+    sources = {src: ("the stand (CAN bus)" if src == BUS else f"simulated: {src}")
+               for src in station.sources()}  # fmt: skip
+    ui.label("New rotor").classes("big")
+    with ui.column().classes("w-full max-w-xl gap-4"):
+        rotor = ui.select(types, label="rotor type", value=types[0] if types else None)
+        rotor.classes("w-full").mark("rotor-type")
+        serial = ui.input("serial number").classes("w-full").mark("serial")
+        order = ui.input("order").classes("w-full").mark("order")
+        operator = ui.input("operator").classes("w-full").mark("operator")
+        default = "demo" if "demo" in sources else BUS
+        source = ui.select(sources, label="source", value=default).classes("w-full")
+        source.mark("source")
+
+        def go() -> None:
+            job = Job(
+                serial=serial.value or None,
+                order=order.value or None,
+                operator=operator.value or None,
+            )
+            station.start(str(rotor.value), str(source.value), job)
+
+        ui.button("Start measuring", on_click=_guard(go, "/measure")).props(
+            "size=xl color=primary"
+        ).mark("start")
+    if not types:
+        ui.label(f"No rotor types: put a configuration (.toml) in {station.config_dir}")
+
+
+def measure_screen(station: Station) -> None:
+    """Measure: speed, per plane the live polar plot, the supports, the warnings."""
+    head = ui.label().classes("big").mark("measure-head")
+    sub = ui.label().classes("text-h6").mark("measure-sub")
+    with ui.row().classes("w-full no-wrap gap-4"):
+        charts, texts = [], []
+        for i in (1, 2):
+            with ui.column().classes("w-1/2 items-center"):
+                charts.append(ui.echart(polar_chart(i, None, Display())).classes("w-full h-96"))
+                texts.append(ui.label().classes("text-h6").mark(f"plane{i}-live"))
+    note = ui.label(ANGLE_NOTE).classes("text-body1 text-grey-8")
+    warn = ui.column().mark("warnings")
+    with ui.row().classes("gap-4"):
+        stop = ui.button("Stop", on_click=station.stop).props("size=xl color=negative")
+        stop.mark("stop")
+        onward = ui.button(
+            "Go on",
+            on_click=lambda: ui.navigate.to(
+                "/check" if station.snapshot().kind == "check" else "/correct"
+            ),
+        ).props("size=xl color=primary")
+        onward.mark("onward")
+    seen = {"seq": -1}
+
+    def redraw() -> None:
+        s = station.snapshot()
+        if s.seq == seen["seq"]:
+            return
+        seen["seq"] = s.seq
+        units = _units(station)
+        stop.set_visibility(s.phase == "measuring")
+        onward.set_visibility(s.phase == "done")
+        onward.text = "See the check" if s.kind == "check" else "Go to the correction"
+        if s.phase == "idle":
+            head.text, sub.text = "Nothing measured yet", "start a rotor on the Start screen"
+        elif s.phase == "failed":
+            head.text, sub.text = "The run failed", s.error
+        if s.progress is None:
+            if s.phase == "measuring":
+                head.text = f"{s.kind} run of {s.job.serial or 'the rotor'}: starting"
+                sub.text = f"waiting: {s.waiting}" if s.waiting else "waiting for the stand"
+            return
+        n = live_numbers(s.progress)
+        verb = {"measuring": "measuring", "done": "measured"}.get(s.phase, "stopped")
+        head.text = f"{n['rpm']:.0f} rpm   {verb} {n['elapsed_s']:.1f} s"
+        sub.text = (
+            f"{s.kind} run of {s.job.serial or 'the rotor'}; vibration at the supports "
+            f"{n['support1_m_s2']:.3f} and {n['support2_m_s2']:.3f} m/s²"
+            + (f"; {s.waiting}" if s.waiting else "")
+        )
+        for i, p in enumerate(planes_live(s.progress, s.tolerance_kg_m)):
+            charts[i].options.clear()
+            charts[i].options.update(polar_chart(i + 1, p, units))
+            charts[i].update()
+            texts[i].text = f"plane {i + 1}: {plane_status(p, units)}"
+        warn.clear()
+        with warn:
+            msgs = [w.message for w in s.progress.measurement.warnings]
+            msgs += [w.message for w in (s.result.warnings if s.result else ())]
+            for msg in dict.fromkeys(msgs):
+                ui.label(f"⚠ {msg}").classes("text-h6 text-orange-10")
+            for msg in s.notes:
+                ui.label(msg).classes("text-h6 text-orange-10")
+
+    note.set_visibility(True)
+    redraw()
+    ui.timer(REFRESH_S, redraw)
+
+
+def correct_screen(station: Station) -> None:
+    """Correct: per plane the instruction in large type, on the rotor face."""
+    s = station.snapshot()
+    initial = s.before if s.kind == "check" else s.result
+    if initial is None:
+        ui.label("Measure the rotor first (Start).").classes("big")
+        return
+    out = to_json(initial)
+    pos = out.get("correction_positions") or {}
+    ui.label(f"Correction of {s.job.serial or 'the rotor'}").classes("big")
+    ui.label(f"{ANGLE_NOTE}; the faces are drawn {SEEN_FROM}").classes("text-body1")
+    with ui.row().classes("w-full no-wrap gap-6"):
+        for ins in instructions(out):
+            with ui.card().classes("w-1/2").mark(f"correct-plane{ins.plane}"):
+                ui.label(ins.headline).classes("text-h5")
+                with ui.row().classes("w-full no-wrap items-center"):
+                    svg = face_svg(
+                        ins.marks,
+                        positions=int(pos.get("count") or 0),
+                        position1_deg=float(pos.get("position1_deg") or 0.0),
+                        action=out["correction_mode"],
+                        title=f"plane {ins.plane}",
+                    )
+                    ui.html(svg, sanitize=False).classes("w-1/2")
+                    with ui.column().classes("w-1/2 gap-1"):
+                        for what, where, stock in ins.lines:
+                            ui.label(what).classes("big")
+                            ui.label(where).classes("text-h5")
+                            if stock:
+                                ui.label(stock).classes("text-body1 text-grey-8 q-mb-md")
+    with ui.row().classes("gap-4 q-mt-md"):
+        if s.simulated and s.kind == "initial" and s.phase == "done":
+
+            def apply() -> None:
+                masses = station.apply_correction()
+                ui.notify(f"{len(masses)} masses put on the simulated rotor", type="positive")
+
+            ui.button("Apply the correction (simulated stand)", on_click=_guard(apply)).props(
+                "size=xl color=secondary"
+            ).mark("apply")
+        ui.button("Start the check run", on_click=_guard(station.check, "/measure")).props(
+            "size=xl color=primary"
+        ).mark("check-run")
+
+
+def check_screen(station: Station) -> None:
+    """Check: before and after, URR per plane, the verdict, the certificate."""
+    s = station.snapshot()
+    if s.kind != "check" or s.result is None:
+        ui.label("No check run yet: correct the rotor, then start the check run.").classes("big")
+        return
+    out = to_json(s.result)
+    verdict = out.get("verdict") or (
+        "pass" if all(r["verdict"] == "PASS" for r in check_rows(out)) else "fail"
+    )
+    word = "WITHIN TOLERANCE" if verdict == "pass" else "NOT WITHIN TOLERANCE"
+    ui.label(f"{s.job.serial or 'rotor'}: {word}").classes(
+        "huge " + ("pass" if verdict == "pass" else "fail")
+    ).mark("verdict")
+    names = {
+        "plane": "plane",
+        "before": "before",
+        "after": "after",
+        "urr": "reduction (URR)",
+        "permissible": "permissible",
+        "verdict": "verdict",
+    }
+    columns = [{"name": k, "label": v, "field": k, "align": "left"}
+               for k, v in names.items()]  # fmt: skip
+    ui.table(columns=columns, rows=check_rows(out)).classes("text-h6").mark("check-table")
+    with ui.row().classes("gap-4 q-mt-md"):
+        if s.run_id is not None:
+            ui.link("Open the certificate", f"/report/{s.run_id}", new_tab=True).classes(
+                "text-h5"
+            ).mark("certificate")
+
+        def next_rotor() -> None:
+            station.next_rotor()
+
+        ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
+
+
+def history_screen(station: Station) -> None:
+    """History: the archive by serial and rotor type; each run opens its report."""
+    ui.label("History").classes("big")
+    with ui.row().classes("items-end gap-4"):
+        serial = ui.input("serial number").mark("history-serial")
+        rotor = ui.select(["", *station.rotor_types()], label="rotor type", value="")
+        rotor.classes("w-64").mark("history-type")
+        found = ui.button("Search").props("size=lg").mark("history-search")
+    columns = [{"name": k, "label": k, "field": k, "align": "left"}
+               for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
+                         "plane 2", "report")]  # fmt: skip
+    table = ui.table(columns=columns, rows=[]).classes("w-full").mark("history-table")
+    table.add_slot(
+        "body-cell-report",
+        '<q-td :props="props"><a :href="props.value" target="_blank">report</a></q-td>',
+    )
+
+    def search() -> None:
+        try:
+            rows = station.history(serial.value or None, rotor.value or None)
+        except StandError as exc:
+            ui.notify(str(exc), type="negative")
+            return
+        table.rows = [_history_row(r) for r in rows]
+        table.update()
+
+    found.on_click(search)
+    search()
+
+
+def _history_row(r: dict[str, Any]) -> dict[str, Any]:
+    def plane(p: dict[str, Any]) -> str:
+        urr = "" if p["urr"] is None else f", URR {100 * p['urr']:.1f} %"
+        return f"{p['unbalance_g_mm']:.1f} g mm at {p['angle_deg']:.0f}°{urr}"
+
+    planes = {p["plane"]: plane(p) for p in r["planes"]}
+    return {
+        "run": r["id"],
+        "time": _local(r["start_time"]),
+        "serial": r["serial"] or "",
+        "rotor type": r["rotor_type"] or "",
+        "verdict": (r["verdict"] or "") + (" (check)" if r["checks_run"] else ""),
+        "plane 1": planes.get(1, ""),
+        "plane 2": planes.get(2, ""),
+        "report": f"/report/{r['id']}",
+    }
+
+
+def _local(iso: str) -> str:
+    """An archived start time (UTC) in the station's local time, to the second."""
+    import datetime as dt
+
+    try:
+        return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S")
+    except ValueError:
+        return iso
+
+
+def add_routes(station: Station) -> None:
+    """The routes beside the screens: a run's report, by its archive id."""
+    from fastapi.responses import FileResponse, PlainTextResponse
+
+    @app.get("/report/{run_id}")
+    def report(run_id: int) -> Any:
+        try:
+            return FileResponse(station.report_file(run_id), media_type="text/html")
+        except StandError as exc:
+            return PlainTextResponse(str(exc), status_code=404)
+
+
+def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:
+    """Serve the station until interrupted (the token, if any, on every request)."""
+    from stand.station.safety import TokenGate
+
+    add_routes(station)
+    if token:
+        app.add_middleware(TokenGate, token=token)
+    ui.run(
+        lambda: frame(station),
+        host=host,
+        port=port,
+        title="Balancing station",
+        show=show,
+        reload=False,
+        show_welcome_message=False,
+        reconnect_timeout=10.0,
+    )

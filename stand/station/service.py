@@ -1,0 +1,313 @@
+"""The station's one measurement, shared by every screen (no interface code here).
+
+:class:`Station` runs the operator's loop on the application layer: a live
+run measured until precise (:func:`stand.live.measure_live`, in a thread),
+the report beside the run, the run archived; on a simulated stand the
+correction applied (:func:`stand.pipeline.correction_masses`, as
+``--apply`` does) and the check run against the run before
+(:func:`stand.check.with_check`).  Screens read :meth:`Station.snapshot`, a
+frozen picture of the state; only one measurement runs at a time, whichever
+screen starts it (:class:`~stand.errors.StationBusyError`).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import logging
+import re
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from stand.errors import StandError, StationBusyError, UsageError
+from stand.result import Job
+
+log = logging.getLogger(__name__)
+
+UPDATE_S = 0.4
+"""The live estimate is renewed at least this often [s]: 2.5 a second, above the 2 the
+screen must show (a 0.1 s read can delay one)."""
+MAX_SECONDS = 120.0
+"""A station run ends after this long even when not yet precise [s]."""
+SILENCE_S = 2.0
+"""No frame for this long ends a run (the bus is gone) [s]."""
+BUS = "bus"
+"""The source that reads the stand's CAN bus (the rotor type's ``[bus]`` table)."""
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What the screens show, at one moment.
+
+    ``phase`` is ``idle``, ``measuring``, ``done`` or ``failed``; ``kind`` is
+    ``initial`` (the first run of a rotor) or ``check`` (after the correction).
+    ``progress`` is the latest live estimate (:class:`stand.live.Progress`),
+    ``result`` the finished run's :class:`stand.result.Result` and ``before`` the
+    initial run's while a check is made.  ``seq`` grows with every change.
+    """
+
+    seq: int = 0
+    phase: str = "idle"
+    kind: str = "initial"
+    rotor_type: str | None = None
+    source: str | None = None
+    job: Job = field(default_factory=Job)
+    started_s: float = 0.0
+    progress: Any = None
+    waiting: str = ""
+    result: Any = None
+    before: Any = None
+    error: str = ""
+    notes: tuple[str, ...] = ()
+    applied: tuple[Any, ...] = ()
+    run_id: int | None = None
+    tolerance_kg_m: tuple[float, float] | None = None
+
+    @property
+    def simulated(self) -> bool:
+        return self.source not in (None, BUS)
+
+
+def safe_name(text: str) -> str:
+    """``text`` as part of a file name (letters, digits, ``.``, ``_`` and ``-``)."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("._")[:60] or "rotor"
+
+
+class Station:
+    """The operator's loop on one stand: start, measure, correct, check, next rotor.
+
+    Parameters
+    ----------
+    config_dir
+        The rotor types: one configuration file (``NAME.toml``) each.
+    runs_dir
+        Where run files and their reports are written (created if missing).
+    archive_url
+        The archive every run goes into.
+    targets
+        ``targets(cfg, params, U) -> (kg m, kg m)``: the precision each plane must reach.
+    max_seconds
+        The longest run [s].
+    """
+
+    def __init__(
+        self,
+        config_dir: Path,
+        runs_dir: Path,
+        archive_url: str,
+        targets: Callable[[Any, Any, Any], tuple[float, float]],
+        *,
+        max_seconds: float = MAX_SECONDS,
+    ) -> None:
+        self.config_dir = Path(config_dir).resolve()
+        self.runs_dir = Path(runs_dir).resolve()
+        self.archive_url = archive_url
+        self.targets = targets
+        self.max_seconds = max_seconds
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._state = Snapshot()
+
+    # -- what there is to choose -------------------------------------------------------------
+    def rotor_types(self) -> list[str]:
+        """The rotor types: the configuration files in ``config_dir``, by name."""
+        return sorted(p.stem for p in self.config_dir.glob("*.toml") if p.is_file())
+
+    def config_path(self, rotor_type: str) -> Path:
+        """The configuration of ``rotor_type`` (only names from :meth:`rotor_types`)."""
+        if rotor_type not in self.rotor_types():
+            raise UsageError(f"no rotor type {rotor_type!r} in {self.config_dir}")
+        return self.config_dir / f"{rotor_type}.toml"
+
+    @staticmethod
+    def sources() -> list[str]:
+        """The stand's CAN bus, and the simulated scenes (training and demonstrations)."""
+        from stand.sim.scene import shipped_scenes
+
+        return [BUS, *shipped_scenes()]
+
+    # -- state ---------------------------------------------------------------------------
+    def snapshot(self) -> Snapshot:
+        """The state now (a frozen copy: safe to read from any thread)."""
+        return self._state
+
+    def _set(self, **changes: Any) -> None:
+        with self._lock:
+            self._state = replace(self._state, seq=self._state.seq + 1, **changes)
+
+    # -- the loop ------------------------------------------------------------------------
+    def start(self, rotor_type: str, source: str, job: Job) -> None:
+        """Measure a new rotor: the initial run (nothing applied to a simulated rotor)."""
+        config = self.config_path(rotor_type)
+        if source not in self.sources():
+            raise UsageError(f"no source {source!r}: the bus or one of the scenes")
+        self._launch(
+            "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
+        )
+
+    def check(self) -> None:
+        """Measure the same rotor again after its correction: the check run."""
+        s = self._state
+        initial = s.before if s.kind == "check" else s.result
+        if s.rotor_type is None or initial is None:
+            raise UsageError("measure the rotor first: a check needs the run before it")
+        self._launch(
+            "check",
+            rotor_type=s.rotor_type,
+            source=str(s.source),
+            job=s.job,
+            config=self.config_path(s.rotor_type),
+            before=initial,
+        )
+
+    def _launch(self, kind: str, *, config: Path, before: Any, **state: Any) -> None:
+        with self._lock:
+            s = self._state
+            if s.phase == "measuring":
+                what = f"the {s.kind} run of {s.job.serial or 'a rotor'}"
+                raise StationBusyError(f"the station is measuring {what} already", running=what)
+            self._stop.clear()
+            applied = s.applied if kind == "check" else ()
+            self._state = replace(
+                Snapshot(seq=s.seq + 1, phase="measuring", kind=kind, before=before,
+                         applied=applied, started_s=_now(), **state),
+            )  # fmt: skip
+        self._thread = threading.Thread(
+            target=self._measure, args=(kind, config, before), name="station-run", daemon=True
+        )
+        self._thread.start()
+
+    def stop(self) -> None:
+        """End the running measurement by hand (its run is kept and solved)."""
+        self._stop.set()
+
+    def wait(self, timeout_s: float | None = None) -> Snapshot:
+        """Wait for the running measurement to end; the state then."""
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        return self._state
+
+    def apply_correction(self) -> tuple[Any, ...]:
+        """On a simulated stand: put the prescribed correction on the rotor, as an operator
+        would (the masses ``--apply`` puts on); returns every mass applied so far."""
+        from stand.pipeline import correction_masses
+        from stand.sim import Mass
+
+        s = self._state
+        if s.phase != "done" or s.result is None or not s.simulated:
+            raise UsageError("a correction is applied on the simulated stand, after a run")
+        run, config = s.result.provenance.run_file, self.config_path(str(s.rotor_type))
+        masses = [Mass(p, g, a, r) for p, g, a, r in correction_masses(run, str(config))]
+        self._set(applied=s.applied + tuple(masses))
+        return self._state.applied
+
+    def next_rotor(self) -> None:
+        """Forget the rotor measured (its runs stay in the archive): back to the start."""
+        with self._lock:
+            if self._state.phase == "measuring":
+                raise StationBusyError("stop the measurement first", running="a run")
+            self._state = Snapshot(seq=self._state.seq + 1)
+
+    # -- the measuring thread ------------------------------------------------------------
+    def _measure(self, kind: str, config: Path, before: Any) -> None:
+        try:
+            result = self._run(kind, config, before)
+        except StandError as exc:
+            self._set(phase="failed", error=str(exc), progress=None)
+            return
+        except Exception as exc:  # the screen must say it, not die with the thread
+            log.exception("station run failed")
+            self._set(phase="failed", error=f"{type(exc).__name__}: {exc}", progress=None)
+            return
+        self._set(waiting="writing the report and archiving the run")
+        run_id, notes = self._file(result, config)
+        self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
+
+    def _run(self, kind: str, config: Path, before: Any) -> Any:
+        from stand.live import live_source, measure_live
+        from stand.pipeline import SolveOptions, tolerance_of
+
+        s = self._state
+        scene = None if s.source == BUS else s.source
+        src = live_source(scene, str(config), "station", list(s.applied))
+        tol = tolerance_of(src.cfg, src.params)
+        self._set(tolerance_kg_m=None if tol is None else tuple(tol.per_plane_kg_m))
+        kwargs = src.scene_bus if src.scene_bus is not None else dict(src.bus_table or {})
+        self.runs_dir.mkdir(parents=True, exist_ok=True)
+        stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
+        path = self.runs_dir / f"{safe_name(s.job.serial or 'rotor')}-{kind}-{stamp}.h5"
+        result, _ = measure_live(
+            src,
+            kwargs,
+            str(path),
+            SolveOptions(traces=True),
+            self.targets,
+            max_seconds=self.max_seconds,
+            silence_timeout_s=SILENCE_S,
+            on_progress=lambda p: self._set(progress=p, waiting=""),
+            on_wait=lambda t, why: self._set(waiting=why),
+            job=s.job,
+            stop=self._stop,
+            max_interval_s=UPDATE_S,
+        )
+        if kind == "check":
+            from stand.check import with_check
+
+            prev = before.provenance.run_file
+            result = with_check(result, prev, src.cfg, src.params, strict=True)
+        return result
+
+    def _file(self, result: Any, config: Path) -> tuple[int | None, tuple[str, ...]]:
+        """The report beside the run, then the archive (a failure of either is noted: the
+        run file is kept whatever happens)."""
+        from stand.archive import archive_result
+        from stand.drivers.files import output
+        from stand.report import render
+
+        notes = []
+        run = Path(result.provenance.run_file)
+        try:
+            data = render(result).encode("utf-8")
+            with output(run.with_suffix(".html"), need_bytes=len(data)) as tmp:
+                tmp.write_bytes(data)
+        except StandError as exc:
+            notes.append(f"no report: {exc}")
+        run_id = None
+        try:
+            run_id = archive_result(result, self.archive_url, config=str(config))
+        except StandError as exc:
+            notes.append(f"not archived ({exc}); the run is kept in {run}")
+        return run_id, tuple(notes)
+
+    # -- the archive ---------------------------------------------------------------------
+    def history(
+        self, serial: str | None = None, rotor_type: str | None = None, limit: int = 50
+    ) -> list[dict[str, Any]]:
+        """The archive's latest runs (newest first), by serial and rotor type."""
+        from stand.archive.query import Filters, history
+
+        rows = history(self.archive_url, Filters(serial=serial or None, rotor_type=rotor_type))
+        return rows[::-1][:limit]
+
+    def report_file(self, run_id: int) -> Path:
+        """The report of archived run ``run_id``, if it lies inside the runs folder."""
+        from stand.archive.query import run_file
+
+        found = run_file(self.archive_url, run_id)
+        if found is None:
+            raise UsageError(f"no run {run_id} in the archive")
+        report = Path(found).with_suffix(".html").resolve()
+        if not report.is_relative_to(self.runs_dir):
+            raise UsageError(f"run {run_id}'s report is outside {self.runs_dir}")
+        if not report.is_file():
+            raise UsageError(f"run {run_id} has no report in {self.runs_dir}")
+        return report
+
+
+def _now() -> float:
+    import time
+
+    return time.monotonic()

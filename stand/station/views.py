@@ -1,0 +1,196 @@
+"""What the screens show, as data: the live polar charts (ECharts options), the
+instructions in words, the check's verdict.  No interface code: pages.py lays
+these out; tests read them directly.
+
+Angles are from the reference mark, against the direction of rotation (the
+charts count them clockwise from the top, as the report's plots and the rotor
+face do).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from stand.core import rad_s_to_rpm, unbalance_to_polar
+from stand.units import Display
+
+ANGLE_NOTE = "angles from the reference mark, against the direction of rotation"
+RING = np.linspace(0.0, 2.0 * math.pi, 73)
+"""Points of a drawn circle (every 5 deg)."""
+
+
+@dataclass(frozen=True)
+class PlaneLive:
+    """One plane's live estimate, in kg m and degrees."""
+
+    U_kg_m: float
+    angle_deg: float
+    radius95_kg_m: float
+    goal_kg_m: float
+    permissible_kg_m: float | None
+
+    @property
+    def precise(self) -> bool:
+        return self.radius95_kg_m <= self.goal_kg_m
+
+
+def planes_live(progress: Any, tolerance_kg_m: tuple[float, float] | None) -> list[PlaneLive]:
+    """Both planes of a live estimate (:class:`stand.live.Progress`)."""
+    m = progress.measurement
+    size, angle = unbalance_to_polar(m.solution.U_kg_m)
+    return [
+        PlaneLive(
+            float(size[i]),
+            float(angle[i]),
+            float(m.radius95_kg_m[i]),
+            float(progress.targets_kg_m[i]),
+            None if tolerance_kg_m is None else float(tolerance_kg_m[i]),
+        )
+        for i in range(2)
+    ]
+
+
+def live_numbers(progress: Any) -> dict[str, float]:
+    """Speed [rpm], time [s] and the supports' 1x amplitudes [m/s^2] of a live estimate."""
+    m = progress.measurement
+    return {
+        "rpm": float(rad_s_to_rpm(m.omega_rad_s)),
+        "elapsed_s": float(progress.elapsed_s),
+        "support1_m_s2": float(abs(m.supports[0].A_m_s2)),
+        "support2_m_s2": float(abs(m.supports[1].A_m_s2)),
+    }
+
+
+def _circle(center_deg: float, center_r: float, radius: float) -> list[list[float]]:
+    """A circle of ``radius`` around the point (``center_r``, ``center_deg``), as polar
+    ``[r, angle_deg]`` points (clockwise angles, as drawn)."""
+    c = center_r * np.exp(1j * math.radians(center_deg))
+    z = c + radius * np.exp(1j * RING)
+    return [[round(float(r), 6), round(float(a), 3)]
+            for r, a in zip(np.abs(z), np.degrees(np.angle(z)) % 360, strict=True)]  # fmt: skip
+
+
+def _nice_max(x: float) -> float:
+    """A round chart radius above ``x``."""
+    step = 10.0 ** math.floor(math.log10(max(x, 1e-12)))
+    for m in (1, 2, 2.5, 5, 10):
+        if m * step >= x:
+            return m * step
+    return 10 * step
+
+
+def polar_chart(plane: int, p: PlaneLive | None, units: Display) -> dict[str, Any]:
+    """The ECharts options of one plane: the tolerance circle, the unbalance, its 95 %
+    circle and the precision goal around it (display units)."""
+    v = units.unbalance_value
+    series: list[dict[str, Any]] = []
+    top = 1.0
+    if p is not None:
+        u, r95, goal = v(p.U_kg_m * 1e6), v(p.radius95_kg_m * 1e6), v(p.goal_kg_m * 1e6)
+        top = u + max(r95, goal)
+        if p.permissible_kg_m is not None:
+            per = v(p.permissible_kg_m * 1e6)
+            top = max(top, per * 1.15)
+            series.append(_line("tolerance", _circle(0.0, 0.0, per), "#2e7d32", area=True))
+        series.append(_line("precision goal", _circle(p.angle_deg, u, goal), "#555", dashed=True))
+        series.append(_line("95 % circle", _circle(p.angle_deg, u, r95), "#c62828"))
+        series.append({
+            "type": "scatter", "coordinateSystem": "polar", "name": "unbalance",
+            "data": [[round(u, 6), round(p.angle_deg, 3)]], "symbolSize": 18,
+            "itemStyle": {"color": "#c62828"}, "z": 5,
+        })  # fmt: skip
+    return {
+        "animation": False,
+        "title": {"text": f"plane {plane} [{units.unbalance_unit}]", "left": "center",
+                  "textStyle": {"fontSize": 22}},
+        "legend": {"bottom": 0, "textStyle": {"fontSize": 15}},
+        "polar": {"radius": "68%", "center": ["50%", "52%"]},
+        "angleAxis": {"type": "value", "min": 0, "max": 360, "startAngle": 90,
+                      "clockwise": True, "interval": 45,
+                      "axisLabel": {"formatter": "{value}°", "fontSize": 14}},
+        "radiusAxis": {"min": 0, "max": _nice_max(top * 1.05), "axisLabel": {"fontSize": 12}},
+        "series": series,
+    }  # fmt: skip
+
+
+def _line(
+    name: str, data: list[list[float]], colour: str, *, dashed: bool = False, area: bool = False
+) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "type": "line", "coordinateSystem": "polar", "name": name, "data": data,
+        "showSymbol": False, "smooth": False, "itemStyle": {"color": colour},
+        "lineStyle": {"color": colour, "width": 2, "type": "dashed" if dashed else "solid"},
+    }  # fmt: skip
+    if area:
+        out["areaStyle"] = {"color": colour, "opacity": 0.12}
+    return out
+
+
+def plane_status(p: PlaneLive, units: Display) -> str:
+    """One plane's estimate in words."""
+    text = f"{units.unbalance(p.U_kg_m * 1e6)} ± {units.number(p.radius95_kg_m * 1e6)}"
+    angle = "" if p.U_kg_m <= p.radius95_kg_m else f" at {p.angle_deg:.0f}°"
+    state = "precise" if p.precise else f"measuring (goal ± {units.number(p.goal_kg_m * 1e6)})"
+    return f"{text}{angle}, {state}"
+
+
+@dataclass(frozen=True)
+class Instruction:
+    """One plane's correction for the operator: a headline and the masses, each with its
+    angle and the words to draw it with."""
+
+    plane: int
+    headline: str
+    lines: tuple[tuple[str, str, str], ...]
+    """Per mass: what (``ADD 39.00 g``), where (``in hole 6 (225°)``), the stock pieces."""
+    marks: tuple[tuple[float, str], ...]
+    needed: bool
+
+
+def instructions(out: dict[str, Any]) -> list[Instruction]:
+    """The correction of each plane of a result's JSON form, in the operator's words."""
+    u = Display.of(out)
+    verb = "ADD" if out["correction_mode"] == "add" else "REMOVE"
+    found = []
+    for c in out["corrections"]:
+        i = c["plane"]
+        if c.get("within_noise") or c.get("within_tolerance") or not c["weights"]:
+            why = "within tolerance" if c.get("within_tolerance") else "nothing to correct"
+            found.append(Instruction(i, f"plane {i}: {why}", (), (), False))
+            continue
+        lines, marks = [], []
+        for w in c["weights"]:
+            where = f"at {w['angle_deg']:.0f}°"
+            if w["position"] is not None:
+                where = f"in hole {w['position']} ({w['angle_deg']:.0f}°)"
+            pieces = w.get("pieces_g") or []
+            stock = "" if len(pieces) < 2 else "stock: " + " + ".join(u.mass(g) for g in pieces)
+            lines.append((f"{verb} {u.mass(w['mass_g'])}", where, stock))
+            marks.append((float(w["angle_deg"]), u.mass(w["mass_g"])))
+        radius = u.length(c["weights"][0]["radius_mm"])
+        found.append(
+            Instruction(i, f"plane {i}: at radius {radius}", tuple(lines), tuple(marks), True)
+        )
+    return found
+
+
+def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
+    """Per plane: before, after, URR [%] and the verdict of a check run's JSON form."""
+    u = Display.of(out)
+    tol = {p["plane"]: p for p in (out.get("tolerance") or {}).get("planes", [])}
+    rows = []
+    for p in (out.get("check") or {}).get("planes", []):
+        t = tol.get(p["plane"])
+        rows.append({
+            "plane": p["plane"],
+            "before": u.unbalance(p["before_g_mm"]),
+            "after": u.unbalance(p["after_g_mm"]),
+            "urr": f"{100 * p['urr']:.1f} %" if p.get("urr") is not None else "-",
+            "permissible": "-" if t is None else u.unbalance(t["permissible_g_mm"]),
+            "verdict": "-" if t is None else ("PASS" if t["pass"] else "FAIL"),
+        })  # fmt: skip
+    return rows
