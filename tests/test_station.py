@@ -235,3 +235,83 @@ async def _flow(station: Station) -> None:
         assert "pass (check)" in [r["verdict"] for r in table.rows]
         response = await user.http_client.get(table.rows[0]["report"])
         assert response.status_code == 200 and "S-42" in response.text
+
+
+@pytest.mark.realtime
+def test_a_failed_check_is_corrected_again_and_a_correction_goes_on_once(
+    station: Station,
+) -> None:
+    """Checked without the correction: not within tolerance; Correct then shows what the
+    check run prescribes, it goes on the rotor once, and the next check passes against it."""
+    station.start("demo-auger", "demo", Job(serial="T-1"))
+    first = _wait(station).result
+    station.check()  # nothing applied: the check fails
+    s = _wait(station)
+    assert s.kind == "check" and s.result.check.previous_run == first.provenance.run_file
+    assert np.all(abs(s.result.U_kg_m) > np.asarray(s.result.tolerance.per_plane_kg_m))
+    assert station.latest() is s.result  # Correct and Apply start from the check run
+    station.apply_correction()
+    with pytest.raises(UsageError, match="on the rotor already"):
+        station.apply_correction()
+    station.check()
+    s = _wait(station)
+    after = abs(s.result.U_kg_m) + s.result.measurement.radius95_kg_m
+    assert np.all(after < np.asarray(s.result.tolerance.per_plane_kg_m))
+    assert len(station.history(serial="T-1")) == 3
+
+
+def test_what_the_screens_say() -> None:
+    from stand.station.views import check_verdict, instructions
+
+    def corr(plane: int, **kw: Any) -> dict[str, Any]:
+        return {"plane": plane, "weights": [], "within_noise": False, "within_tolerance": False,
+                **kw}  # fmt: skip
+
+    w = {"mass_g": 39.0, "angle_deg": 225.0, "position": 6, "pieces_g": [20, 10, 5, 2, 2],
+         "radius_mm": 90.0}  # fmt: skip
+    out = {"correction_mode": "add", "display": {"mass": "g", "length": "mm"},
+           "corrections": [corr(1, weights=[w]), corr(2, within_tolerance=True)]}  # fmt: skip
+    one, two = instructions(out)
+    assert one.lines == (("ADD 39.00 g", "in hole 6 (225°)", "stock: 20.00 g + 10.00 g + "
+                          "5.00 g + 2.00 g + 2.00 g"),)  # fmt: skip
+    assert one.headline == "plane 1: at radius 90 mm" and one.marks == ((225.0, "39.00 g"),)
+    assert not two.needed and two.headline == "plane 2: within tolerance"
+    out["correction_mode"] = "remove"
+    w.update(position=None, pieces_g=[])
+    assert instructions(out)[0].lines == (("REMOVE 39.00 g", "at 225°", ""),)
+    assert check_verdict({}) is None
+    planes = [{"pass": True}, {"pass": False}]
+    assert check_verdict({"tolerance": {"planes": planes}}) == "fail"
+    assert check_verdict({"tolerance": {"planes": planes[:1]}}) == "pass"
+
+
+def test_the_rotor_face_numbers_the_holes_and_marks_the_masses() -> None:
+    import xml.etree.ElementTree as ET
+
+    from stand.station.face import face_svg
+
+    svg = face_svg([(180.0, "20.00 g"), (225.0, "39.00 g")], positions=8, title="plane 1")
+    texts = [t.text for t in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}text")]
+    assert [str(k) for k in range(1, 9)] == [t for t in texts if t and t.isdigit()]
+    assert {"20.00 g", "39.00 g", "reference mark", "rotation"} <= set(texts)
+    bare = face_svg([], positions=0)
+    assert not any(t and t.isdigit() for t in ET.fromstring(bare).itertext())
+
+
+def test_the_live_chart_draws_the_circles_where_they_are() -> None:
+    from stand.station.views import PlaneLive, polar_chart
+    from stand.units import Display
+
+    p = PlaneLive(U_kg_m=5e-3, angle_deg=30.0, radius95_kg_m=1e-3, goal_kg_m=2e-3,
+                  permissible_kg_m=1.1e-3)  # fmt: skip
+    opts = polar_chart(1, p, Display())
+    series = {s["name"]: s["data"] for s in opts["series"]}
+    assert series["unbalance"] == [[5000.0, 30.0]]
+    assert {round(r, 6) for r, _ in series["tolerance"]} == {1100.0}
+    # every point of the 95 % circle lies 1000 g mm from the unbalance (clockwise angles)
+    z0 = 5000 * np.exp(1j * np.radians(30.0))
+    for key, radius in (("95 % circle", 1000.0), ("precision goal", 2000.0)):
+        z = np.array([r * np.exp(1j * np.radians(a)) for r, a in series[key]])
+        # angles are sent rounded to 1e-3 deg: at most 5e-4 deg x 7000 g mm = 0.06 g mm off
+        assert np.allclose(abs(z - z0), radius, rtol=0, atol=0.07)
+    assert opts["radiusAxis"]["max"] >= 7000.0  # the goal circle fits

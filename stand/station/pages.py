@@ -21,6 +21,7 @@ from stand.station.service import BUS, Station
 from stand.station.views import (
     ANGLE_NOTE,
     check_rows,
+    check_verdict,
     instructions,
     live_numbers,
     plane_status,
@@ -206,12 +207,11 @@ def measure_screen(station: Station) -> None:
 
 def correct_screen(station: Station) -> None:
     """Correct: per plane the instruction in large type, on the rotor face."""
-    s = station.snapshot()
-    initial = s.before if s.kind == "check" else s.result
-    if initial is None:
+    s, latest = station.snapshot(), station.latest()
+    if latest is None:
         ui.label("Measure the rotor first (Start).").classes("big")
         return
-    out = to_json(initial)
+    out = to_json(latest)
     pos = out.get("correction_positions") or {}
     ui.label(f"Correction of {s.job.serial or 'the rotor'}").classes("big")
     ui.label(f"{ANGLE_NOTE}; the faces are drawn {SEEN_FROM}").classes("text-body1")
@@ -235,7 +235,7 @@ def correct_screen(station: Station) -> None:
                             if stock:
                                 ui.label(stock).classes("text-body1 text-grey-8 q-mb-md")
     with ui.row().classes("gap-4 q-mt-md"):
-        if s.simulated and s.kind == "initial" and s.phase == "done":
+        if s.simulated and s.phase == "done":
 
             def apply() -> None:
                 masses = station.apply_correction()
@@ -256,13 +256,15 @@ def check_screen(station: Station) -> None:
         ui.label("No check run yet: correct the rotor, then start the check run.").classes("big")
         return
     out = to_json(s.result)
-    verdict = out.get("verdict") or (
-        "pass" if all(r["verdict"] == "PASS" for r in check_rows(out)) else "fail"
+    verdict = check_verdict(out)
+    word = {"pass": "WITHIN TOLERANCE", "fail": "NOT WITHIN TOLERANCE"}.get(
+        str(verdict), "CHECKED (no tolerance set)"
     )
-    word = "WITHIN TOLERANCE" if verdict == "pass" else "NOT WITHIN TOLERANCE"
     ui.label(f"{s.job.serial or 'rotor'}: {word}").classes(
-        "huge " + ("pass" if verdict == "pass" else "fail")
+        "huge " + ("fail" if verdict == "fail" else "pass")
     ).mark("verdict")
+    if verdict == "fail":
+        ui.label("Correct again (Correct shows what is left), then check again.").classes("text-h5")
     names = {
         "plane": "plane",
         "before": "before",

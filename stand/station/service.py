@@ -62,6 +62,8 @@ class Snapshot:
     error: str = ""
     notes: tuple[str, ...] = ()
     applied: tuple[Any, ...] = ()
+    applied_run: str | None = None
+    """The run whose correction was put on the simulated rotor last (once only)."""
     run_id: int | None = None
     tolerance_kg_m: tuple[float, float] | None = None
 
@@ -148,11 +150,16 @@ class Station:
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )
 
-    def check(self) -> None:
-        """Measure the same rotor again after its correction: the check run."""
+    def latest(self) -> Any:
+        """The rotor's latest finished run (the one a correction and a check start from)."""
         s = self._state
-        initial = s.before if s.kind == "check" else s.result
-        if s.rotor_type is None or initial is None:
+        return s.result if s.phase == "done" else s.before
+
+    def check(self) -> None:
+        """Measure the same rotor again after its correction: the check run (against the
+        latest run: after a failed check, a second correction is checked against it)."""
+        s, before = self._state, self.latest()
+        if s.rotor_type is None or before is None:
             raise UsageError("measure the rotor first: a check needs the run before it")
         self._launch(
             "check",
@@ -160,7 +167,7 @@ class Station:
             source=str(s.source),
             job=s.job,
             config=self.config_path(s.rotor_type),
-            before=initial,
+            before=before,
         )
 
     def _launch(self, kind: str, *, config: Path, before: Any, **state: Any) -> None:
@@ -170,11 +177,11 @@ class Station:
                 what = f"the {s.kind} run of {s.job.serial or 'a rotor'}"
                 raise StationBusyError(f"the station is measuring {what} already", running=what)
             self._stop.clear()
-            applied = s.applied if kind == "check" else ()
-            self._state = replace(
-                Snapshot(seq=s.seq + 1, phase="measuring", kind=kind, before=before,
-                         applied=applied, started_s=_now(), **state),
-            )  # fmt: skip
+            fresh = Snapshot(seq=s.seq + 1, phase="measuring", kind=kind, before=before,
+                             started_s=_now(), **state)  # fmt: skip
+            if kind == "check":  # the masses on the simulated rotor stay on it
+                fresh = replace(fresh, applied=s.applied, applied_run=s.applied_run)
+            self._state = fresh
         self._thread = threading.Thread(
             target=self._measure, args=(kind, config, before), name="station-run", daemon=True
         )
@@ -200,8 +207,10 @@ class Station:
         if s.phase != "done" or s.result is None or not s.simulated:
             raise UsageError("a correction is applied on the simulated stand, after a run")
         run, config = s.result.provenance.run_file, self.config_path(str(s.rotor_type))
+        if s.applied_run == run:
+            raise UsageError("this correction is on the rotor already: start the check run")
         masses = [Mass(p, g, a, r) for p, g, a, r in correction_masses(run, str(config))]
-        self._set(applied=s.applied + tuple(masses))
+        self._set(applied=s.applied + tuple(masses), applied_run=run)
         return self._state.applied
 
     def next_rotor(self) -> None:
@@ -235,7 +244,7 @@ class Station:
         src = live_source(scene, str(config), "station", list(s.applied))
         tol = tolerance_of(src.cfg, src.params)
         self._set(tolerance_kg_m=None if tol is None else tuple(tol.per_plane_kg_m))
-        kwargs = src.scene_bus if src.scene_bus is not None else dict(src.bus_table or {})
+        kwargs = src.scene_bus if src.scene_bus is not None else _bus(src.bus_table)
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
         path = self.runs_dir / f"{safe_name(s.job.serial or 'rotor')}-{kind}-{stamp}.h5"
@@ -305,6 +314,17 @@ class Station:
         if not report.is_file():
             raise UsageError(f"run {run_id} has no report in {self.runs_dir}")
         return report
+
+
+def _bus(table: dict[str, Any] | None) -> dict[str, Any]:
+    """The rotor type's ``[bus]`` table as ``can.Bus`` options (a file cannot allow URL
+    channels, as for ``stand measure``)."""
+    from stand.drivers.bus import ALLOW_URL
+
+    kwargs = dict(table or {})
+    if ALLOW_URL in kwargs:
+        raise UsageError(f"[bus] {ALLOW_URL}: a file cannot allow URL channels")
+    return kwargs
 
 
 def _now() -> float:

@@ -194,3 +194,12 @@ def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
             "verdict": "-" if t is None else ("PASS" if t["pass"] else "FAIL"),
         })  # fmt: skip
     return rows
+
+
+def check_verdict(out: dict[str, Any]) -> str | None:
+    """``pass`` when every plane's residual is within its tolerance, ``fail`` when one is
+    not, None without a tolerance."""
+    planes = (out.get("tolerance") or {}).get("planes") or []
+    if not planes:
+        return None
+    return "pass" if all(p["pass"] for p in planes) else "fail"
