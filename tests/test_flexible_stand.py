@@ -8,7 +8,9 @@ import json
 import math
 import re
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 from test_shaft import _config
 
@@ -92,3 +94,92 @@ def test_a_bending_rotor_is_simulated_at_one_steady_speed(
     assert main(["simulate", str(scene), "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert "[rotor.shaft]" in err and "one steady speed" in err
+
+
+def _bow() -> tuple[Any, Any, Any]:
+    from stand.sim import load_scene
+    from stand.sim.scene import node_unbalance
+
+    sc, p, _ = load_scene("auger-bow")
+    beam = sc.rotor.beam()
+    return beam, p, node_unbalance(sc, beam)
+
+
+def test_a_spread_unbalance_on_a_stiff_shaft_acts_as_the_rigid_rotor_s_static_unbalance() -> None:
+    """The lumped masses add up to the rotor; a uniform eccentricity e on a shaft 1e4 times
+    stiffer gives the support motion of the static unbalance M3 e, split between the planes
+    so that it acts at the centre of mass (the beam's rigid limit: error ~ 1e-4)."""
+    from dataclasses import replace
+
+    from stand.core.beam import distributed_unbalance, forward_beam, lumped_masses
+
+    beam, p, _ = _bow()
+    stiff = replace(beam, K=beam.K * 1e4)
+    m = lumped_masses(stiff)
+    assert m.sum() == pytest.approx((7810.0 * math.pi * 0.03**2 + 12.0) * 1.7, rel=1e-12)
+    U_nodes = distributed_unbalance(stiff, np.full(len(m), 50e-6), 60.0)
+    x1, x2 = (stiff.x_m[i] for i in stiff.plane_nodes)
+    U = U_nodes.sum()
+    planes = [U * (x2 - 0.85) / (x2 - x1), U * (0.85 - x1) / (x2 - x1)]  # centre of mass 0.85
+    w = 900 * math.pi / 30
+    spread = forward_beam(stiff, p, w, [0, 0], U_nodes)
+    assert np.allclose(spread, forward_beam(stiff, p, w, planes), rtol=1e-3, atol=0)
+
+
+def test_two_planes_cancel_a_bow_at_their_speed_only(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """README's distributed-unbalance table: the correction from a 900 rpm run leaves the
+    supports still at 900 rpm (within the run's own interval), not at 1500 rpm (24 % of the
+    uncorrected 1x there, 643 g mm equivalent per plane); the shaft bends more than before."""
+    from stand.core.beam import nodal_response, plane_loads
+    from stand.pipeline import solve_recording
+
+    first = str(tmp_path / "bow.h5")
+    assert main(["simulate", "auger-bow", "--out", first]) == 0
+    before = solve_recording(first)
+    assert np.allclose(abs(before.U_kg_m), 2088e-6, rtol=0.005)  # 100 um bow, 60 deg
+    found = {}
+    for rpm in (900, 1500):
+        for tag, extra in (("raw", []), ("corrected", ["--apply", first])):
+            run = str(tmp_path / f"{tag}-{rpm}.h5")
+            argv = ["simulate", "auger-bow", "--rpm", str(rpm), "--seed", "1", "--out", run]
+            assert main([*argv, *extra]) == 0
+            found[tag, rpm] = solve_recording(run)
+    capsys.readouterr()
+    at900 = found["corrected", 900]
+    assert np.all(abs(at900.U_kg_m) < np.asarray(at900.measurement.radius95_kg_m))
+
+    def amp(r: Any) -> float:
+        return max(abs(s.A_m_s2) for s in r.measurement.supports)
+
+    assert amp(found["corrected", 1500]) / amp(found["raw", 1500]) == pytest.approx(0.236, abs=0.01)
+    assert np.allclose(abs(found["corrected", 1500].U_kg_m), 643e-6, rtol=0.01)
+    beam, p, spread = _bow()
+    x, (s1, s2) = beam.x_m, beam.support_nodes
+    mid = int(np.argmin(abs(x - 0.85)))
+
+    def bend_um(U_nodes: Any) -> float:
+        X = nodal_response(beam, p, 900 * math.pi / 30, U_nodes)
+        line = X[s1] + (X[s2] - X[s1]) * (x[mid] - x[s1]) / (x[s2] - x[s1])
+        return float(abs(X[mid] - line) * 1e6)
+
+    corrected = spread + plane_loads(beam, -before.U_kg_m)
+    assert bend_um(spread) == pytest.approx(5.5, abs=0.1)
+    assert bend_um(corrected) == pytest.approx(13.5, abs=0.2)
+
+
+def test_a_spread_unbalance_needs_a_shaft(tmp_path: Path) -> None:
+    from stand.errors import ConfigError
+    from stand.sim import load_scene
+
+    text = (ROOT / "stand" / "data" / "scenes" / "demo.toml").read_text()
+    text = text.replace(
+        "plane2 = { g_mm = 3000.0, angle_deg = 200.0 }",
+        "plane2 = { g_mm = 3000.0, angle_deg = 200.0 }\n"
+        "distributed = { eccentricity_um = 10.0, angle_deg = 0.0 }",
+    )
+    path = tmp_path / "flat.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=r"unbalance\.distributed.*shaft|shaft"):
+        load_scene(path)

@@ -101,31 +101,79 @@ def beam_rotor(
     )
 
 
-def receptance(rotor: BeamRotor, p: StandParameters, omega_rad_s: float) -> ComplexArray:
-    """``H`` with ``A = H U``: support accelerations [m/s^2] per unbalance [kg m], 2 x 2."""
-    w = float(omega_rad_s)
-    D = rotor.K - w * w * rotor.M + 0j
+def _dynamic(rotor: BeamRotor, p: StandParameters, w: float) -> ComplexArray:
+    """The stand's dynamic stiffness ``K - w^2 M + i w H`` with the supports."""
+    D: ComplexArray = np.asarray(rotor.K - w * w * rotor.M, dtype=np.complex128)
     for i, (m, c, h) in zip(
         rotor.support_nodes, ((p.M1, p.C1, p.H1), (p.M2, p.C2, p.H2)), strict=True
     ):
         D[2 * i, 2 * i] += c - w * w * m + 1j * w * h
-    F = np.zeros((D.shape[0], 2), complex)
-    for j, i in enumerate(rotor.plane_nodes):
-        F[2 * i, j] = w * w
+    return D
+
+
+def nodal_response(
+    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, U_nodes_kg_m: ArrayLike
+) -> ComplexArray:
+    """The shaft's displacement phasors at every node [m] for an unbalance at every node
+    [kg m] (the force ``w^2 U`` on each node's lateral dof)."""
+    w = float(omega_rad_s)
+    U = np.asarray(U_nodes_kg_m, dtype=complex)
+    F = np.zeros((2 * len(rotor.x_m), *U.shape[1:]), complex)
+    F[0::2] = w * w * U
     try:
-        X = np.linalg.solve(D, F)
+        X = np.linalg.solve(_dynamic(rotor, p, w), F)
     except np.linalg.LinAlgError as exc:
         raise ModelError(f"no steady state at {w:g} rad/s (a natural frequency)") from exc
-    rows = [2 * i for i in rotor.support_nodes]
-    H: ComplexArray = np.asarray(-w * w * X[rows, :], dtype=np.complex128)
+    out: ComplexArray = np.asarray(X[0::2], dtype=np.complex128)
+    return out
+
+
+def plane_loads(rotor: BeamRotor, U_kg_m: ArrayLike) -> ComplexArray:
+    """The planes' unbalances [kg m] as an unbalance per node (zero elsewhere)."""
+    U = np.asarray(U_kg_m, dtype=complex)
+    out = np.zeros((len(rotor.x_m), *U.shape[1:]), complex)
+    for j, i in enumerate(rotor.plane_nodes):
+        out[i] += U[j]
+    return out
+
+
+def receptance(rotor: BeamRotor, p: StandParameters, omega_rad_s: float) -> ComplexArray:
+    """``H`` with ``A = H U``: support accelerations [m/s^2] per unbalance [kg m], 2 x 2."""
+    X = nodal_response(rotor, p, omega_rad_s, plane_loads(rotor, np.eye(2)))
+    H: ComplexArray = np.asarray(-(omega_rad_s**2) * X[list(rotor.support_nodes), :])
     return H
 
 
-def forward_beam(
-    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, U_kg_m: ArrayLike
+def lumped_masses(rotor: BeamRotor) -> NDArray[np.float64]:
+    """The translational mass each node carries [kg]: the rows of the consistent mass
+    matrix's translational block, summed (they add up to the rotor's mass)."""
+    out: NDArray[np.float64] = rotor.M[0::2, 0::2].sum(axis=1)
+    return out
+
+
+def distributed_unbalance(
+    rotor: BeamRotor, eccentricity_m: ArrayLike, angle_deg: float
 ) -> ComplexArray:
-    """Support acceleration phasors [m/s^2] of the flexible stand for unbalances ``U``."""
+    """The unbalance per node [kg m] of a mass centre line ``eccentricity_m`` off the axis
+    at each node [m], all at one angle ``angle_deg`` (the seed's phi: ``e^{-i phi}``)."""
+    e = np.asarray(eccentricity_m, dtype=float)
+    out: ComplexArray = lumped_masses(rotor) * e * np.exp(-1j * math.radians(angle_deg))
+    return out
+
+
+def forward_beam(
+    rotor: BeamRotor,
+    p: StandParameters,
+    omega_rad_s: float,
+    U_kg_m: ArrayLike,
+    U_nodes_kg_m: ArrayLike | None = None,
+) -> ComplexArray:
+    """Support acceleration phasors [m/s^2] of the flexible stand for the planes'
+    unbalances ``U`` and, optionally, an unbalance spread along the shaft (per node)."""
     out: ComplexArray = receptance(rotor, p, omega_rad_s) @ np.asarray(U_kg_m, dtype=complex)
+    if U_nodes_kg_m is not None:
+        X = nodal_response(rotor, p, omega_rad_s, U_nodes_kg_m)
+        out = out - omega_rad_s**2 * X[list(rotor.support_nodes)]
     return out
 
 

@@ -31,7 +31,7 @@ from stand.sim.physics import (
     steady_forward,
     support_force,
 )
-from stand.sim.scene import Scene, per_node, unbalance_kg_m
+from stand.sim.scene import Scene, node_unbalance, per_node, unbalance_kg_m
 
 FULL_SCALE = 32767
 """Largest count a node sends; -32768 is reserved for invalid samples."""
@@ -172,7 +172,8 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
         )
         a_phys = [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]]
     else:
-        a_phys = [closed_form(p, speed, U, s, beam)[:, i] for i, s in enumerate(seen)]
+        spread = node_unbalance(scene, beam)
+        a_phys = [closed_form(p, speed, U, s, beam, spread)[:, i] for i, s in enumerate(seen)]
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:
@@ -181,7 +182,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     blocks: list[Frames] = []
     truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
     w0 = speed.omega0_rad_s
-    A_true = steady_forward(p, beam, w0, U) * np.array(
+    A_true = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
     )
     truth["A_m_s2"] = A_true

@@ -123,26 +123,37 @@ def edge_times(speed: SceneSpeed, gamma_rad: float, t0_s: float, t1_s: float) ->
 
 
 def closed_form(
-    p: StandParameters, speed: SceneSpeed, U_kg_m: np.ndarray, t_s: FloatArray, beam: Any = None
+    p: StandParameters,
+    speed: SceneSpeed,
+    U_kg_m: np.ndarray,
+    t_s: FloatArray,
+    beam: Any = None,
+    U_nodes_kg_m: Any = None,
 ) -> FloatArray:
     """Support accelerations ``Re(A(w(t)) e^{i theta(t)})`` [m/s^2], shape (n, 2); with
-    ``beam`` (:class:`stand.core.beam.BeamRotor`) the rotor bends (one steady speed)."""
+    ``beam`` (:class:`stand.core.beam.BeamRotor`) the rotor bends (one steady speed), with
+    ``U_nodes_kg_m`` an unbalance spread along it too."""
     w = speed.omega(t_s)
     if speed.ripple == 0 and speed.drift_per_s == 0:  # one speed: one forward
-        A = np.broadcast_to(steady_forward(p, beam, float(w[0]), U_kg_m), (len(t_s), 2))
+        A = np.broadcast_to(
+            steady_forward(p, beam, float(w[0]), U_kg_m, U_nodes_kg_m), (len(t_s), 2)
+        )
     else:
         A = forward(p, w, U_kg_m)
     result: FloatArray = (A * np.exp(1j * speed.theta(t_s))[:, None]).real
     return result
 
 
-def steady_forward(p: StandParameters, beam: Any, omega_rad_s: float, U_kg_m: Any) -> Any:
-    """The support phasors at one speed: the rigid rotor's, or the bending one's."""
+def steady_forward(
+    p: StandParameters, beam: Any, omega_rad_s: float, U_kg_m: Any, U_nodes_kg_m: Any = None
+) -> Any:
+    """The support phasors at one speed: the rigid rotor's, or the bending one's (with its
+    distributed unbalance, if any)."""
     if beam is None:
         return forward(p, omega_rad_s, U_kg_m)
     from stand.core.beam import forward_beam
 
-    return forward_beam(beam, p, omega_rad_s, U_kg_m)
+    return forward_beam(beam, p, omega_rad_s, U_kg_m, U_nodes_kg_m)
 
 
 def support_force(

@@ -6,6 +6,7 @@ the scene's own) and::
 
     [run]        rpm, seconds, seed = 0, physics = "auto"
     [unbalance]  plane1 = { g_mm, angle_deg }, plane2 = { ... }   (the seed's phi)
+                 distributed = { eccentricity_um, angle_deg, shape }  (with a shaft)
     [nodes]      rate_hz = 4000, scale_um_s2 = 100, first_seq = 0
     [effects.*]  each optional; an effect not named costs nothing
 
@@ -89,11 +90,23 @@ class PlaneUnbalance(_Table):
     angle_deg: FiniteFloat
 
 
+class DistributedUnbalance(_Table):
+    """``[unbalance.distributed]`` (a rotor with ``[rotor.shaft]`` only): the mass centre
+    line off the shaft's axis, at one angle; ``shape`` ``uniform`` (an eccentric shaft)
+    or ``bow`` (a half sine over the shaft's length, largest at mid-length)."""
+
+    eccentricity_um: NonNegative
+    angle_deg: FiniteFloat
+    shape: Literal["uniform", "bow"] = "bow"
+
+
 class UnbalanceTable(_Table):
-    """``[unbalance]``: ``U_i = q_i R_i`` [g mm] at the seed's angle ``phi_i`` [deg]."""
+    """``[unbalance]``: ``U_i = q_i R_i`` [g mm] at the seed's angle ``phi_i`` [deg], and
+    optionally an unbalance spread along a bending shaft."""
 
     plane1: PlaneUnbalance
     plane2: PlaneUnbalance
+    distributed: DistributedUnbalance | None = None
 
 
 class NodesTable(_Table):
@@ -308,8 +321,14 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
             source=str(path),
             key="run.physics",
         )
-    # a shaft table gives the rotor's values (the simulated rotor is rigid: issue 13)
+    # a shaft table gives the rotor's values (and the rotor bends)
     scene = scene.model_copy(update={"rotor": with_shaft(scene.config(), str(path)).rotor})
+    if scene.unbalance.distributed is not None and scene.rotor.shaft is None:
+        raise ConfigError(
+            "an unbalance spread along the rotor needs the shaft ([rotor.shaft])",
+            source=str(path),
+            key="unbalance.distributed",
+        )
     params = parameters_of(scene.config(), str(path))
     return scene, params, str(path)
 
@@ -365,11 +384,28 @@ def with_masses(scene: Scene, masses: Sequence[Mass] = (), rpm: float | None = N
             raise ConfigError(f"plane {m.plane}: a rotor has planes 1 and 2", key="add")
         r = radius_mm[m.plane - 1] if m.radius_m is None else m.radius_m * 1e3
         U[m.plane - 1] += m.grams * r * cmath.exp(-1j * math.radians(m.angle_deg))
-    planes = {
+    planes: dict[str, Any] = {
         f"plane{i + 1}": PlaneUnbalance(
             g_mm=abs(u), angle_deg=float(-math.degrees(cmath.phase(u)) % 360.0)
         )
         for i, u in enumerate(U)
     }
+    planes["distributed"] = scene.unbalance.distributed
     run = scene.run if rpm is None else scene.run.model_copy(update={"rpm": rpm})
     return scene.model_copy(update={"unbalance": UnbalanceTable(**planes), "run": run})
+
+
+def node_unbalance(scene: Scene, beam: Any) -> Any:
+    """The scene's distributed unbalance per node of ``beam`` [kg m] (None without one)."""
+    d = scene.unbalance.distributed
+    if d is None or beam is None:
+        return None
+    import numpy as np
+
+    from stand.core.beam import distributed_unbalance
+
+    x = beam.x_m
+    e = np.full(len(x), d.eccentricity_um * 1e-6)
+    if d.shape == "bow":
+        e = e * np.sin(math.pi * (x - x[0]) / (x[-1] - x[0]))
+    return distributed_unbalance(beam, e, d.angle_deg)
