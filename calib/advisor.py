@@ -15,8 +15,10 @@ speeds the advisor computes:
 
 and recommends the range from the lowest speed where that sensitivity stays
 under 1 % (and no natural frequency lies within a factor 1.25) to the
-maximum service speed (the rotor is treated as rigid: do not balance above
-it).
+maximum service speed (do not balance above it).  With the shaft's beam
+model (a bending rotor, :mod:`stand.core.beam`) the same is computed
+through the flexible stand, and the range also ends a factor 1.25 below
+the rotor's first bending mode in the stand.
 
 Pure numerics on :mod:`stand.core`.
 """
@@ -26,8 +28,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from stand.core import (
     StandParameters,
@@ -60,40 +64,83 @@ class Advice:
     rows: tuple[SpeedRow, ...]
     recommended_rpm: tuple[float, float] | None
     reasons: tuple[str, ...]
+    bending_hz: float | None = None
+    """The rotor's first bending mode in the stand [Hz] (a bending rotor only)."""
 
 
-def _sensitivity(p: StandParameters, w: float) -> float:
+@dataclass(frozen=True)
+class _Stand:
+    """The stand the advice is for: rigid (the seed's model) or with a bending shaft."""
+
+    p: StandParameters
+    beam: Any = None
+
+    def modes(self) -> NDArray[np.float64]:
+        """The natural frequencies [rad/s]: the two on the supports (then the bending one)."""
+        if self.beam is None:
+            return np.asarray(natural_frequencies(self.p), dtype=float)
+        from stand.core.beam import natural_frequencies_beam
+
+        return np.asarray(natural_frequencies_beam(self.beam, self.p, 3), dtype=float)
+
+    def solve(self, p: StandParameters, w: float, A: Any) -> Any:
+        if self.beam is None:
+            return solve_unbalance(p, w, A, max_split_condition=math.inf)
+        from stand.core.beam import receptance
+        from stand.core.influence import InfluenceMap, solve_influence
+
+        return solve_influence(InfluenceMap(receptance(self.beam, p, w)), A)
+
+    def forward(self, w: float, U: Any) -> Any:
+        if self.beam is None:
+            return forward(self.p, w, U)
+        from stand.core.beam import forward_beam
+
+        return forward_beam(self.beam, self.p, w, U)
+
+
+def _sensitivity(stand: _Stand, w: float) -> float:
     U = np.array([1e-3, 1e-3j], dtype=complex)  # two different planes, 90 deg apart
-    A = forward(p, w, U)
-    worst = 0.0
+    A = stand.forward(w, U)
+    p, worst = stand.p, 0.0
     for s1 in (-1, 1):
         for s2 in (-1, 1):
             q = dataclasses.replace(p, C1=p.C1 * (1 + s1 * C_ERROR), C2=p.C2 * (1 + s2 * C_ERROR))
-            got = solve_unbalance(q, w, A, max_split_condition=math.inf).U_kg_m
+            got = stand.solve(q, w, A).U_kg_m
             worst = max(worst, float(np.max(np.abs(got - U) / np.abs(U))))
     return worst
 
 
-def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int = 40) -> Advice:
-    """The advice for a stand + rotor; speeds from 1.1x the lowest mode to 8x the highest."""
-    wn = natural_frequencies(p)
-    top = float(np.max(wn))
+def advise(
+    p: StandParameters, max_speed_rpm: float | None = None, points: int = 40, beam: Any = None
+) -> Advice:
+    """The advice for a stand + rotor; speeds from 1.1x the lowest mode to 8x the highest
+    (with ``beam``, a :class:`stand.core.beam.BeamRotor`, the rotor bends)."""
+    stand = _Stand(p, beam)
+    wn = stand.modes()
+    rigid = wn[:2]
+    top = float(np.max(rigid))
+    bend = None if beam is None else float(wn[2])
     hi = float(rpm_to_rad_s(max_speed_rpm)) if max_speed_rpm else 8 * top
-    grid = np.geomspace(1.1 * float(np.min(wn)), max(hi, 1.2 * top), points)
+    grid = np.geomspace(1.1 * float(np.min(rigid)), max(hi, 1.2 * top), points)
     rows = []
     for w in grid:
         near = bool(np.any((w / wn > 1 / RESONANCE_BAND) & (w / wn < RESONANCE_BAND)))
         try:
-            sol = solve_unbalance(p, float(w), np.zeros(2, complex), max_split_condition=math.inf)
+            sol = stand.solve(p, float(w), np.zeros(2, complex))
             gain = sol.noise_gain * 1e6
-            sens = _sensitivity(p, float(w))
+            sens = _sensitivity(stand, float(w))
         except (ValueError, ArithmeticError):  # exactly at an undamped mode
             gain, sens = math.inf, math.inf
         rows.append(SpeedRow(float(rad_s_to_rpm(w)), float(w) / top, gain, sens, near))
+    below = math.inf if bend is None else float(rad_s_to_rpm(bend / RESONANCE_BAND))
     good = [
         r
         for r in rows
-        if r.sensitivity_to_C < SENSITIVITY_OK and not r.near_resonance and r.ratio_to_top_mode > 1
+        if r.sensitivity_to_C < SENSITIVITY_OK
+        and not r.near_resonance
+        and r.ratio_to_top_mode > 1
+        and r.rpm < below
     ]
     reasons = [
         f"natural frequencies of stand + rotor: {wn[0] / (2 * math.pi):.2f} Hz "
@@ -101,10 +148,17 @@ def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int =
         f"({wn[1] * 30 / math.pi:.0f} rpm): keep clear of both by a factor "
         f"{RESONANCE_BAND:g}, and run above them (soft-bearing)",
     ]
+    if bend is not None:
+        reasons.append(
+            f"the rotor's first bending mode in the stand: {bend / (2 * math.pi):.2f} Hz "
+            f"({bend * 30 / math.pi:.0f} rpm): stay a factor {RESONANCE_BAND:g} below it, "
+            f"under {below:.0f} rpm (the flexible model answers there; near the mode the "
+            "answer rests on the shaft's description)"
+        )
     recommended = None
     if good:
         low = good[0].rpm
-        high = max_speed_rpm if max_speed_rpm else rows[-1].rpm
+        high = min(max_speed_rpm if max_speed_rpm else rows[-1].rpm, below)
         if high > low:
             recommended = (low, high)
             reasons.append(
@@ -113,10 +167,10 @@ def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int =
                 f"{100 * SENSITIVITY_OK:.0f} % ({100 * good[0].sensitivity_to_C:.2f} %), and "
                 f"1 m/s^2 of reading error costs {good[0].noise_gain_g_mm_per_m_s2:.0f} g mm"
             )
-        if max_speed_rpm:
+        if max_speed_rpm and max_speed_rpm <= below:
             reasons.append(
                 f"up to the rotor's maximum service speed, {max_speed_rpm:.0f} rpm: "
-                "the rotor is treated as rigid, do not balance above it"
+                "do not balance above it"
             )
     if recommended is None:
         reasons.append(
@@ -129,4 +183,5 @@ def advise(p: StandParameters, max_speed_rpm: float | None = None, points: int =
         tuple(rows),
         recommended,
         tuple(reasons),
+        None if bend is None else bend / (2 * math.pi),
     )

@@ -24,7 +24,8 @@ def run(args: argparse.Namespace) -> int:
 
     cfg, params = load_config(args.config)
     top = args.max_rpm or (cfg.tolerance.max_speed_rpm if cfg.tolerance else None)
-    a = advise(params, top)
+    beam = cfg.rotor.beam()  # a described shaft: the advice is the bending rotor's
+    a = advise(params, top, beam=beam)
     limit = None
     if cfg.rotor.bending_hz is not None:
         from stand.core.flexible import rigid_limit_rpm
@@ -36,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
         "recommended_rpm": list(a.recommended_rpm) if a.recommended_rpm else None,
         "reasons": list(a.reasons),
         "bending_hz": cfg.rotor.bending_hz,
+        "bending_in_stand_hz": a.bending_hz,
         "rigid_limit_rpm": None if limit is None else round(limit, 1),
         "speeds": [
             {
@@ -56,7 +58,12 @@ def run(args: argparse.Namespace) -> int:
     for reason in a.reasons:
         print(f"  - {reason}")
     f_ff = cfg.rotor.bending_hz
-    if limit is not None and f_ff is not None:
+    if limit is not None and f_ff is not None and beam is not None:
+        print(
+            f"  - the shaft is described: the answer is the bending rotor's (the rigid model "
+            f"would stay within 1 % only up to {limit:.0f} rpm)"
+        )
+    elif limit is not None and f_ff is not None:
         if rec is not None and limit < rec[0]:
             then = ": no recommended speed is below it; the rotor needs a flexible model"
         elif rec is not None and limit < rec[1]:
