@@ -17,7 +17,8 @@ linear in ``(C1, M1, H1, C2, M2, H2, Re U_res1, Im U_res1, Re U_res2,
 Im U_res2)``.  Runs at two or more speeds separate ``C`` from ``M``.
 
 **Nonlinear step.**  The measured phasor is ``s_i e^{i (dgamma - w tau_i)}``
-times the model's (:func:`stand.core.forward`); ``scipy.optimize.least_squares``
+times the model's (:func:`stand.core.forward`, or the bending rotor's
+:func:`stand.core.beam.forward_beam`); ``scipy.optimize.least_squares``
 fits all 15 unknowns, started from the linear step.  Two speeds or more
 separate a delay (phase growing with speed) from the reference angle
 (constant phase).  Standard errors come from the Jacobian at the solution,
@@ -116,16 +117,21 @@ def _linear(p: StandParameters, runs: list[CalibrationRun]) -> NDArray[np.float6
 
 
 def _model(
-    p: StandParameters, z: NDArray[np.float64], runs: list[CalibrationRun]
+    p: StandParameters, z: NDArray[np.float64], runs: list[CalibrationRun], beam: Any = None
 ) -> NDArray[np.complex128]:
     q = dataclasses.replace(p, **dict(zip(STAND_NAMES, z[:6].tolist(), strict=True)))
+    if beam is not None:
+        from stand.core.beam import forward_beam
     U_res = np.array([complex(z[6], z[7]), complex(z[8], z[9])])
     gain, delay, dgamma = z[10:12], z[12:14], z[14]
     # the reference sensor really sits dgamma further than the configuration says: the
     # measured shaft angle lags the true one by dgamma, and every phasor turns by e^{+i dgamma}
     out = []
     for r in runs:
-        A = forward(q, r.omega_rad_s, U_res + r.test_kg_m)
+        if beam is None:
+            A = forward(q, r.omega_rad_s, U_res + r.test_kg_m)
+        else:
+            A = forward_beam(beam, q, r.omega_rad_s, U_res + r.test_kg_m)
         out.append(gain * np.exp(1j * (dgamma - r.omega_rad_s * delay)) * A)
     return np.array(out)
 
@@ -144,8 +150,12 @@ def _errors(sol: Any, level: float, advice: str) -> tuple[NDArray[np.float64], f
     return se, level * math.sqrt(float(r @ r) / len(r))
 
 
-def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
-    """Identify the stand (see the module docstring); ``p0`` gives M3, J3 and the geometry."""
+def identify(p0: StandParameters, runs: list[CalibrationRun], beam: Any = None) -> Identification:
+    """Identify the stand (see the module docstring); ``p0`` gives M3, J3 and the geometry.
+
+    With ``beam`` (:class:`stand.core.beam.BeamRotor`) the proving rotor bends: the
+    nonlinear step fits through the flexible stand's forward (the linear step, rigid,
+    only starts it)."""
     from scipy.optimize import least_squares
 
     speeds = {round(r.omega_rad_s, 6) for r in runs}
@@ -162,7 +172,7 @@ def identify(p0: StandParameters, runs: list[CalibrationRun]) -> Identification:
     level = float(np.sqrt(np.mean(np.abs(meas) ** 2)))
 
     def residual(z: NDArray[np.float64]) -> NDArray[np.float64]:
-        d = (_model(p0, z, runs) - meas).reshape(-1) / level
+        d = (_model(p0, z, runs, beam) - meas).reshape(-1) / level
         return np.concatenate([d.real, d.imag])
 
     typical = np.abs(z0) + np.array(

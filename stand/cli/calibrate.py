@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     from stand.calib.identify import NAMES, CalibrationRun, identify
     from stand.config import load_config, read_toml, validate
     from stand.drivers.files import check_output
-    from stand.errors import ModelError
+    from stand.errors import ModelError, UsageError
     from stand.pipeline import measure_recording
 
     check_output(args.out, force=args.force, inputs=[args.config, args.runs])  # before the work
@@ -91,9 +91,14 @@ def run(args: argparse.Namespace) -> int:
             T[i] += mass.mass_g * 1e-3 * R[i] * np.exp(-1j * math.radians(mass.angle_deg))
         runs.append(CalibrationRun(m.omega_rad_s, np.array([ph.A_m_s2 for ph in m.supports]), T))
     if args.rotor:
+        if cfg.rotor.shaft is not None:
+            raise UsageError(
+                f"{args.config}: [rotor.shaft] describes the rotor already (its mass, inertia "
+                "and geometry follow from it): nothing to identify with --rotor"
+            )
         return _rotor(args, cfg, params, runs)
     try:
-        res = identify(params, runs)
+        res = identify(params, runs, beam=cfg.rotor.beam())
     except ModelError as exc:
         raise ConfigError(str(exc), source=args.runs) from None
     v, se = res.values, res.std_errors
