@@ -68,3 +68,66 @@ def test_the_flexible_inverse_gives_the_unbalance_back() -> None:
     H = receptance(rotor, p, W)
     back = np.linalg.solve(H, forward_beam(rotor, p, W, U))
     assert np.allclose(back, U, rtol=1e-9, atol=0)
+
+
+def _rigid_basis(rotor: object) -> np.ndarray:
+    """The shaft's two rigid-body motions at every node: translation (1, 0) and rotation
+    about x = 0 (x_i, 1), as columns over the (displacement, rotation) dofs."""
+    x = rotor.x_m  # type: ignore[attr-defined]
+    phi = np.zeros((2 * len(x), 2))
+    phi[0::2, 0] = 1.0
+    phi[0::2, 1] = x
+    phi[1::2, 1] = 1.0
+    return phi
+
+
+@pytest.mark.parametrize("name", sorted(ROTORS))
+def test_the_infinitely_stiff_shaft_is_the_seed_s_rigid_rotor_to_machine_precision(
+    name: str,
+) -> None:
+    """The limit E -> infinity, computed without a stiff solve. The beam's stiffness has the
+    two rigid-body motions as its null space (to 1e-13 of its size), so as E grows the
+    shaft's motion tends to the rigid one that the stand's equations projected on those two
+    motions give. That projection is the seed's rigid model to 1e-12. And the full model,
+    with the bending dofs eliminated (a Schur complement in a basis that separates the rigid
+    motions: no cancellation as E grows), comes within 1e-8 of it at 10^8 E, as 1/E."""
+    sections, length, _ = ROTORS[name]
+    p, supports, planes = _stand(sections, length)
+    rotor = beam_rotor(sections, E, RHO, supports, planes)
+    phi = _rigid_basis(rotor)
+    assert np.max(np.abs(rotor.K @ phi)) < 1e-13 * np.max(np.abs(rotor.K))
+    n = rotor.K.shape[0]
+    S = np.zeros((n, n), complex)  # the supports
+    for i, (m, c, h) in zip(rotor.support_nodes, ((p.M1, p.C1, p.H1), (p.M2, p.C2, p.H2)),
+                            strict=True):  # fmt: skip
+        S[2 * i, 2 * i] = c - W * W * m + 1j * W * h
+    F = np.zeros((n, 2), complex)
+    for j, i in enumerate(rotor.plane_nodes):
+        F[2 * i, j] = W * W
+    rows = [2 * i for i in rotor.support_nodes]
+    rigid = forward(p, W, U)
+
+    def supports_of(q: np.ndarray, y: np.ndarray | None = None, psi: np.ndarray | None = None):
+        X = phi @ q if y is None else phi @ q + psi @ y
+        return -W * W * X[rows]
+
+    Dr = phi.T @ (-W * W * rotor.M + S) @ phi
+    projected = supports_of(np.linalg.solve(Dr, phi.T @ F @ U))
+    assert np.max(np.abs(projected - rigid) / np.abs(rigid)) < 1e-12
+    # the complement of the rigid motions: orthonormal, so the bending block is well posed
+    q_, _ = np.linalg.qr(np.hstack([phi, np.eye(n)]))
+    psi = q_[:, 2:n]
+    T = np.hstack([phi, psi])
+    errs = []
+    Kff = psi.T @ rotor.K @ psi  # K phi = 0 (checked above): K acts on the bending dofs only
+    for k in (1e2, 1e5, 1e8):
+        D = T.T @ (-W * W * rotor.M + S) @ T
+        D[2:, 2:] += k * Kff
+        G = T.T @ F @ U
+        Drr, Drf, Dfr, Dff = D[:2, :2], D[:2, 2:], D[2:, :2], D[2:, 2:]
+        sol = np.linalg.solve(Dff, np.column_stack([Dfr, G[2:]]))
+        q = np.linalg.solve(Drr - Drf @ sol[:, :2], G[:2] - Drf @ sol[:, 2])
+        y = sol[:, 2] - sol[:, :2] @ q
+        errs.append(float(np.max(np.abs(supports_of(q, y, psi) - rigid) / np.abs(rigid))))
+    assert errs[2] < 1e-8, errs
+    assert 500 < errs[0] / errs[1] < 2000  # 1/E: a thousandfold per thousandfold
