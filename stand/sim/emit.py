@@ -123,12 +123,12 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     q_r, phi = unbalance_kg_m(scene)
     U = unbalance_from_polar(q_r, phi)
     beam = scene.rotor.beam()  # a [rotor.shaft] table: the rotor bends
-    if beam is not None and (scene.needs_integration or speed.ripple or speed.drift_per_s):
+    if beam is not None and scene.needs_integration:
         from stand.errors import ConfigError
 
         raise ConfigError(
-            "a bending rotor ([rotor.shaft]) is simulated at one steady speed for now: no "
-            "run-up, speed ripple or drift, nonlinear supports or integrated physics",
+            "a bending rotor ([rotor.shaft]) is simulated in the closed form only: no "
+            "run-up from standstill, nonlinear supports or integrated physics",
             key="rotor.shaft",
         )
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
