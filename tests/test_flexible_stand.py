@@ -248,3 +248,19 @@ def test_a_ripple_across_a_natural_frequency_of_the_undamped_stand_is_refused(
     err = capsys.readouterr().err
     assert "natural frequency" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_the_shipped_auger_shaft_example_is_the_bending_auger(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """README's example config: forward names the auger's bending mode in the stand (56.18
+    Hz) without a rigid-limit warning, and advise names the mode and the rigid limit."""
+    cfg = str(ROOT / "examples" / "auger-shaft.toml")
+    argv = ["forward", "--config", cfg, "--rpm", "900", "--unbalance", "5000@30"]
+    assert main([*argv, "--unbalance", "3000@200", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["natural_frequencies_hz"][2] == pytest.approx(56.18, abs=0.01)
+    assert out["warnings"] == []
+    assert main(["advise", "--config", cfg]) == 0
+    text = capsys.readouterr().out
+    assert "first bending mode in the stand: 56.18 Hz" in text and "up to 299 rpm" in text
