@@ -97,6 +97,27 @@ def test_rotor_types_and_files_stay_inside_their_folders(station: Station, tmp_p
         station.report_file(99)
 
 
+def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> None:
+    """A rotor type whose configuration asks for ounces and inches has its archived
+    unbalances shown so; a type no longer in the folder (or broken) in g mm."""
+    from stand.station.pages import _history_row
+
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    text = (ROTORS / "demo-auger.toml").read_text()
+    (folder / "us.toml").write_text(text + '\n[display]\nmass = "oz"\nlength = "in"\n')
+    (folder / "broken.toml").write_text("[rotor\n")
+    st = Station(folder, tmp_path / "runs", f"sqlite:///{tmp_path / 'a.sqlite'}", _targets)
+    plane = {"plane": 1, "unbalance_g_mm": 2834.952, "angle_deg": 30.0, "urr": None}
+    row = {"id": 3, "start_time": "2026-11-22T10:00:00+00:00", "serial": "U-1",
+           "rotor_type": "us", "verdict": "pass", "checks_run": None,
+           "planes": [plane]}  # fmt: skip
+    shown = _history_row(row, st.display("us"))["plane 1"]
+    assert shown == "3.937 oz in at 30°"  # 2834.952 g mm / 28.3495 g/oz / 25.4 mm/in
+    for gone in ("broken", "demo-auger", None):
+        assert _history_row(row, st.display(gone))["plane 1"] == "2835.0 g mm at 30°"
+
+
 def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run: Path) -> None:
     from stand.archive import archive_result
     from stand.pipeline import solve_recording

@@ -210,3 +210,41 @@ def test_the_screens_load_nothing_from_outside_and_need_the_token(
                    and urlsplit(u).netloc != host]  # fmt: skip
         assert len(urls) > 10 and not outside, outside
         assert any("/_nicegui_ws/" in u for u in urls)  # the page's socket, through the gate
+
+
+def _tab_to(driver: Any, what: str, limit: int = 40) -> Any:
+    """Press Tab until the focus is on the field labelled ``what`` or the button reading
+    ``what``; that element.  Fails naming what the focus went through."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    seen = []
+    for _ in range(limit):
+        ActionChains(driver).send_keys(Keys.TAB).perform()
+        el = driver.switch_to.active_element
+        name = el.get_attribute("aria-label") or el.text.strip()
+        seen.append(name)
+        if name.casefold() == what.casefold():  # buttons show their text in capitals
+            return el
+    raise AssertionError(f"Tab never reached {what!r}; it went through {seen}")
+
+
+@pytest.mark.realtime
+def test_the_screens_work_from_the_keyboard_alone(browser: Any, tmp_path: Path) -> None:
+    """Tab and Enter only: the start form filled and the run started, stopped by hand, on
+    to the correction, back to the start (an operator without a mouse or touch screen)."""
+    from selenium.webdriver.common.keys import Keys
+
+    with served(tmp_path) as base:
+        browser.get(base + "/")
+        _see(browser, "New rotor")
+        for label, text in (("serial number", "K-1"), ("order", "O-1"), ("operator", "lee")):
+            _tab_to(browser, label).send_keys(text)
+        _tab_to(browser, "Start measuring").send_keys(Keys.ENTER)
+        _see(browser, "measuring K-1")
+        time.sleep(3.0)  # some revolutions in
+        _tab_to(browser, "Stop").send_keys(Keys.ENTER)
+        _tab_to(browser, "Go to the correction").send_keys(Keys.ENTER)
+        _see(browser, "in hole")
+        _tab_to(browser, "Start").send_keys(Keys.ENTER)  # the Start screen, from the top bar
+        _see(browser, "New rotor")

@@ -311,17 +311,20 @@ def history_screen(station: Station) -> None:
         except StandError as exc:
             ui.notify(str(exc), type="negative")
             return
-        table.rows = [_history_row(r) for r in rows]
+        units = {t: station.display(t) for t in {r["rotor_type"] for r in rows}}
+        table.rows = [_history_row(r, units[r["rotor_type"]]) for r in rows]
         table.update()
 
     found.on_click(search)
     search()
 
 
-def _history_row(r: dict[str, Any]) -> dict[str, Any]:
+def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
+    """One archived run as a row, its unbalances in its rotor type's units."""
+
     def plane(p: dict[str, Any]) -> str:
         urr = "" if p["urr"] is None else f", URR {100 * p['urr']:.1f} %"
-        return f"{p['unbalance_g_mm']:.1f} g mm at {p['angle_deg']:.0f}°{urr}"
+        return f"{units.unbalance(p['unbalance_g_mm'])} at {p['angle_deg']:.0f}°{urr}"
 
     planes = {p["plane"]: plane(p) for p in r["planes"]}
     return {

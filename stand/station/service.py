@@ -124,6 +124,21 @@ class Station:
             raise UsageError(f"no rotor type {rotor_type!r} in {self.config_dir}")
         return self.config_dir / f"{rotor_type}.toml"
 
+    def display(self, rotor_type: str | None) -> Any:
+        """The units (:class:`stand.units.Display`) the rotor type's configuration shows;
+        g and mm when it names none, or the type is no longer in the folder."""
+        from stand.units import Display
+
+        if rotor_type not in self.rotor_types():
+            return Display()
+        from stand.config import load_config
+
+        try:
+            cfg, _ = load_config(self.config_path(str(rotor_type)))
+        except StandError:
+            return Display()
+        return Display(cfg.display.mass, cfg.display.length)
+
     @staticmethod
     def sources() -> list[str]:
         """The stand's CAN bus, and the simulated scenes (training and demonstrations)."""
