@@ -132,7 +132,8 @@ def spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
         ax.text(k * f1, ax.get_ylim()[1], f"{k}x", ha="center", va="bottom", fontsize=8)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("amplitude [m/s²]")
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:  # without traces no curve to name
+        ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     spectrum = png(fig)
 
@@ -146,7 +147,8 @@ def spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
     mid = 0.5 * (lo + hi)
     half = max(0.5 * (hi - lo), 0.01 * mid)  # a steady speed shows as steady: at least +-1 %
     ax.set_ylim(mid - half, mid + half)
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:  # without traces no curve to name
+        ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     return spectrum, png(fig)
 

@@ -71,7 +71,7 @@ ALLOWED: dict[str, set[str]] = {
     # that only format it (pages, views, face), the bind rule and the token (safety)
     "stand/station/__init__.py": set(),
     "stand/station/service.py": NUMERIC | APP | {"stand.station", "stand.live", "stand.sim",
-                                                 "stand.report"},
+                                                 "stand.report", "stand.printing"},
     "stand/station/safety.py": {"stand.errors"},
     "stand/station/face.py": set(),
     "stand/station/views.py": NUMERIC | CORE | {"stand.units"},

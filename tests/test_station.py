@@ -4,6 +4,7 @@ screens as a simulated user (NiceGUI's user simulation), the bind rule and the t
 from __future__ import annotations
 
 import asyncio
+import shutil
 import subprocess
 import sys
 import time
@@ -101,6 +102,7 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
     """A rotor type whose configuration asks for ounces and inches has its archived
     unbalances shown so; a type no longer in the folder (or broken) in g mm."""
     from stand.station.pages import _history_row
+    from stand.units import Display
 
     folder = tmp_path / "rotors"
     folder.mkdir()
@@ -112,10 +114,12 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
     row = {"id": 3, "start_time": "2026-11-22T10:00:00+00:00", "serial": "U-1",
            "rotor_type": "us", "verdict": "pass", "checks_run": None,
            "planes": [plane]}  # fmt: skip
-    shown = _history_row(row, st.display("us"))["plane 1"]
+    shown = _history_row(row, Display(*st.display_units("us")))["plane 1"]
     assert shown == "3.937 oz in at 30°"  # 2834.952 g mm / 28.3495 g/oz / 25.4 mm/in
     for gone in ("broken", "demo-auger", None):
-        assert _history_row(row, st.display(gone))["plane 1"] == "2835.0 g mm at 30°"
+        assert (
+            _history_row(row, Display(*st.display_units(gone)))["plane 1"] == "2835.0 g mm at 30°"
+        )
 
 
 def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run: Path) -> None:
@@ -125,6 +129,33 @@ def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run:
     run_id = archive_result(solve_recording(str(demo_run)), station.archive_url)
     with pytest.raises(UsageError, match="outside"):
         station.report_file(run_id)
+
+
+@pytest.mark.skipif(
+    shutil.which("chromium") is None and shutil.which("chromium-browser") is None,
+    reason="the PDF is printed by Chromium (Debian: apt-get install chromium)",
+)
+def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
+    station: Station, demo_run: Path
+) -> None:
+    from stand.archive import archive_result
+    from stand.pipeline import SolveOptions, solve_recording
+    from stand.report import render
+
+    station.runs_dir.mkdir(parents=True)
+    run = station.runs_dir / "demo.h5"
+    shutil.copy(demo_run, run)
+    result = solve_recording(str(run), options=SolveOptions(traces=True))  # as the station
+    run.with_suffix(".html").write_text(render(result), encoding="utf-8")
+    run_id = archive_result(result, station.archive_url)
+    pdf = station.certificate_pdf(run_id)
+    assert pdf == run.with_suffix(".pdf") and pdf.read_bytes()[:5] == b"%PDF-"
+    printed = pdf.stat().st_mtime_ns
+    assert station.certificate_pdf(run_id).stat().st_mtime_ns == printed  # not again
+    assert sorted(p.name for p in station.runs_dir.iterdir()) == [
+        "demo.h5", "demo.html", "demo.pdf"]  # fmt: skip
+    with pytest.raises(UsageError, match="no run 99"):
+        station.certificate_pdf(99)
 
 
 @pytest.mark.parametrize(

@@ -176,6 +176,10 @@ def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
         assert body.count("PASS") == 2 and "%" in body
         _shot(browser, tmp_path, "check")
         link = browser.find_element(By.LINK_TEXT, "Open the certificate").get_attribute("href")
+        pdf = browser.find_element(By.LINK_TEXT, "as PDF").get_attribute("href")
+        with urllib.request.urlopen(pdf, timeout=120) as got:  # printed by Chromium
+            assert got.headers["content-type"] == "application/pdf"
+            assert got.read(5) == b"%PDF-"
         browser.get(link)
         assert "D-1" in browser.find_element(By.TAG_NAME, "body").text
         browser.get(base + "/history")

@@ -14,7 +14,7 @@ from typing import Any
 
 from nicegui import app, ui
 
-from stand.errors import StandError
+from stand.errors import StandError, UsageError
 from stand.result import Job, to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.service import BUS, Station
@@ -281,6 +281,9 @@ def check_screen(station: Station) -> None:
             ui.link("Open the certificate", f"/report/{s.run_id}", new_tab=True).classes(
                 "text-h5"
             ).mark("certificate")
+            ui.link("as PDF", f"/report/{s.run_id}/pdf", new_tab=True).classes("text-h5").mark(
+                "certificate-pdf"
+            )
 
         def next_rotor() -> None:
             station.next_rotor()
@@ -302,7 +305,8 @@ def history_screen(station: Station) -> None:
     table = ui.table(columns=columns, rows=[]).classes("w-full").mark("history-table")
     table.add_slot(
         "body-cell-report",
-        '<q-td :props="props"><a :href="props.value" target="_blank">report</a></q-td>',
+        '<q-td :props="props"><a :href="props.value" target="_blank">report</a>'
+        ' &middot; <a :href="props.value + \'/pdf\'" target="_blank">PDF</a></q-td>',
     )
 
     def search() -> None:
@@ -311,7 +315,7 @@ def history_screen(station: Station) -> None:
         except StandError as exc:
             ui.notify(str(exc), type="negative")
             return
-        units = {t: station.display(t) for t in {r["rotor_type"] for r in rows}}
+        units = {t: Display(*station.display_units(t)) for t in {r["rotor_type"] for r in rows}}
         table.rows = [_history_row(r, units[r["rotor_type"]]) for r in rows]
         table.update()
 
@@ -359,6 +363,16 @@ def add_routes(station: Station) -> None:
             return FileResponse(station.report_file(run_id), media_type="text/html")
         except StandError as exc:
             return PlainTextResponse(str(exc), status_code=404)
+
+    @app.get("/report/{run_id}/pdf")
+    def certificate_pdf(run_id: int) -> Any:
+        try:
+            pdf = station.certificate_pdf(run_id)
+        except UsageError as exc:  # no such run, or outside the folders
+            return PlainTextResponse(str(exc), status_code=404)
+        except StandError as exc:  # Chromium missing or failing, a full disk
+            return PlainTextResponse(str(exc), status_code=503)
+        return FileResponse(pdf, media_type="application/pdf", filename=pdf.name)
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:

@@ -109,6 +109,7 @@ class Station:
         self.targets = targets
         self.max_seconds = max_seconds
         self._lock = threading.Lock()
+        self._printing = threading.Lock()  # one certificate printed at a time
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._state = Snapshot()
@@ -124,20 +125,19 @@ class Station:
             raise UsageError(f"no rotor type {rotor_type!r} in {self.config_dir}")
         return self.config_dir / f"{rotor_type}.toml"
 
-    def display(self, rotor_type: str | None) -> Any:
-        """The units (:class:`stand.units.Display`) the rotor type's configuration shows;
-        g and mm when it names none, or the type is no longer in the folder."""
-        from stand.units import Display
-
+    def display_units(self, rotor_type: str | None) -> tuple[str, str]:
+        """The units (mass, length) the rotor type's configuration shows the operator
+        (``[display]``); g and mm when it names none, or the type is no longer in the
+        folder, or its file no longer loads."""
         if rotor_type not in self.rotor_types():
-            return Display()
-        from stand.config import load_config
+            return "g", "mm"
+        from stand.pipeline import load_config_text
 
         try:
-            cfg, _ = load_config(self.config_path(str(rotor_type)))
+            cfg, _, _ = load_config_text(str(self.config_path(str(rotor_type))))
         except StandError:
-            return Display()
-        return Display(cfg.display.mass, cfg.display.length)
+            return "g", "mm"
+        return cfg.display.mass, cfg.display.length
 
     @staticmethod
     def sources() -> list[str]:
@@ -329,6 +329,18 @@ class Station:
         if not report.is_file():
             raise UsageError(f"run {run_id} has no report in {self.runs_dir}")
         return report
+
+    def certificate_pdf(self, run_id: int) -> Path:
+        """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
+        the first time it is asked for (:func:`stand.printing.write_pdf`, written safely)."""
+        report = self.report_file(run_id)
+        pdf = report.with_suffix(".pdf")
+        with self._printing:
+            if not pdf.is_file():
+                from stand.printing import write_pdf
+
+                write_pdf(report.read_text(encoding="utf-8"), pdf, inputs=[str(report)])
+        return pdf
 
 
 def _bus(table: dict[str, Any] | None) -> dict[str, Any]:
