@@ -1,5 +1,3 @@
-"""The edge towards the hardware: CAN buses, the sensor-node protocol, recordings.
-
-Empty until the CAN layer lands (issue "2 · CAN layer"). The numerical core
-(:mod:`stand.core`) never imports this package.
+"""The edge towards the hardware: CAN buses (python-can), the sensor-node protocol, logs
+and run files.  The numerical core (:mod:`stand.core`) never imports this package.
 """

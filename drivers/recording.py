@@ -2,6 +2,8 @@
 
 A run file holds everything needed to reprocess a run::
 
+    bytes 0..511     the seal (:mod:`stand.drivers.seal`): the SHA-256 of every
+                     byte after it, written when the run is closed
     /                attrs: format = "rotor-stand-run", format_version = 1,
                      software, start_time (ISO 8601, UTC), source (the bus),
                      config_toml (the configuration text used, or ""),
@@ -30,6 +32,11 @@ after a crash the file only opens in SWMR-read mode or after ``h5clear``.)
 The file is created under a temporary name and renamed, so a half-made
 header never sits under the run's name.  ``tests/test_recording.py`` kills a
 recording process at random times and reopens the file.
+
+**The seal.**  A run the writer closed is read only if its bytes still have
+the SHA-256 sealed at closing; a run without one (cut short by a crash) is
+read by a child process with a time limit first, so that a damaged file
+HDF5 would never finish reading is refused instead of hanging the command.
 """
 
 from __future__ import annotations
@@ -55,6 +62,7 @@ from stand.drivers.files import (
     write_error,
 )
 from stand.drivers.protocol import FRAME_DLC, MAX_PAYLOAD, Frames
+from stand.drivers.seal import USERBLOCK_BYTES, read_in_child, seal, seal_state
 from stand.drivers.streams import RunStreams
 from stand.errors import RecordingError, WriteError
 
@@ -170,7 +178,7 @@ class RunWriter:
         tmp: Path | None = None
         try:
             tmp = temporary_beside(self.path)
-            with h5py.File(tmp, "w") as f:
+            with h5py.File(tmp, "w", userblock_size=USERBLOCK_BYTES) as f:  # for the seal
                 f.attrs.update(
                     format=RUN_FORMAT,
                     format_version=RUN_FORMAT_VERSION,
@@ -304,6 +312,7 @@ class RunWriter:
                 self.end_time = _utc_now()
                 f.attrs["end_time"] = self.end_time
                 f.attrs["complete"] = True
+            seal(self.path)
         except OSError as exc:
             self._broken = True
             raise write_error(exc, self.path, "cannot close the run file") from exc
@@ -491,18 +500,43 @@ def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
 
 
 def _read_run_blocks(
-    path: str | Path, take: Callable[[Frames], None], rows: int | None = None
+    path: str | Path,
+    take: Callable[[Frames], None],
+    rows: int | None = None,
+    *,
+    guard: bool = True,
 ) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
     """Hand a run file's committed frames to ``take``, ``rows`` at a time (None: all at once);
-    return its attributes and warnings.
+    return its attributes and warnings.  A file without an intact seal is read by a child
+    process with a time limit first (``guard``; :mod:`stand.drivers.seal`).
 
     Raises
     ------
     RecordingError
-        Not an HDF5 file, truncated beyond use, not a run file, or a failed checksum.
+        Not an HDF5 file, truncated beyond use, not a run file, a failed checksum, a
+        broken seal, or a file HDF5 does not finish reading.
     """
     p = Path(path)
     check_input(p)
+    try:
+        state = seal_state(p) if guard else "intact"
+    except OSError as exc:
+        raise _unreadable(exc, p) from exc
+    if state != "intact":
+        read_in_child(p)
+    meta, warnings = _read_checked(p, take, rows)
+    if state == "broken":
+        raise RecordingError(
+            "its bytes no longer match the SHA-256 sealed when the run was closed: the "
+            "file was altered or damaged since",
+            path=str(p),
+        )
+    return meta, warnings
+
+
+def _read_checked(
+    p: Path, take: Callable[[Frames], None], rows: int | None
+) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
         with _h5py().File(p, "r", locking=False) as f:
@@ -525,10 +559,11 @@ def _read_run_blocks(
     return meta, warnings
 
 
-def read_run(path: str | Path) -> Recording:
-    """Read an HDF5 run file (complete, or cut short by a crash)."""
+def read_run(path: str | Path, *, guard: bool = True) -> Recording:
+    """Read an HDF5 run file (complete, or cut short by a crash); ``guard=False`` skips the
+    seal and the child's read (the child itself uses it)."""
     blocks: list[Frames] = []
-    meta, warnings = _read_run_blocks(path, blocks.append)
+    meta, warnings = _read_run_blocks(path, blocks.append, guard=guard)
     return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 

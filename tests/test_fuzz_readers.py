@@ -30,9 +30,9 @@ FUZZ = settings(
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
     # the same 40 examples every run: a random one once made libhdf5 loop for ever inside
-    # h5py's attrs.get on a damaged run file (2026-11-22; README, "What the software checks,
-    # and what it cannot"); a suite that may hang is worse than one that explores, and the
-    # thorough profile explores (new inputs each run)
+    # h5py's attrs.get on a damaged run file (2026-11-22); such a file is now refused by the
+    # time-limited child read (stand.drivers.seal), but a suite that fails on a rare input
+    # now and then is worse than one that explores on request: the thorough profile does
     derandomize=not THOROUGH,
 )
 TEXT_FORMATS = (".log", ".asc", ".trc", ".csv")

@@ -23,6 +23,7 @@ from stand.cli import main
 from stand.drivers.logs import write_log
 from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.recording import read_recording
+from stand.drivers.seal import USERBLOCK_BYTES
 
 ROOT = Path(__file__).resolve().parents[1]
 CFG = (ROOT / "examples" / "demo-stand.toml").read_text()
@@ -50,12 +51,23 @@ def _cfg(d: Path, text: str = CFG) -> str:
     return str(d / "cfg.toml")
 
 
-def _run_copy(d: Path, run: Path, edit: Callable[[h5py.File], None]) -> str:
+def _run_copy(d: Path, run: Path, edit: Callable[[h5py.File], None], *, unseal: bool = True) -> str:
+    """The run edited by HDF5; by default its seal wiped too, as a file written or edited
+    by another program carries none: the checks behind the seal are what catch it then."""
     out = d / "run.h5"
     shutil.copy(run, out)
     with h5py.File(out, "a") as f:
         edit(f)
+    if unseal:
+        with out.open("r+b") as f:
+            f.write(bytes(USERBLOCK_BYTES))
     return str(out)
+
+
+@case("run file: sealed, then one attribute changed by another program")
+def _resealed(d: Path, run: Path) -> tuple[list[str], str]:
+    edit = lambda f: f.attrs.__setitem__("software", "edited")  # noqa: E731
+    return ["solve", _run_copy(d, run, edit, unseal=False)], "SHA-256 sealed"
 
 
 def _log(d: Path, text: str | bytes, name: str = "run.log") -> str:

@@ -26,6 +26,7 @@ from stand.drivers.recording import (
     read_run,
     write_recording,
 )
+from stand.drivers.seal import MAGIC, USERBLOCK_BYTES, read_in_child, seal_state
 from stand.drivers.streams import rebuild
 from stand.errors import RecordingError, WriteError
 
@@ -219,6 +220,7 @@ def test_killing_a_recording_loses_at_most_the_last_second(tmp_path: Path, after
             proc.kill()
     with h5py.File(out) as h:  # opens with plain h5py: no repair tool needed
         assert h.attrs["complete"] == 0
+    assert seal_state(out) == "none"  # never closed: read by a child with a time limit first
     rec = read_run(out)
     sent = sine_run(seconds=30.0)
     n = len(rec.frames)
@@ -231,3 +233,31 @@ def test_killing_a_recording_loses_at_most_the_last_second(tmp_path: Path, after
     assert n >= sent_by_kill - one_second, (n, sent_by_kill)
     assert FLUSH_INTERVAL_S <= 0.5
     rebuild(rec.frames)  # and decodes
+
+
+def test_a_closed_run_is_sealed_and_any_byte_changed_after_is_refused(tmp_path: Path) -> None:
+    """The writer seals the run with the SHA-256 of its bytes; a byte changed where HDF5
+    itself notices nothing (inside the text of the ``source`` attribute) is refused."""
+    run = tmp_path / "run.h5"
+    write_recording(Recording("x", sine_run(seconds=0.2), {"source": "bench-unit-7"}), run)
+    head = run.read_bytes()[:USERBLOCK_BYTES]
+    assert head.startswith(MAGIC) and seal_state(run) == "intact"
+    read_run(run)
+    blob = bytearray(run.read_bytes())
+    at = blob.index(b"bench-unit-7", USERBLOCK_BYTES)
+    blob[at] ^= 0x20  # "Bench-unit-7": still a valid attribute
+    run.write_bytes(bytes(blob))
+    assert seal_state(run) == "broken"
+    with pytest.raises(RecordingError, match="no longer match the SHA-256 sealed"):
+        read_run(run)
+
+
+def test_a_reader_that_does_not_finish_is_refused_not_waited_for(tmp_path: Path) -> None:
+    """What happens to a file on which HDF5 would loop for ever: the child reading it is
+    still at it when its time is up, and the file is refused in one line, in time."""
+    run = tmp_path / "run.h5"
+    run.write_bytes(b"\0" * 1024)
+    start = time.monotonic()
+    with pytest.raises(RecordingError, match="did not finish reading it within 1 s"):
+        read_in_child(run, timeout_s=1.0, argv=[sys.executable, "-c", "while True: pass"])
+    assert time.monotonic() - start < 5.0
