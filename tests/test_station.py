@@ -4,6 +4,7 @@ screens as a simulated user (NiceGUI's user simulation), the bind rule and the t
 from __future__ import annotations
 
 import asyncio
+import os
 import shutil
 import subprocess
 import sys
@@ -152,6 +153,8 @@ def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
     assert pdf == run.with_suffix(".pdf") and pdf.read_bytes()[:5] == b"%PDF-"
     printed = pdf.stat().st_mtime_ns
     assert station.certificate_pdf(run_id).stat().st_mtime_ns == printed  # not again
+    os.utime(run.with_suffix(".html"), ns=(printed + 10**9, printed + 10**9))  # report changed
+    assert station.certificate_pdf(run_id).stat().st_mtime_ns > printed  # printed again
     assert sorted(p.name for p in station.runs_dir.iterdir()) == [
         "demo.h5", "demo.html", "demo.pdf"]  # fmt: skip
     with pytest.raises(UsageError, match="no run 99"):

@@ -332,14 +332,17 @@ class Station:
 
     def certificate_pdf(self, run_id: int) -> Path:
         """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
-        the first time it is asked for (:func:`stand.printing.write_pdf`, written safely)."""
+        the first time it is asked for, and again if the report changed since
+        (:func:`stand.printing.write_pdf`, written safely)."""
         report = self.report_file(run_id)
         pdf = report.with_suffix(".pdf")
         with self._printing:
-            if not pdf.is_file():
+            stale = pdf.is_file() and pdf.stat().st_mtime_ns < report.stat().st_mtime_ns
+            if stale or not pdf.is_file():
                 from stand.printing import write_pdf
 
-                write_pdf(report.read_text(encoding="utf-8"), pdf, inputs=[str(report)])
+                text = report.read_text(encoding="utf-8")
+                write_pdf(text, pdf, force=stale, inputs=[str(report)])  # its own print only
         return pdf
 
 
