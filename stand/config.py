@@ -8,7 +8,8 @@ Tables (SI units, the seed's symbols)::
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
     [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
-    [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g
+    [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g;
+                  drilling and milling (:mod:`stand.config_correction`)
     [sensors]     (optional) gain, delay_s per node (from stand calibrate)
     [display]     (optional) mass = "g" | "oz", length = "mm" | "in" (what the operator sees)
     [archive]     (optional) url: the database runs are archived in
@@ -26,38 +27,14 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Field,
-    FiniteFloat,
-    NonNegativeFloat,
-    NonNegativeInt,
-    PositiveFloat,
-    ValidationError,
-)
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError
 
+from stand.config_correction import CorrectionTable as CorrectionTable  # re-exported
+from stand.config_correction import check_correction
 from stand.core.model import STAND_KEYS, StandParameters
 from stand.errors import ConfigError, ParameterError
-
-STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
-"""Every table of every TOML file: unknown keys refused, no strings for numbers, frozen."""
-
-
-# Magnitudes beyond these describe no balancing stand, and the model's arithmetic would
-# overflow into meaninglessness: refused, naming the key.
-Mass = Annotated[FiniteFloat, Field(ge=-1e6, le=1e6)]
-"""[kg]: at most 1000 t."""
-Inertia = Annotated[FiniteFloat, Field(ge=-1e9, le=1e9)]
-"""[kg m^2]."""
-Stiffness = Annotated[FiniteFloat, Field(ge=-1e12, le=1e12)]
-"""[N/m] or [N s/m]."""
-Length = Annotated[FiniteFloat, Field(ge=-1e3, le=1e3)]
-"""[m]."""
-Angle = Annotated[FiniteFloat, Field(ge=-360.0, le=360.0)]
-"""[deg]."""
-Name = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$")]
-"""A name: 1 to 64 characters, no control characters."""
+from stand.tables import STRICT as STRICT  # re-exported: every table's model config
+from stand.tables import Angle, Inertia, Length, Mass, Name, Stiffness
 
 
 class StandTable(BaseModel):
@@ -179,22 +156,6 @@ class ToleranceTable(BaseModel):
     """G, e.g. 6.3 for G 6.3 [mm/s]."""
     max_speed_rpm: Annotated[FiniteFloat, Field(ge=1.0)]
     """The rotor's maximum service speed [rpm]: at least 1 (U_per grows as its inverse)."""
-
-
-class CorrectionTable(BaseModel):
-    """``[correction]``: how the rotor is corrected."""
-
-    model_config = STRICT
-
-    mode: Literal["remove", "add"] = "remove"
-    positions: NonNegativeInt = 0
-    """0: any angle; N: only at N equally spaced positions (holes, blades)."""
-    position0_deg: FiniteFloat = 0.0
-    """Angle of position 0 from the reference mark, in the sense of phi [deg]."""
-    weights_g: list[PositiveFloat] = []
-    """Available weights [g] (each correction is rounded to the nearest) ..."""
-    weight_step_g: NonNegativeFloat = 0.0
-    """... or weights in multiples of this [g]; 0 and [] mean any mass."""
 
 
 class DisplayTable(BaseModel):
@@ -325,6 +286,7 @@ def config_from_dict(
         Naming ``source``, the first bad key and what is wrong with it.
     """
     cfg = with_shaft(validate(Config, data, source), source)
+    check_correction(cfg.correction, cfg.rotor, source)
     return cfg, parameters_of(cfg, source)
 
 

@@ -26,13 +26,9 @@ import numpy as np
 
 from stand import __version__
 from stand.core import Diagnostic, StandParameters, rpm_to_rad_s
-from stand.core.balance import (
-    Correction,
-    correction,
-    permissible_unbalance,
-    plane_tolerances,
-    static_couple,
-)
+from stand.core.balance import permissible_unbalance, plane_tolerances, static_couple
+from stand.correct import corrections as plane_corrections
+from stand.correct import removed_masses
 from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, config_digest
 from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError
 from stand.matrix import parse_matrix
@@ -219,20 +215,12 @@ def build_result(
         tolerance is not None and abs(U) <= tolerance.per_plane_kg_m[i]
         for i, U in enumerate(m.solution.U_kg_m)
     ]
-    corrections = tuple(
-        # inside its interval: no angle to act on; within tolerance: no need
-        Correction((), c.mode == "remove", complex(U))
-        if noise[i] or fine[i]
-        else correction(
-            complex(U),
-            m.radius_m[i],
-            remove=c.mode == "remove",
-            positions=c.positions,
-            position0_deg=c.position0_deg,
-            steps_kg=[w * 1e-3 for w in c.weights_g],
-            step_kg=c.weight_step_g * 1e-3,
-        )
-        for i, U in enumerate(m.solution.U_kg_m)
+    corrections = plane_corrections(
+        m.solution.U_kg_m,
+        m.radius_m,
+        c,
+        skip=[a or b for a, b in zip(noise, fine, strict=True)],
+        permissible_kg_m=None if tolerance is None else tolerance.per_plane_kg_m,
     )
     floor = [
         Diagnostic(
@@ -453,14 +441,14 @@ def correction_masses(run: str, config: str | None = None) -> list[tuple[int, fl
     """The masses an operator puts on (grams > 0) or takes off (< 0) to apply the correction
     that ``run``'s result prescribes, with its config's mode, positions and weights:
     ``(plane, grams, angle_deg, radius_m)`` each, the angle from the reference mark
-    against the direction of rotation.
+    against the direction of rotation; a drilled hole or a slot as the metal it removes
+    at its centre of mass's radius (not at the radius the drill enters).
     """
     result = solve_recording(run, config)
-    sign = -1.0 if result.correction_mode == "remove" else 1.0
     return [
-        (i + 1, sign * w.mass_kg * 1e3, w.angle_deg, result.measurement.radius_m[i])
+        (i + 1, grams, angle, radius)
         for i, corr in enumerate(result.corrections)
-        for w in corr.weights
+        for grams, angle, radius in removed_masses(corr, result.measurement.radius_m[i])
     ]
 
 

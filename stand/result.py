@@ -230,21 +230,56 @@ def _polar(U: complex) -> dict[str, float]:
     return {"unbalance_g_mm": _g_mm(q), "angle_deg": round(float(phi), 3)}
 
 
-def _planes(m: Measurement) -> list[dict[str, Any]]:
+def _hole(n: int, h: Any) -> dict[str, Any]:
+    return {
+        "number": n,
+        "angle_deg": round(h.angle_deg, 3),
+        "depth_mm": round(h.depth_m * 1e3, 4),
+        "diameter_mm": round(h.drill.diameter_m * 1e3, 4),
+        "point_angle_deg": round(h.drill.point_angle_deg, 3),
+        "entry_radius_mm": round(h.entry_radius_m * 1e3, 4),
+        "direction": h.direction,
+        "mass_g": round(h.mass_kg * 1e3, 4),
+        "centroid_radius_mm": round(h.centroid_radius_m * 1e3, 4),
+    }
+
+
+def _slot(s: Any) -> dict[str, Any]:
+    return {
+        "angle_deg": round(s.angle_deg, 3),
+        "arc_deg": round(s.arc_deg, 3),
+        "arc_length_mm": round(math.radians(s.arc_deg) * s.entry_radius_m * 1e3, 3),
+        "width_mm": round(s.width_m * 1e3, 4),
+        "depth_mm": round(s.depth_m * 1e3, 4),
+        "entry_radius_mm": round(s.entry_radius_m * 1e3, 4),
+        "mass_g": round(s.mass_kg * 1e3, 4),
+    }
+
+
+def _planes(
+    m: Measurement, corrections: tuple[Correction, ...] = (), mode: str = "remove"
+) -> list[dict[str, Any]]:
     q, phi = unbalance_to_polar(m.solution.U_kg_m)
     out = []
     for i in range(2):
         R = m.radius_m[i]
-        out.append(
-            {
-                "plane": i + 1,
-                "unbalance_g_mm": _g_mm(q[i]),
-                "angle_deg": round(float(phi[i]), 3),
-                "mass_g": round(float(q[i]) / R * 1e3, 4),
-                "radius_mm": round(R * 1e3, 3),
-                "uncertainty_g_mm": _g_mm(m.radius95_kg_m[i]),
-            }
-        )
+        plane: dict[str, Any] = {
+            "plane": i + 1,
+            "unbalance_g_mm": _g_mm(q[i]),
+            "angle_deg": round(float(phi[i]), 3),
+            "mass_g": round(float(q[i]) / R * 1e3, 4),
+            "radius_mm": round(R * 1e3, 3),
+            "uncertainty_g_mm": _g_mm(m.radius95_kg_m[i]),
+        }
+        corr = corrections[i] if i < len(corrections) else None
+        if corr is not None and mode in ("drill", "mill"):
+            # drilled (numbered in drilling order) or milled: what the machinist does
+            plane["holes"] = [_hole(n + 1, h) for n, h in enumerate(corr.holes)]
+            plane["slot"] = None if corr.slot is None else _slot(corr.slot)
+            removed = sum(h.mass_kg for h in corr.holes) + (corr.slot.mass_kg if corr.slot else 0)
+            plane["removed_g"] = round(removed * 1e3, 4)
+            plane["leftover_g_mm"] = _g_mm(abs(corr.residual_kg_m))
+        out.append(plane)
     return out
 
 
@@ -382,7 +417,7 @@ def to_json(r: Result) -> dict[str, Any]:
     m = r.measurement
     out: dict[str, Any] = {
         "rpm": round(float(rad_s_to_rpm(m.omega_rad_s)), 3),
-        "planes": _planes(m),
+        "planes": _planes(m, r.corrections, r.correction_mode),
         "supports": _supports(m),
         "condition_number": float(m.solution.condition_number),
         "warnings": [w.message for w in r.warnings],

@@ -59,6 +59,42 @@ class Display:
             return f"{self.length_value(mm):.3f} in"
         return f"{mm:g} mm"
 
+    def depth(self, mm: float) -> str:
+        """A depth to machine: ``16.5 mm`` (to 0.01 mm) or ``0.6496 in``."""
+        if self.length_unit == "in":
+            return f"{self.length_value(mm):.4f} in"
+        return f"{round(mm, 2):g} mm"
+
+    def hole(self, h: dict[str, Any]) -> str:
+        """One drilled hole of a result's JSON form, in the machinist's words."""
+        return (
+            f"hole {h['number']} at {h['angle_deg']:.1f} deg: {self.length(h['diameter_mm'])} "
+            f"drill ({h['point_angle_deg']:g} deg point), {self.depth(h['depth_mm'])} deep to "
+            f"the tip ({self.mass(h['mass_g'])})"
+        )
+
+    def slot(self, s: dict[str, Any]) -> str:
+        """A milled slot of a result's JSON form, in the machinist's words."""
+        return (
+            f"slot centred at {s['angle_deg']:.1f} deg over {s['arc_deg']:.1f} deg "
+            f"({self.depth(s['arc_length_mm'])} of arc): {self.length(s['width_mm'])} wide, "
+            f"{self.depth(s['depth_mm'])} deep ({self.mass(s['mass_g'])})"
+        )
+
+    def cuts(self, plane: dict[str, Any]) -> str:
+        """Where a plane's holes or slot go in: ``radial holes into radius 90 mm``."""
+        holes, slot = plane.get("holes") or [], plane.get("slot")
+        if slot:
+            return f"mill into radius {self.length(slot['entry_radius_mm'])}"
+        if not holes:
+            return "no cut"
+        n = len(holes)
+        where = "into radius" if holes[0]["direction"] == "radial" else "parallel to the axis at"
+        return (
+            f"drill {n} {holes[0]['direction']} hole{'s' if n > 1 else ''} {where} "
+            f"{self.length(holes[0]['entry_radius_mm'])}"
+        )
+
     def unbalance(self, g_mm: float) -> str:
         """``5000.0 g mm``, or about as many digits in other units."""
         return f"{self.number(g_mm)} {self.unbalance_unit}"

@@ -45,7 +45,10 @@ ALLOWED: dict[str, set[str]] = {
     # calibration: numerics on the core's model; the config only as data
     "calib": NUMERIC | CORE | {"stand.calib"},
     # the configuration: validated data for the core
-    "stand/config.py": NUMERIC | CORE | {"pydantic", "tomlkit"},
+    "stand/tables.py": {"pydantic"},
+    "stand/config_correction.py": NUMERIC | CORE | {"pydantic", "stand.tables"},
+    "stand/config.py": NUMERIC | CORE | {"pydantic", "tomlkit", "stand.tables",
+                                         "stand.config_correction"},
     # the measuring path: streams in, unbalance out
     "stand/measure.py": NUMERIC | CORE | {"stand.drivers.streams", "stand.passes"},
     "stand/passes.py": NUMERIC | CORE | {"stand.drivers.streams"},
@@ -54,7 +57,9 @@ ALLOWED: dict[str, set[str]] = {
     # a stored influence matrix: its schema, read and written
     "stand/matrix.py": NUMERIC | CORE | {"pydantic", "stand.config", "stand.drivers.files",
                                          "stand.drivers.recording"},
-    "stand/pipeline.py": NUMERIC | APP | {"stand.config"},
+    "stand/pipeline.py": NUMERIC | APP | {"stand.config", "stand.correct"},
+    # what the operator or machinist does per plane: weights, holes, a slot
+    "stand/correct.py": NUMERIC | CORE,
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},
     "stand/influence.py": NUMERIC | APP,
     "stand/check.py": NUMERIC | APP,
@@ -62,7 +67,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},
     "stand/evaluate.py": NUMERIC | APP | {"stand.sim"},
     # the simulated stand: physics on the core; frames through the drivers
-    "stand/sim": NUMERIC | DRIVERS | {"stand.sim", "stand.config", "pydantic"},
+    "stand/sim": NUMERIC | DRIVERS | {"stand.sim", "stand.config", "stand.config_correction",
+                                      "pydantic"},
     # formatting only: the report and the CLI read a Result, never measure on their own
     "stand/report.py": NUMERIC | CORE | {"stand.result", "stand.units", "stand.plots"},
     "stand/plots.py": NUMERIC | CORE | {"stand.result", "stand.units", "matplotlib"},

@@ -69,7 +69,21 @@ def weights_text(c: dict[str, Any], u: Display | None = None) -> str:
     )
 
 
-def _correction_line(c: dict[str, Any], u: Display) -> str:
+def _machined(c: dict[str, Any], plane: dict[str, Any], u: Display) -> str:
+    """A drilled or milled plane: one line per hole (in drilling order), then the leftover."""
+    lines = [u.hole(h) for h in plane.get("holes") or []]
+    if plane.get("slot"):
+        lines.append(u.slot(plane["slot"]))
+    judged = c.get("residual_within_tolerance")
+    verdict = "" if judged is None else " (within tolerance)" if judged else " (OVER the tolerance)"
+    head = (
+        f"  plane {c['plane']}: {u.cuts(plane)}, removing {u.mass(plane['removed_g'])}; "
+        f"leaves {u.unbalance(plane['leftover_g_mm'])}{verdict}"
+    )
+    return "\n".join([head, *(f"    {x}" for x in lines)] if lines else [head])
+
+
+def _correction_line(c: dict[str, Any], u: Display, plane: dict[str, Any] | None = None) -> str:
     if c.get("within_noise"):
         return (
             f"  plane {c['plane']}: no correction: the unbalance is inside its own 95 % "
@@ -77,6 +91,8 @@ def _correction_line(c: dict[str, Any], u: Display) -> str:
         )
     if c.get("within_tolerance"):
         return f"  plane {c['plane']}: within tolerance: no correction needed"
+    if plane is not None and "holes" in plane:
+        return _machined(c, plane, u)
     left = (
         f"; rounding leaves {u.unbalance(c['residual_g_mm'])}" if c["residual_g_mm"] > 0.05 else ""
     )
@@ -93,13 +109,17 @@ def _correction_line(c: dict[str, Any], u: Display) -> str:
     )
 
 
+VERBS = {"remove": "remove material", "add": "add weights", "drill": "drill holes",
+         "mill": "mill a slot"}  # fmt: skip
+
+
 def print_corrections(out: dict[str, Any]) -> None:
     """The corrections, static and couple parts, and the tolerance verdict."""
     u = Display.of(out)
-    verb = "remove material" if out["correction_mode"] == "remove" else "add weights"
+    verb = VERBS.get(out["correction_mode"], "add weights")
     print(f"correction ({verb}; {ANGLE_NOTE}):")
-    for c in out["corrections"]:
-        print(_correction_line(c, u))
+    for c, plane in zip(out["corrections"], out["planes"], strict=True):
+        print(_correction_line(c, u, plane))
     s, cp = out["static"], out["couple"]
     print(
         f"  static part {u.unbalance(s['unbalance_g_mm'])} at {s['angle_deg']:.1f} deg; couple "

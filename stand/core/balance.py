@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -158,11 +159,17 @@ class Correction:
         True: remove at ``angle_deg``; False: add.
     residual_kg_m : complex
         Unbalance left by rounding to positions and steps [kg m] (0 if exact).
+    holes : tuple of stand.core.holes.Hole
+        Drilled holes, in drilling order (mode drill; then ``weights`` is empty).
+    slot : stand.core.drill.Slot or None
+        A milled slot (mode mill).
     """
 
     weights: tuple[Weight, ...]
     remove: bool
     residual_kg_m: complex
+    holes: tuple[Any, ...] = ()
+    slot: Any = None
 
 
 def _wrap(deg: float) -> float:

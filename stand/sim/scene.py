@@ -39,6 +39,7 @@ from stand.config import (
     validate,
     with_shaft,
 )
+from stand.config_correction import check_correction
 from stand.core.model import StandParameters
 from stand.errors import ConfigError
 
@@ -329,6 +330,7 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
             source=str(path),
             key="unbalance.distributed",
         )
+    check_correction(scene.correction, scene.rotor, str(path))
     params = parameters_of(scene.config(), str(path))
     return scene, params, str(path)
 

@@ -151,16 +151,47 @@ class Instruction:
     needed: bool
 
 
+def _machined(i: int, plane: dict[str, Any], u: Display) -> Instruction:
+    """A drilled or milled plane: per hole (in drilling order) the drill and the depth."""
+    lines, marks = [], []
+    for h in plane.get("holes") or []:
+        lines.append((
+            f"{h['number']}. DRILL {u.length(h['diameter_mm'])} × {u.depth(h['depth_mm'])}",
+            f"at {h['angle_deg']:.0f}° ({h['direction']}, depth to the tip)",
+            f"removes {u.mass(h['mass_g'])}",
+        ))  # fmt: skip
+        marks.append((float(h["angle_deg"]), f"{h['number']}: {u.depth(h['depth_mm'])}"))
+    slot = plane.get("slot")
+    if slot:
+        lines.append((
+            f"MILL {u.length(slot['width_mm'])} × {u.depth(slot['depth_mm'])}",
+            f"centred at {slot['angle_deg']:.0f}°, over {slot['arc_deg']:.0f}° "
+            f"({u.depth(slot['arc_length_mm'])})",
+            f"removes {u.mass(slot['mass_g'])}",
+        ))  # fmt: skip
+        marks.append((float(slot["angle_deg"]), f"slot {slot['arc_deg']:.0f}°"))
+    head = f"plane {i}: {u.cuts(plane)}"
+    return Instruction(i, head, tuple(lines), tuple(marks), bool(lines))
+
+
 def instructions(out: dict[str, Any]) -> list[Instruction]:
     """The correction of each plane of a result's JSON form, in the operator's words."""
     u = Display.of(out)
     verb = "ADD" if out["correction_mode"] == "add" else "REMOVE"
     found = []
-    for c in out["corrections"]:
+    for c, plane in zip(out["corrections"], out["planes"], strict=True):
         i = c["plane"]
-        if c.get("within_noise") or c.get("within_tolerance") or not c["weights"]:
+        machined = "holes" in plane
+        if (
+            c.get("within_noise")
+            or c.get("within_tolerance")
+            or not (c["weights"] or plane.get("holes") or plane.get("slot"))
+        ):
             why = "within tolerance" if c.get("within_tolerance") else "nothing to correct"
             found.append(Instruction(i, f"plane {i}: {why}", (), (), False))
+            continue
+        if machined:
+            found.append(_machined(i, plane, u))
             continue
         lines, marks = [], []
         for w in c["weights"]:

@@ -1,0 +1,26 @@
+"""The pieces every TOML table shares: the strict model config and the bounded numbers."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import ConfigDict, Field, FiniteFloat
+
+STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
+"""Every table of every TOML file: unknown keys refused, no strings for numbers, frozen."""
+
+
+# Magnitudes beyond these describe no balancing stand, and the model's arithmetic would
+# overflow into meaninglessness: refused, naming the key.
+Mass = Annotated[FiniteFloat, Field(ge=-1e6, le=1e6)]
+"""[kg]: at most 1000 t."""
+Inertia = Annotated[FiniteFloat, Field(ge=-1e9, le=1e9)]
+"""[kg m^2]."""
+Stiffness = Annotated[FiniteFloat, Field(ge=-1e12, le=1e12)]
+"""[N/m] or [N s/m]."""
+Length = Annotated[FiniteFloat, Field(ge=-1e3, le=1e3)]
+"""[m]."""
+Angle = Annotated[FiniteFloat, Field(ge=-360.0, le=360.0)]
+"""[deg]."""
+Name = Annotated[str, Field(min_length=1, max_length=64, pattern=r"^[^\x00-\x1f]+$")]
+"""A name: 1 to 64 characters, no control characters."""
