@@ -103,6 +103,20 @@ def polar(out: dict[str, Any]) -> str:
         ax.plot([phi], [u], "o", color="tab:red", ms=7, label=label)
         z = u * np.exp(1j * phi) + r95 * np.exp(1j * ring)  # the 95 % circle, in the plane
         ax.plot(np.angle(z), np.abs(z), color="tab:red", lw=1)
+        for h in plane.get("holes") or []:  # numbered in drilling order, with their depths
+            a = math.radians(h["angle_deg"])
+            ax.plot([a, a], [0, rmax * 0.95], color="tab:orange", lw=2.5)
+            at = rmax * (0.82 - 0.3 * (h["number"] % 2 == 0))  # neighbours' labels apart
+            ax.annotate(f"{h['number']}: {d.depth(h['depth_mm'])}", (a, at),
+                        fontsize=9, fontweight="bold", ha="center", color="tab:orange",
+                        bbox={"boxstyle": "round", "fc": "white", "ec": "tab:orange"})  # fmt: skip
+        if plane.get("holes"):
+            ax.plot([], [], color="tab:orange", lw=2.5, label=d.cuts(plane))
+        if plane.get("slot"):
+            sl = plane["slot"]
+            arc = np.radians(sl["angle_deg"] + np.linspace(-0.5, 0.5, 50) * sl["arc_deg"])
+            ax.plot(arc, np.full_like(arc, rmax * 0.9), color="tab:orange", lw=6,
+                    label=f"slot {sl['arc_deg']:.0f}° × {d.depth(sl['depth_mm'])}")  # fmt: skip
         for k, w in enumerate(corr["weights"]):
             a = math.radians(w["angle_deg"])
             where = "" if w["position"] is None else f" (position {w['position']})"

@@ -146,6 +146,21 @@ def _results(out: dict[str, Any]) -> str:
     )
 
 
+def _machined(plane: dict[str, Any], c: dict[str, Any], d: Display) -> str:
+    """A drilled or milled plane: the cuts in drilling order, then what they leave."""
+    e = html.escape
+    cuts = [d.hole(h) for h in plane.get("holes") or []]
+    if plane.get("slot"):
+        cuts.append(d.slot(plane["slot"]))
+    judged = c.get("residual_within_tolerance")
+    verdict = "" if judged is None else " (within tolerance)" if judged else " (OVER tolerance)"
+    return (
+        f"plane {plane['plane']}: <b>{e(d.cuts(plane))}</b>, removing "
+        f"{e(d.mass(plane['removed_g']))}; leaves {e(d.unbalance(plane['leftover_g_mm']))}"
+        f"{verdict}<ul class=cuts>" + "".join(f"<li>{e(x)}</li>" for x in cuts) + "</ul>"
+    )
+
+
 def _corrections(out: dict[str, Any]) -> str:
     d, e = Display.of(out), html.escape
     items = []
@@ -158,6 +173,9 @@ def _corrections(out: dict[str, Any]) -> str:
             continue
         if c.get("within_tolerance"):
             items.append(f"plane {i}: within tolerance: no correction needed")
+            continue
+        if "holes" in plane:
+            items.append(_machined(plane, c, d))
             continue
         what = " + ".join(
             f"{d.mass(w['mass_g'])}"

@@ -156,11 +156,11 @@ def _machined(i: int, plane: dict[str, Any], u: Display) -> Instruction:
     lines, marks = [], []
     for h in plane.get("holes") or []:
         lines.append((
-            f"{h['number']}. DRILL {u.length(h['diameter_mm'])} × {u.depth(h['depth_mm'])}",
-            f"at {h['angle_deg']:.0f}° ({h['direction']}, depth to the tip)",
+            f"{h['number']}. DRILL Ø{u.length(h['diameter_mm'])}, {u.depth(h['depth_mm'])} DEEP",
+            f"at {h['angle_deg']:.0f}° ({h['direction']}; depth to the tip)",
             f"removes {u.mass(h['mass_g'])}",
         ))  # fmt: skip
-        marks.append((float(h["angle_deg"]), f"{h['number']}: {u.depth(h['depth_mm'])}"))
+        marks.append((float(h["angle_deg"]), str(h["number"])))  # the drilling order
     slot = plane.get("slot")
     if slot:
         lines.append((
