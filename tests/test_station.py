@@ -89,7 +89,7 @@ def test_the_loop_live_estimates_twice_a_second(station: Station) -> None:
 
 
 def test_rotor_types_and_files_stay_inside_their_folders(station: Station, tmp_path: Path) -> None:
-    assert station.rotor_types() == ["demo-auger"]
+    assert station.rotor_types() == ["demo-auger", "demo-auger-drilled"]
     for bad in ("../demo-auger", "/etc/passwd", "demo-auger.toml", ""):
         with pytest.raises(UsageError):
             station.config_path(bad)
@@ -334,6 +334,19 @@ def test_what_the_screens_say() -> None:
     out["correction_mode"] = "remove"
     w.update(position=None, pieces_g=[])
     assert instructions(out)[0].lines == (("REMOVE 39.00 g", "at 225°", ""),)
+    hole = {"number": 1, "angle_deg": 20.0, "depth_mm": 16.5, "diameter_mm": 20.0,
+            "point_angle_deg": 118.0, "entry_radius_mm": 90.0, "direction": "radial",
+            "mass_g": 30.47}  # fmt: skip
+    drilled = {
+        "correction_mode": "drill",
+        "corrections": [corr(1), corr(2)],
+        "planes": [{"plane": 1, "holes": [hole], "slot": None}, {"plane": 2, "holes": []}],
+    }
+    one, two = instructions(drilled)
+    assert one.headline == "plane 1: drill 1 radial hole into radius 90 mm"
+    assert one.lines == (("1. DRILL Ø20 mm, 16.5 mm DEEP", "at 20° (radial; depth to the tip)",
+                          "removes 30.47 g"),)  # fmt: skip
+    assert one.marks == ((20.0, "1"),) and not two.needed
     assert check_verdict({}) is None
     planes = [{"pass": True}, {"pass": False}]
     assert check_verdict({"tolerance": {"planes": planes}}) == "fail"

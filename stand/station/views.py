@@ -179,7 +179,8 @@ def instructions(out: dict[str, Any]) -> list[Instruction]:
     u = Display.of(out)
     verb = "ADD" if out["correction_mode"] == "add" else "REMOVE"
     found = []
-    for c, plane in zip(out["corrections"], out["planes"], strict=True):
+    planes = out.get("planes") or [{} for _ in out["corrections"]]
+    for c, plane in zip(out["corrections"], planes, strict=True):
         i = c["plane"]
         machined = "holes" in plane
         if (
