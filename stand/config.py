@@ -167,6 +167,19 @@ class DisplayTable(BaseModel):
     length: Literal["mm", "in"] = "mm"
 
 
+class ToolingTable(BaseModel):
+    """``[tooling]``: the adapter, mandrel or coupling the rotor sits on; its unbalance,
+    measured once by ``stand tooling measure``, is subtracted from every run."""
+
+    model_config = STRICT
+
+    name: Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")]
+    """Letters, digits, ``. _ -`` (it names a file in the tooling folder)."""
+    folder: Annotated[str, Field(min_length=1, max_length=4000)] | None = None
+    """Where the tooling's measurement is kept (default: ``tooling/`` in the user's data
+    folder, beside the archive)."""
+
+
 class ArchiveTable(BaseModel):
     """``[archive]``: where runs are archived (a database URL; default: the user's own)."""
 
@@ -205,6 +218,7 @@ class Config(BaseModel):
     sensors: SensorsTable = SensorsTable()
     display: DisplayTable = DisplayTable()
     archive: ArchiveTable | None = None
+    tooling: ToolingTable | None = None
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measure.measure` needs from the configuration."""

@@ -368,6 +368,7 @@ def live_source(
     command: str,
     masses: Sequence[Any] = (),
     rpm: float | None = None,
+    index_deg: float | None = None,
 ) -> LiveSource:
     """A simulated scene (played in real time on a private virtual bus), or a config's bus.
 
@@ -385,7 +386,7 @@ def live_source(
         from stand.sim import load_scene, simulate, with_masses
 
         sc, physical, _ = load_scene(scene)
-        sc = with_masses(sc, masses, rpm)
+        sc = with_masses(sc, masses, rpm, index_deg)
         if config:
             cfg, params, text = load_config_text(config)
         else:
@@ -399,8 +400,10 @@ def live_source(
             scene_frames=simulate(sc, physical).frames,
             scene_bus={"interface": "virtual", "channel": channel},
         )
-    if masses or rpm is not None:
-        raise UsageError(f"stand {command}: --add, --apply and --rpm change a --scene's rotor")
+    if masses or rpm is not None or index_deg is not None:
+        raise UsageError(
+            f"stand {command}: --add, --apply, --rpm and --index change a --scene's rotor"
+        )
     if not config:
         raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params, text = load_config_text(config)

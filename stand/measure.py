@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -68,6 +69,8 @@ class Measurement:
         Mean speed over the window [rad/s].
     windows : list of Window
     warnings : list of Diagnostic
+    tooling : stand.tooling.Tooling or None
+        The tooling whose unbalance was subtracted (:mod:`stand.tooling`).
     cov_A_m2_s4 : ndarray, shape (4, 4), or None
         Covariance of ``(Re A1, Im A1, Re A2, Im A2)`` [m^2/s^4], the reference
         edges' common jitter included.
@@ -81,6 +84,9 @@ class Measurement:
     windows: list[Window]
     warnings: list[Diagnostic] = field(default_factory=list)
     cov_A_m2_s4: np.ndarray | None = None
+    tooling: Any = None
+    """The tooling compensation subtracted from the unbalance, if any
+    (:class:`stand.tooling.Tooling`)."""
 
 
 NONLINEAR_WIDEN = 1.5

@@ -67,6 +67,9 @@ class SolveOptions:
         Also compute the spectra and speed traces the report plots.
     matrix : stand.matrix.LoadedMatrix or None
         A stored influence matrix to use in place of the stand model.
+    compensate : bool
+        Subtract the config's ``[tooling]`` unbalance (:mod:`stand.tooling`); off for
+        the tooling's own index runs.
     """
 
     taper: bool = False
@@ -75,6 +78,7 @@ class SolveOptions:
     draws: int = 1000
     traces: bool = False
     matrix: Any = None
+    compensate: bool = True
 
 
 def job_of(meta: dict[str, Any], path: str) -> Job:
@@ -233,6 +237,15 @@ def build_result(
         for i, U in enumerate(m.solution.U_kg_m)
         if noise[i]
     ]
+    if m.tooling is not None and m.tooling.config_sha256 != provenance.config_sha256:
+        floor.append(
+            Diagnostic(
+                "tooling_config",
+                f"the tooling {m.tooling.name!r} was measured with another configuration "
+                f"(on {m.tooling.measured[:10]}): if the stand was calibrated since, measure "
+                "the tooling again (stand tooling measure)",
+            )
+        )
     static, couple = static_couple(params, m.solution.U_kg_m)
     return Result(
         measurement=m,
@@ -270,6 +283,10 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
         notes.append(options.matrix.speed_note(m.omega_rad_s))
     if any(notes):
         m = replace(m, warnings=[*m.warnings, *(n for n in notes if n is not None)])
+    if cfg.tooling is not None and options.compensate:
+        from stand.tooling import compensate, folder, load_tooling
+
+        m = compensate(m, load_tooling(cfg.tooling.name, folder(cfg.tooling)))
     return m
 
 
@@ -416,12 +433,13 @@ def solve_many(
 
 
 def measure_recording(
-    path: str, config: str | None = None, *, raw_sensors: bool = False
+    path: str, config: str | None = None, *, raw_sensors: bool = False, compensate: bool = True
 ) -> tuple[Measurement, Any, StandParameters, str]:
     """One run's measurement alone, for identification and influence coefficients.
 
     ``raw_sensors``: the nodes' phasors as they read, without the config's
-    ``[sensors]`` gains and delays (what a calibration identifies).  Returns the
+    ``[sensors]`` gains and delays (what a calibration identifies); ``compensate`` False:
+    without the ``[tooling]`` compensation (the tooling's own runs).  Returns the
     measurement, the config, its parameters and its text.
     """
     from stand.drivers.recording import read_streams
@@ -433,7 +451,7 @@ def measure_recording(
         if raw_sensors:
             m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)
         else:
-            m = measure_streams(streams, cfg, params, SolveOptions())
+            m = measure_streams(streams, cfg, params, SolveOptions(compensate=compensate))
     return m, cfg, params, text
 
 

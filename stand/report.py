@@ -206,6 +206,17 @@ def _calibration(out: dict[str, Any], result: Result) -> str:
     when = out["stand"].get("calibrated")
     cal = f"calibrated on {e(when)}" if when else "design values (no calibration date)"
     matrix = f"; influence matrix {e(p.matrix)}" if p.matrix else ""
+    t = out.get("tooling")
+    if t:
+        d = Display.of(out)
+        parts = ", ".join(
+            f"plane {x['plane']} {d.unbalance(x['unbalance_g_mm'])} at {x['angle_deg']:.1f}°"
+            for x in t["subtracted"]
+        )
+        matrix += (
+            f". <b>Tooling compensation:</b> {e(t['name'])}, measured {e(t['measured'][:10])} "
+            f"by the two-run index procedure; its unbalance ({e(parts)}) is subtracted"
+        )
     return (
         f"<p><b>Calibration used:</b> configuration {e(p.config_source)}, SHA-256 "
         f"{p.config_sha256[:16]}…, {cal}{matrix}. Measured with {e(p.software)}.</p>"

@@ -389,6 +389,24 @@ def _uncertainty(r: Result) -> dict[str, Any]:
     }
 
 
+def _tooling(t: Any) -> dict[str, Any]:
+    from stand.core.dsp import radius95
+
+    planes = []
+    for i, U in enumerate(t.U_kg_m):
+        planes.append(
+            {**_polar(U), "plane": i + 1,
+             "uncertainty_g_mm": _g_mm(radius95(t.cov_U[2 * i : 2 * i + 2, 2 * i : 2 * i + 2]))}
+        )  # fmt: skip
+    return {
+        "name": t.name,
+        "measured": t.measured,
+        "config_sha256": t.config_sha256,
+        "file": t.path,
+        "subtracted": planes,
+    }
+
+
 def _check(c: Check) -> dict[str, Any]:
     planes = []
     for i, urr in enumerate(c.urr):
@@ -411,7 +429,8 @@ def to_json(r: Result) -> dict[str, Any]:
     ``couple``, ``display`` (the units the operator sees), ``correction_positions``,
     ``stand`` (its name and calibration date), and when present
     ``tolerance``, ``parameter_uncertainty``, ``check``, the live keys
-    ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``; ``job`` (serial,
+    ``stopped_by``, ``elapsed_s``, ``targets_g_mm``, ``run_file``, ``tooling`` (the
+    compensation subtracted); ``job`` (serial,
     order, operator, note, rotor type); ``provenance`` last.
     """
     m = r.measurement
@@ -435,6 +454,8 @@ def to_json(r: Result) -> dict[str, Any]:
         out["parameter_uncertainty"] = _uncertainty(r)
     if r.check is not None:
         out["check"] = _check(r.check)
+    if m.tooling is not None:
+        out["tooling"] = _tooling(m.tooling)
     if r.live is not None:
         out["stopped_by"] = r.live.stopped_by
         out["elapsed_s"] = round(r.live.elapsed_s, 3)

@@ -50,6 +50,8 @@ SUBCOMMANDS: dict[str, str] = {
     "history": "find archived runs by serial, rotor type, order, operator, date, verdict",
     "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
     "station": "the operator station: a web screen at the stand (measure, correct, check)",
+    "tooling": "the tooling's own unbalance (index runs at 0 and 180 deg), subtracted from "
+    "every run",
 }
 """Each subcommand and its one-line help; its module ``stand.cli.<name>`` is imported only
 when it is the one chosen, so ``stand --help`` and ``stand --version`` import none."""

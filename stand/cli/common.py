@@ -69,6 +69,17 @@ def parse_mass(text: str) -> tuple[int, float, float, float | None]:
     return plane, grams, deg, radius
 
 
+def parse_angle(text: str) -> float:
+    """An angle [deg], finite."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an angle in degrees, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite angle, got {text!r}")
+    return value
+
+
 def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     """``--add``, ``--apply`` and ``--rpm``: change a simulated scene's rotor and speed."""
     g = p.add_argument_group("the simulated rotor (with a scene)")
@@ -89,6 +100,13 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
         "config's mode, positions and weights)",
     )
     g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]")
+    g.add_argument(
+        "--index",
+        type=parse_angle,
+        metavar="DEG",
+        help="the rotor turned this far on its tooling ([effects.tooling]): 180 for the "
+        "second run of `stand tooling measure`",
+    )
 
 
 def scene_masses(args: argparse.Namespace) -> list[Any]:

@@ -180,9 +180,24 @@ def print_check(out: dict[str, Any]) -> None:
         )
 
 
+def tooling_line(out: dict[str, Any]) -> str | None:
+    """``tooling mandrel-A subtracted: ...`` when a tooling compensation was used."""
+    t = out.get("tooling")
+    if t is None:
+        return None
+    u = Display.of(out)
+    planes = "; ".join(
+        f"plane {p['plane']} {u.unbalance(p['unbalance_g_mm'])} at {p['angle_deg']:.1f} deg"
+        for p in t["subtracted"]
+    )
+    return f"tooling {t['name']} subtracted (measured {t['measured'][:10]}): {planes}"
+
+
 def print_result(out: dict[str, Any]) -> None:
     """The whole result as text (stdout); warnings go to stderr."""
     print_measurement(out)
+    if line := tooling_line(out):
+        print(line)
     print_corrections(out)
     print_uncertainty(out)
     if "stopped_by" in out:

@@ -176,8 +176,9 @@ def measure_live_from_args(
 
     check_live_arguments(args, command)
     source = live_source(
-        args.scene, args.config, command, scene_masses(args), getattr(args, "rpm", None)
-    )
+        args.scene, args.config, command, scene_masses(args), getattr(args, "rpm", None),
+        getattr(args, "index", None),
+    )  # fmt: skip
     kwargs = source.scene_bus
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)

@@ -63,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
 
         stored = load_config_text(args.config)[2]
     scene, params, source = load_scene(args.scene)
-    scene = with_masses(scene, scene_masses(args), args.rpm)
+    scene = with_masses(scene, scene_masses(args), args.rpm, args.index)
     if args.seed is not None:
         scene = scene.model_copy(update={"run": scene.run.model_copy(update={"seed": args.seed})})
     label = args.scene if args.scene in shipped_scenes() else source

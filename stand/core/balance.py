@@ -260,3 +260,26 @@ def static_couple(p: StandParameters, U_kg_m: ArrayLike) -> tuple[complex, compl
     """
     U = np.asarray(U_kg_m, dtype=complex)
     return complex(U[0] + U[1]), complex((U[0] - U[1]) / 2)
+
+
+def index_split(
+    U_0_kg_m: ArrayLike, cov_0: ArrayLike, U_180_kg_m: ArrayLike, cov_180: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The two-run index procedure: the tooling's and the rotor's unbalance apart.
+
+    The rotor is measured on its tooling, then turned 180 deg on it.  The reference
+    mark is on the rotor, so the rotor's unbalance ``U_r`` stays where it was and the
+    tooling's ``U_t`` turns half a revolution: ``U_0 = U_r + U_t`` and
+    ``U_180 = U_r - U_t``, hence ``U_t = (U_0 - U_180) / 2`` and
+    ``U_r = (U_0 + U_180) / 2``.  The runs are independent: each half's covariance
+    (real 4 x 4, ``Re U1, Im U1, Re U2, Im U2``) is ``(C_0 + C_180) / 4``.
+
+    Returns ``U_t``, its covariance, ``U_r``, its covariance [kg m, kg^2 m^2].
+
+    >>> t, _, r, _ = index_split([3 + 1j, 2j], np.eye(4), [1 + 1j, 0j], np.eye(4))
+    >>> t.tolist(), r.tolist()
+    ([(1+0j), 1j], [(2+1j), 1j])
+    """
+    U0, U180 = np.asarray(U_0_kg_m, dtype=complex), np.asarray(U_180_kg_m, dtype=complex)
+    cov = (np.asarray(cov_0, dtype=float) + np.asarray(cov_180, dtype=float)) / 4
+    return (U0 - U180) / 2, cov, (U0 + U180) / 2, cov.copy()

@@ -84,6 +84,9 @@ class RunTable(_Table):
     settle_s: NonNegative = 2.0
     """Time integrated (and not recorded) before the run starts, on the
     integration path without run-up, for the nonlinear supports to settle [s]."""
+    index_deg: FiniteFloat = 0.0
+    """How far the rotor is turned on its tooling (``[effects.tooling]``), in the angles'
+    sense [deg]: 180 for the second run of the index procedure."""
 
 
 class PlaneUnbalance(_Table):
@@ -218,6 +221,16 @@ class Clearance(_Table):
     """Smoothing [1/m]; default 100 / gap."""
 
 
+class ToolingEffect(_Table):
+    """``[effects.tooling]``: the unbalance of the adapter, mandrel or coupling the rotor
+    sits on [g mm, deg at index 0].  It turns with the rotor, but stays with the tooling
+    when the rotor is turned on it (``[run] index_deg``, ``--index``): the reference mark
+    is on the rotor, so the tooling's angle moves by the index."""
+
+    plane1: PlaneUnbalance
+    plane2: PlaneUnbalance
+
+
 class Dropout(_Table):
     """The bus carries nothing from ``at_s`` for ``seconds``."""
 
@@ -242,6 +255,7 @@ class Effects(_Table):
     friction: Friction | None = None
     clearance: Clearance | None = None
     dropout: Dropout | None = None
+    tooling: ToolingEffect | None = None
 
     def named(self) -> list[str]:
         """The effects the scene names, in table order."""
@@ -336,9 +350,21 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
 
 
 def unbalance_kg_m(scene: Scene) -> tuple[list[float], list[float]]:
-    """``(q_i R_i [kg m], phi_i [deg])`` of both planes."""
-    u = scene.unbalance
-    return [u.plane1.g_mm * 1e-6, u.plane2.g_mm * 1e-6], [u.plane1.angle_deg, u.plane2.angle_deg]
+    """``(q_i R_i [kg m], phi_i [deg])`` of both planes: the rotor's, and its tooling's
+    (``[effects.tooling]``) at the rotor's index on it."""
+    u, t = scene.unbalance, scene.effects.tooling
+    planes = [u.plane1, u.plane2]
+    if t is None:
+        return [p.g_mm * 1e-6 for p in planes], [p.angle_deg for p in planes]
+    # the rotor turned by delta on its tooling: the tooling's heavy spot is delta nearer the
+    # mark, phi_t - delta, so U_t e^{+i delta}
+    turn = cmath.exp(1j * math.radians(scene.run.index_deg))
+    total = [
+        p.g_mm * cmath.exp(-1j * math.radians(p.angle_deg))
+        + q.g_mm * cmath.exp(-1j * math.radians(q.angle_deg)) * turn
+        for p, q in zip(planes, (t.plane1, t.plane2), strict=True)
+    ]
+    return [abs(z) * 1e-6 for z in total], [-math.degrees(cmath.phase(z)) % 360.0 for z in total]
 
 
 def describe(scene: Scene) -> dict[str, Any]:
@@ -367,8 +393,14 @@ class Mass:
     radius_m: float | None = None
 
 
-def with_masses(scene: Scene, masses: Sequence[Mass] = (), rpm: float | None = None) -> Scene:
-    """The scene's rotor with masses added or removed, optionally at another speed.
+def with_masses(
+    scene: Scene,
+    masses: Sequence[Mass] = (),
+    rpm: float | None = None,
+    index_deg: float | None = None,
+) -> Scene:
+    """The scene's rotor with masses added or removed, optionally at another speed and
+    turned on its tooling by ``index_deg``.
 
     A mass ``m`` at radius ``r`` and angle ``a`` adds ``m r e^{-i a}`` to its
     plane's unbalance ``U = q R e^{-i phi}``: a mass put where the software says
@@ -394,6 +426,8 @@ def with_masses(scene: Scene, masses: Sequence[Mass] = (), rpm: float | None = N
     }
     planes["distributed"] = scene.unbalance.distributed
     run = scene.run if rpm is None else scene.run.model_copy(update={"rpm": rpm})
+    if index_deg is not None:
+        run = run.model_copy(update={"index_deg": index_deg})
     return scene.model_copy(update={"unbalance": UnbalanceTable(**planes), "run": run})
 
 
