@@ -284,9 +284,18 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
     if any(notes):
         m = replace(m, warnings=[*m.warnings, *(n for n in notes if n is not None)])
     if cfg.tooling is not None and options.compensate:
-        from stand.tooling import compensate, folder, load_tooling
+        from stand.tooling import compensate, folder, load_tooling, tooling_file
 
-        m = compensate(m, load_tooling(cfg.tooling.name, folder(cfg.tooling)))
+        where = folder(cfg.tooling)
+        if tooling_file(cfg.tooling.name, where).exists():
+            m = compensate(m, load_tooling(cfg.tooling.name, where))
+        else:  # its own index runs come first: measured, and said loudly
+            note = Diagnostic(
+                "tooling_not_measured",
+                f"the tooling {cfg.tooling.name!r} has not been measured: its unbalance is NOT "
+                "subtracted from this answer (measure it: stand tooling measure RUN_0 RUN_180)",
+            )
+            m = replace(m, warnings=[*m.warnings, note])
     return m
 
 

@@ -87,15 +87,21 @@ def test_tooling_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFix
     cfg = _config(tmp_path)
     run = _sim(tmp_path, "r0.h5", cfg)
     capsys.readouterr()
-    assert main(["solve", run]) == 2  # the config names a tooling never measured
-    err = capsys.readouterr().err.strip()
-    assert "[tooling.name]" in err and "stand tooling measure" in err and "\n" not in err
+    # the config names a tooling never measured (its own index runs come first): the
+    # answer is given, and says loudly that nothing was subtracted
+    assert main(["solve", run, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert "tooling" not in out
+    assert any("NOT subtracted" in w and "stand tooling measure" in w for w in out["warnings"])
     assert main(["tooling", "measure", run]) == 2
     assert "two runs" in capsys.readouterr().err
     assert main(["tooling", "measure", run, run]) == 0
     assert main(["tooling", "measure", run, run]) == 2  # kept already: --force replaces it
     assert "exists" in capsys.readouterr().err
     assert main(["tooling", "measure", run, run, "--force"]) == 0
+    (tmp_path / "toolings" / "mandrel-A.json").write_text("{")
+    assert main(["solve", run]) == 2
+    assert "mandrel-A.json: not a tooling file" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(Path(cfg).read_text().replace('name = "mandrel-A"', 'name = "../x"'))
     assert main(["solve", run, "--config", str(bad)]) == 2
