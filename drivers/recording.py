@@ -73,7 +73,10 @@ JOB_ATTR = "job_json"
 """Run file attribute: the job the run was made for (JSON: serial, order, operator, note)."""
 MATRIX_ATTR = "influence_matrix_json"
 """Run file attribute: the stored influence matrix the run was measured with (its JSON)."""
-CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR)
+STAND_ATTR = "stand_id"
+"""Run file attribute: the id of the stand that recorded the run (``[stand] id``, else its
+host name), so a plant's shared archive knows where each run was made."""
+CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR)
 """Text attributes a converted or rewritten run keeps."""
 FLUSH_INTERVAL_S = 0.5
 """Frames reach the disk at least this often [s]; a crash loses at most this much."""

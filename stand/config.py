@@ -53,6 +53,15 @@ class StandTable(BaseModel):
     """How far the speeds two nodes measure of one shaft may differ [%]."""
     name: Name | None = None
     """The stand's name, as certificates show it (e.g. "stand 2, hall B")."""
+    id: Name | None = None
+    """The stand's id in a plant's shared archive (default: this computer's host name)."""
+
+    def stand_id(self) -> str:
+        """``id``, else this computer's host name."""
+        import socket
+
+        return self.id or socket.gethostname()[:64] or "stand"
+
     calibrated: Annotated[str, Field(pattern=r"^\d{4}-\d{2}-\d{2}$")] | None = None
     """The date of its last calibration (YYYY-MM-DD; stand calibrate writes it)."""
 
@@ -233,7 +242,7 @@ class Config(BaseModel):
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
-                    "bending_hz", "shaft"):  # fmt: skip
+                    "id", "bending_hz", "shaft"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 

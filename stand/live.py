@@ -331,6 +331,7 @@ def measure_until_precise(
         matrix=None if options.matrix is None else options.matrix.path,
         job=job_of(session.run_attrs, session.run_path),
         rotor_type=cfg.rotor.type,
+        stand_id=cfg.stand.stand_id(),
     )
     goal = targets(final.solution.U_kg_m)
     return build_result(
@@ -429,11 +430,12 @@ def measure_live(
     """One live session measured until precise: the result, and the session (closed).
     ``job`` (serial, order, operator, note) is recorded with the run; ``stop`` and
     ``max_interval_s`` as in :func:`measure_until_precise`."""
-    from stand.drivers.recording import JOB_ATTR
+    from stand.drivers.recording import JOB_ATTR, STAND_ATTR
 
     cfg, params = source.cfg, source.params
     check_matrix(options, cfg, live=True)
     attrs = {} if options.matrix is None else options.matrix.run_attrs()
+    attrs[STAND_ATTR] = cfg.stand.stand_id()
     if job:
         attrs[JOB_ATTR] = job.to_text()
     with LiveSession(

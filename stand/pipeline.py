@@ -29,7 +29,7 @@ from stand.core import Diagnostic, StandParameters, rpm_to_rad_s
 from stand.core.balance import permissible_unbalance, plane_tolerances, static_couple
 from stand.correct import corrections as plane_corrections
 from stand.correct import removed_masses
-from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, config_digest
+from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest
 from stand.errors import ConfigError, MeasurementError, NoStatusError, StandError
 from stand.matrix import parse_matrix
 from stand.measure import Measurement, measure
@@ -396,6 +396,7 @@ def solve_recording(
         matrix=None if options.matrix is None else options.matrix.path,
         job=job_of(rec.meta, path),
         rotor_type=cfg.rotor.type,
+        stand_id=str(rec.meta.get(STAND_ATTR) or cfg.stand.stand_id()),
     )
     return build_result(
         m, cfg, params, stream_warnings=streams.warnings, provenance=prov,

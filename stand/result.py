@@ -84,6 +84,8 @@ class Provenance:
         Serial, order, operator, note (empty when not given).
     rotor_type : str or None
         The config's ``[rotor] type``.
+    stand_id : str
+        The stand that recorded the run (its ``[stand] id``, else its host name).
     """
 
     software: str
@@ -98,6 +100,7 @@ class Provenance:
     matrix: str | None = None
     job: Job = Job()
     rotor_type: str | None = None
+    stand_id: str = ""
 
 
 @dataclass(frozen=True)
@@ -446,7 +449,11 @@ def to_json(r: Result) -> dict[str, Any]:
         "couple": _polar(r.couple_kg_m),
         "display": {"mass": r.display[0], "length": r.display[1]},
         "correction_positions": {"count": r.positions[0], "position1_deg": r.positions[1]},
-        "stand": {"name": r.stand_name, "calibrated": r.calibrated},
+        "stand": {
+            "name": r.stand_name,
+            "calibrated": r.calibrated,
+            "id": r.provenance.stand_id or None,
+        },
     }
     if r.tolerance is not None:
         out["tolerance"] = _tolerance(r)

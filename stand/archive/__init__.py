@@ -87,6 +87,7 @@ def rows(
         "couple_im_kg_m": result.couple_kg_m.imag,
         "software": p.software,
         "result_json": json_text(out),
+        "stand_id": p.stand_id or None,
     }
     urr = result.check.urr if result.check is not None else (None, None)
     per = None if result.tolerance is None else result.tolerance.per_plane_kg_m

@@ -28,6 +28,7 @@ class Filters:
     until: dt.date | None = None
     verdict: str | None = None
     limit: int | None = None
+    stand: str | None = None
 
 
 def _where(f: Filters) -> list[Any]:
@@ -38,6 +39,7 @@ def _where(f: Filters) -> list[Any]:
         (runs.c.order_no, f.order),
         (runs.c.operator, f.operator),
         (runs.c.verdict, f.verdict),
+        (runs.c.stand_id, f.stand),
     ):
         if value is not None:
             conds.append(column == value)
@@ -121,6 +123,7 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
             "operator": r.operator,
             "note": r.note,
             "rotor_type": r.rotor_type,
+            "stand": r.stand_id,
             "rpm": r.rpm,
             "verdict": r.verdict,
             "checks_run": r.checks_run_id,

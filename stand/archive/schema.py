@@ -51,11 +51,13 @@ runs = Table(
     Column("couple_im_kg_m", Float, nullable=False),
     Column("software", String(64), nullable=False),
     Column("result_json", Text, nullable=False),
+    Column("stand_id", String(64)),  # the stand that recorded it (revision 0002)
 )
 Index("ix_runs_serial", runs.c.serial)
 Index("ix_runs_rotor_type_start", runs.c.rotor_type, runs.c.start_time)
 Index("ix_runs_order", runs.c.order_no)
 Index("ix_runs_start", runs.c.start_time)
+Index("ix_runs_stand", runs.c.stand_id, runs.c.start_time)
 
 planes = Table(
     "planes",

@@ -207,4 +207,54 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
         for name, values in parts.items()
     }
     out["times"] = [r.start_time for r in rotors]
+    out["stands"] = compare_stands(rows, U)
+    return out
+
+
+STAND_LEVEL = 0.05
+"""Family-wise false-alarm rate of the stand comparison (Bonferroni over stands and planes)."""
+
+
+def _residuals(rows: list[Any], U: dict[int, list[complex]]) -> dict[str, list[list[float]]]:
+    """Per stand, per plane, the residual of each rotor it balanced: the unbalance its last
+    check run measured [kg m] (rotors never checked are left out)."""
+    last: dict[str, Any] = {}
+    for r in rows:  # oldest first: the last check of a rotor wins
+        if r.checks_run_id is not None:
+            last[r.serial if r.serial is not None else f"#{r.id}"] = r
+    out: dict[str, list[list[float]]] = {}
+    for r in last.values():
+        per = out.setdefault(r.stand_id or "(no id)", [[], []])
+        for i in range(2):
+            per[i].append(abs(U[r.id][i]))
+    return out
+
+
+def compare_stands(rows: list[Any], U: dict[int, list[complex]]) -> list[dict[str, Any]]:
+    """Does one stand leave rotors less well balanced than the others?  Per stand and plane,
+    the Mann-Whitney U test of its rotors' residuals against every other stand's
+    (two-sided; no assumption on their distribution), judged at :data:`STAND_LEVEL` over all
+    stands and planes (Bonferroni).  A stand needs 3 checked rotors, and so do the rest."""
+    from scipy import stats
+
+    res = _residuals(rows, U)
+    if len(res) < 2:
+        return []
+    tests = 2 * len(res)
+    out = []
+    for stand, per in sorted(res.items()):
+        entry: dict[str, Any] = {
+            "stand": stand,
+            "rotors": len(per[0]),
+            "residual_median_g_mm": [round(float(np.median(v)) * 1e6, 3) for v in per],
+            "p_value": [None, None],
+            "differs": False,
+        }
+        for i in range(2):
+            others = [x for s, o in res.items() if s != stand for x in o[i]]
+            if len(per[i]) >= MIN_ROTORS and len(others) >= MIN_ROTORS:
+                p = float(stats.mannwhitneyu(per[i], others, alternative="two-sided").pvalue)
+                entry["p_value"][i] = round(p, 6)
+                entry["differs"] = entry["differs"] or p < STAND_LEVEL / tests
+        out.append(entry)
     return out

@@ -69,6 +69,15 @@ class Archive:
             self.sqlite = u.get_backend_name() == "sqlite"
             if self.sqlite and u.database and u.database != ":memory:":
                 Path(u.database).parent.mkdir(parents=True, exist_ok=True)
+                share = network_filesystem(Path(u.database).parent)
+                if share is not None:
+                    raise ArchiveError(
+                        f"an SQLite archive on a network share ({share}) is not safe: its file "
+                        "locks do not hold there, so two stands can corrupt it. Use "
+                        "PostgreSQL for an archive that several stands share "
+                        "(postgresql+psycopg://user@host/db)",
+                        url=self.shown,
+                    )
             self.engine = sa.create_engine(self.url, future=True)
         except (ArgumentError, NoSuchModuleError, ValueError, OSError) as exc:
             raise ArchiveError(f"not a usable database URL ({exc})", url=self.shown) from exc
@@ -119,18 +128,27 @@ class Archive:
         """Write one run and its planes in one transaction; the run's id.  A run already
         archived (the same file digest) is not written again: its id is returned."""
         import sqlalchemy as sa
+        from sqlalchemy.exc import IntegrityError
 
-        with self.transaction() as conn:
-            found = conn.execute(
-                sa.select(runs.c.id).where(runs.c.file_sha256 == row["file_sha256"])
-            ).scalar()
-            if found is not None:
-                return int(found)
-            stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-            new = conn.execute(runs.insert().values(**row, archived_at=stamp))
-            run_id = new.inserted_primary_key[0]
-            conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
-            return int(run_id)
+        try:
+            with self.engine.begin() as conn:
+                found = conn.execute(
+                    sa.select(runs.c.id).where(runs.c.file_sha256 == row["file_sha256"])
+                ).scalar()
+                if found is not None:
+                    return int(found)
+                stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+                new = conn.execute(runs.insert().values(**row, archived_at=stamp))
+                run_id = new.inserted_primary_key[0]  # type: ignore[index]
+                conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
+                return int(run_id)
+        except IntegrityError:  # another stand archived the same run file meanwhile
+            found = self.run_id(row["file_sha256"])
+            if found is None:
+                raise ArchiveError("the run could not be written", url=self.shown) from None
+            return found
+        except sa.exc.SQLAlchemyError as exc:
+            raise ArchiveError(_reason(exc), url=self.shown) from exc
 
     def run_id(self, file_sha256: str) -> int | None:
         """The id of the run with this file digest, if archived."""
@@ -152,6 +170,36 @@ class Archive:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+NETWORK_FILESYSTEMS = frozenset({
+    "nfs", "nfs4", "cifs", "smb3", "smbfs", "9p", "ceph", "glusterfs", "fuse.glusterfs",
+    "fuse.sshfs", "sshfs", "afs", "lustre", "gpfs", "ncpfs", "davfs", "fuse.s3fs", "fuse.rclone",
+})  # fmt: skip
+"""File systems whose locks SQLite cannot trust (its documentation: not over a network)."""
+MOUNTS = Path("/proc/self/mounts")
+
+
+def network_filesystem(folder: Path) -> str | None:
+    """``nfs4 at /mnt/share`` when ``folder`` lies on a network file system, else None
+    (also when the mounts cannot be read: not Linux)."""
+    try:
+        lines = MOUNTS.read_text().splitlines()
+    except OSError:
+        return None
+    target = str(folder.resolve())
+    best: tuple[int, str, str] | None = None
+    for line in lines:
+        parts = line.split()
+        if len(parts) < 3:
+            continue
+        point = parts[1].replace("\\040", " ")
+        inside = target == point or target.startswith(point.rstrip("/") + "/")
+        if inside and (best is None or len(point) > best[0]):
+            best = (len(point), point, parts[2])
+    if best is not None and best[2] in NETWORK_FILESYSTEMS:
+        return f"{best[2]} at {best[1]}"
+    return None
 
 
 def _sqlite_pragmas(engine: Any) -> None:

@@ -25,6 +25,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
     p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
     p.add_argument("--verdict", choices=("pass", "fail", "none"))
+    p.add_argument("--stand", metavar="ID", help="runs of this stand ([stand] id)")
     p.add_argument("--limit", type=int, metavar="N", help="at most N runs (the oldest)")
     add_archive_argument(p)
     out = p.add_mutually_exclusive_group()
@@ -56,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
         until=_date(args.until, "--until"),
         verdict=args.verdict,
         limit=args.limit,
+        stand=args.stand,
     )
     found = history(archive_url(args), f)
     if args.json:

@@ -46,7 +46,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from stand.config import config_toml
-    from stand.drivers.recording import JOB_ATTR, Recording, write_recording
+    from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
     from stand.drivers.streams import rebuild
     from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
@@ -82,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
                 "config_toml": stored or config_toml(scene.config()),
                 "software": f"stand {__version__}",
                 JOB_ATTR: job.to_text() if job else "",
+                STAND_ATTR: scene.stand.stand_id(),
             },
         )
         write_recording(

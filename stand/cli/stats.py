@@ -13,6 +13,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
     p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
     p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
+    p.add_argument(
+        "--stand", metavar="ID", help="this stand's runs only ([stand] id; default: every stand)"
+    )
     add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument(
@@ -38,7 +41,9 @@ def run(args: argparse.Namespace) -> int:
         except ValueError:
             raise UsageError(f"--{name}: a date YYYY-MM-DD, got {text!r}") from None
     out = production(
-        archive_url(args), args.rotor_type, Filters(since=dates["since"], until=dates["until"])
+        archive_url(args),
+        args.rotor_type,
+        Filters(since=dates["since"], until=dates["until"], stand=args.stand),
     )
     if args.json:
         dump_json(out)
@@ -52,6 +57,22 @@ def run(args: argparse.Namespace) -> int:
         if not args.json:
             print(f"wrote {args.report}")
     return 0
+
+
+def _stands_text(out: dict[str, Any]) -> None:
+    stands = out.get("stands") or []
+    if not stands:
+        return
+    print("stands (residual after the last check; Mann-Whitney U against the other stands,")
+    print("5 % false alarms over all stands and planes):")
+    for s in stands:
+        med = " / ".join(f"{x:.1f}" for x in s["residual_median_g_mm"])
+        ps = " / ".join("-" if p is None else f"{p:.3g}" for p in s["p_value"])
+        verdict = "DIFFERS from the others" if s["differs"] else "like the others"
+        print(
+            f"  {s['stand']:16} {s['rotors']:5d} rotors  median residual {med} g mm  "
+            f"p {ps}  {verdict}"
+        )
 
 
 def _text(out: dict[str, Any]) -> None:
@@ -95,3 +116,4 @@ def _text(out: dict[str, Any]) -> None:
         if "spread_rms_g_mm" in out["plane1"] and "spread_rms_g_mm" in out["plane2"]
         else f"the stand's own 95 % interval: +-{own[0]:.1f} and +-{own[1]:.1f} g mm per run"
     )
+    _stands_text(out)
