@@ -290,6 +290,12 @@ async def _flow(station: Station) -> None:
         assert "pass (check)" in [r["verdict"] for r in table.rows]
         response = await user.http_client.get(table.rows[0]["report"])
         assert response.status_code == 200 and "S-42" in response.text
+        user.find(marker="history-export")  # the button; its route gives the file
+        dfq = await user.http_client.get("/export/qdas/demo-auger")
+        assert dfq.status_code == 200 and dfq.content.startswith(b"K0100 8\r\n")
+        assert b"K0014/0 S-42" in dfq.content
+        missing = await user.http_client.get("/export/qdas/no-such-type")
+        assert missing.status_code == 404 and "nothing exported" in missing.text
 
 
 @pytest.mark.realtime

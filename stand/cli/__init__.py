@@ -48,6 +48,7 @@ SUBCOMMANDS: dict[str, str] = {
     "forward": "support accelerations for given unbalances, and the natural frequencies",
     "archive": "the archive of runs: import runs recorded before, verify the run files",
     "history": "find archived runs by serial, rotor type, order, operator, date, verdict",
+    "export": "export archived results for the plant's quality system (Q-DAS .dfq)",
     "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
     "station": "the operator station: a web screen at the stand (measure, correct, check)",
     "tooling": "the tooling's own unbalance (index runs at 0 and 180 deg), subtracted from "

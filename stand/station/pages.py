@@ -299,6 +299,16 @@ def history_screen(station: Station) -> None:
         rotor = ui.select(["", *station.rotor_types()], label="rotor type", value="")
         rotor.classes("w-64").mark("history-type")
         found = ui.button("Search").props("size=lg").mark("history-search")
+
+        def export() -> None:
+            if not rotor.value:
+                ui.notify("choose a rotor type to export", type="warning")
+                return
+            ui.navigate.to(f"/export/qdas/{rotor.value}", new_tab=True)
+
+        ui.button("Export Q-DAS (.dfq)", on_click=export).props("size=lg outline").mark(
+            "history-export"
+        )
     columns = [{"name": k, "label": k, "field": k, "align": "left"}
                for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
                          "plane 2", "report")]  # fmt: skip
@@ -356,6 +366,21 @@ def _local(iso: str) -> str:
 def add_routes(station: Station) -> None:
     """The routes beside the screens: a run's report, by its archive id."""
     from fastapi.responses import FileResponse, PlainTextResponse
+
+    @app.get("/export/qdas/{rotor_type}")
+    def export_qdas(rotor_type: str) -> Any:
+        from fastapi.responses import Response
+
+        try:
+            data = station.export_qdas(rotor_type)
+        except StandError as exc:  # no run of that type
+            return PlainTextResponse(str(exc), status_code=404)
+        name = "".join(c if c.isalnum() or c in "-_." else "_" for c in rotor_type)
+        return Response(
+            data,
+            media_type="text/plain; charset=windows-1252",
+            headers={"Content-Disposition": f'attachment; filename="{name}.dfq"'},
+        )
 
     @app.get("/report/{run_id}")
     def report(run_id: int) -> Any:

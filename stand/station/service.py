@@ -316,6 +316,15 @@ class Station:
         rows = history(self.archive_url, Filters(serial=serial or None, rotor_type=rotor_type))
         return rows[::-1][:limit]
 
+    def export_qdas(self, rotor_type: str) -> bytes:
+        """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
+        (:mod:`stand.archive.qdas`; UsageError when there is none)."""
+        from stand.archive.qdas import export_qdas
+        from stand.archive.query import Filters
+
+        data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None)
+        return data
+
     def report_file(self, run_id: int) -> Path:
         """The report of archived run ``run_id``, if it lies inside the runs folder."""
         from stand.archive.query import run_file
