@@ -61,6 +61,9 @@ ALLOWED: dict[str, set[str]] = {
     "stand/pipeline.py": NUMERIC | APP | {"stand.config", "stand.correct"},
     # the tooling's unbalance (index runs), kept per tooling and subtracted from every run
     "stand/tooling.py": NUMERIC | APP,
+    # the plant's systems: an OPC UA result server (asyncua), MQTT (paho)
+    "stand/opcua.py": APP | {"asyncua", "stand.station.safety"},
+    "stand/mqtt.py": {"paho", "stand.errors", "stand.result"},
     # what the operator or machinist does per plane: weights, holes, a slot
     "stand/correct.py": NUMERIC | CORE,
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},

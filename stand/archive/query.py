@@ -143,3 +143,50 @@ def run_file(url: str, run_id: int) -> str | None:
     with Archive(url) as archive, archive.transaction() as conn:
         found = conn.execute(sa.select(runs.c.run_file).where(runs.c.id == run_id)).first()
     return None if found is None else str(found.run_file)
+
+
+def _run_dict(r: Any, planes_: list[dict[str, Any]]) -> dict[str, Any]:
+    """One archived run's row as :func:`history` gives it (without its links' lists)."""
+    return {
+        "id": r.id, "start_time": r.start_time, "serial": r.serial, "order": r.order_no,
+        "operator": r.operator, "rotor_type": r.rotor_type, "stand": r.stand_id, "rpm": r.rpm,
+        "verdict": r.verdict, "checks_run": r.checks_run_id, "planes": planes_,
+        "run_file": r.run_file, "file_sha256": r.file_sha256,
+    }  # fmt: skip
+
+
+def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
+    """The latest run in an open archive (of one stand, or of any) as :func:`history` gives
+    it, with ``initial``, the planes of the run it checks (its own when it checks none), and
+    ``result``, its whole JSON form; None in an empty archive."""
+    import json
+
+    import sqlalchemy as sa
+
+    with archive.transaction() as conn:
+        q = sa.select(runs)
+        if stand is not None:
+            q = q.where(runs.c.stand_id == stand)
+        row = conn.execute(q.order_by(runs.c.id.desc()).limit(1)).first()
+        if row is None:
+            return None
+        ids = [row.id] + ([row.checks_run_id] if row.checks_run_id is not None else [])
+        found: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
+        for p in plane_rows(conn, ids):
+            found[p.run_id].append(_plane(p))
+    run = _run_dict(row, found[row.id])
+    run["initial"] = found[ids[-1]]
+    run["result"] = json.loads(row.result_json)
+    return run
+
+
+def latest_id(archive: Archive, stand: str | None = None) -> int | None:
+    """The id of the latest run in an open archive (a cheap poll: anything new?)."""
+    import sqlalchemy as sa
+
+    with archive.transaction() as conn:
+        q = sa.select(sa.func.max(runs.c.id))
+        if stand is not None:
+            q = q.where(runs.c.stand_id == stand)
+        found = conn.execute(q).scalar()
+    return None if found is None else int(found)

@@ -51,6 +51,7 @@ SUBCOMMANDS: dict[str, str] = {
     "export": "export archived results for the plant's quality system (Q-DAS .dfq)",
     "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
     "station": "the operator station: a web screen at the stand (measure, correct, check)",
+    "opcua": "the OPC UA result server: identification, state and latest result for the MES",
     "tooling": "the tooling's own unbalance (index runs at 0 and 180 deg), subtracted from "
     "every run",
 }

@@ -27,6 +27,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--token-file", metavar="FILE", help="the token, in a file's first line")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser")
     p.add_argument(
+        "--opcua",
+        action="store_true",
+        help="also serve the results over OPC UA (stand opcua), on --opcua-port",
+    )
+    p.add_argument("--opcua-port", type=int, default=4840, help="(default: %(default)s)")
+    p.add_argument(
         "--max-seconds",
         type=float,
         default=120.0,
@@ -64,6 +70,15 @@ def run(args: argparse.Namespace) -> int:
         )  # fmt: skip
 
     station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
+    if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
+        from stand.opcua import ResultServer
+
+        def state() -> str:
+            return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"
+
+        ua = ResultServer(url, None, "127.0.0.1", args.opcua_port, state=state)
+        ua.run_in_thread()
+        print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
     where = f"http://{args.host}:{args.port}/" + (f"?token={token}" if token else "")
     print(f"station at {where} (rotor types in {config_dir}; runs in {runs}; Ctrl-C ends)",
           file=sys.stderr)  # fmt: skip

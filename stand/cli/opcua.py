@@ -1,0 +1,79 @@
+"""The OPC UA result server on its own: identification, state and the latest result of the
+stand, for a line's MES (:mod:`stand.opcua`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from stand.cli.common import add_archive_argument, archive_url
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--port", type=int, default=4840, help="TCP port (default: 4840)")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to serve on (default: 127.0.0.1; beyond this machine needs --user and "
+        "--password-file)",
+    )
+    p.add_argument("--config", metavar="CFG", help="the stand's config: its [stand] id, archive")
+    p.add_argument("--stand", metavar="ID", help="this stand's runs (default: the config's id)")
+    add_archive_argument(p)
+    p.add_argument("--user", help="the one user a client must log in as")
+    p.add_argument("--password-file", metavar="FILE", help="the user's password (first line)")
+
+
+def read_access(args: argparse.Namespace) -> object:
+    """The options' user and password (:class:`stand.opcua.Access`)."""
+    from stand.errors import UsageError
+    from stand.opcua import Access
+
+    password = None
+    if args.password_file:
+        try:
+            password = Path(args.password_file).read_text().splitlines()[0].strip()
+        except (OSError, IndexError, UnicodeDecodeError):
+            raise UsageError(f"{args.password_file}: cannot read a password from it") from None
+    if bool(args.user) != bool(password):
+        raise UsageError("stand opcua: --user and --password-file go together")
+    return Access(args.user, password)
+
+
+def run(args: argparse.Namespace) -> int:
+    import asyncio
+    import signal
+
+    from stand.errors import UsageError
+    from stand.opcua import ResultServer
+
+    if not 0 < args.port < 65536:
+        raise UsageError(f"--port must be 1 to 65535, got {args.port}")
+    cfg = None
+    if args.config:
+        from stand.config import load_config
+
+        cfg = load_config(args.config)[0]
+    stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)
+    server = ResultServer(
+        archive_url(args, cfg),
+        stand,
+        args.host,
+        args.port,
+        read_access(args),  # type: ignore[arg-type]
+    )
+
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, server.stop)
+        task = asyncio.create_task(server.serve())
+        while not server.ready.is_set() and not task.done():
+            await asyncio.sleep(0.05)
+        if server.ready.is_set():
+            print(f"OPC UA on {server.endpoint} (Ctrl-C stops)", file=sys.stderr)
+        await task
+
+    asyncio.run(main())
+    return 0
