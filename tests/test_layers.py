@@ -91,7 +91,7 @@ ALLOWED: dict[str, set[str]] = {
                                "stand.units", "stand.errors"},
     "stand/cli": NUMERIC | APP | {"stand.cli", "stand.config", "stand.sim", "stand.evaluate",
                                   "stand.live", "stand.report", "stand.units", "stand.printing",
-                                  "stand.station", "pydantic", "rich"},
+                                  "stand.station", "stand.opcua", "pydantic", "rich"},
 }  # fmt: skip
 """Layer (a folder or a file) -> the non-stdlib modules it may import (and their children;
 ``stand`` alone is the package's ``__init__``: its version)."""
