@@ -189,6 +189,16 @@ class ToolingTable(BaseModel):
     folder, beside the archive)."""
 
 
+class PlantTable(BaseModel):
+    """``[plant]``: the plant's systems that take each archived result."""
+
+    model_config = STRICT
+
+    mqtt_url: Annotated[str, Field(pattern=r"^mqtts?://[^\s/]+(:\d+)?/?$")] | None = None
+    """``mqtt://host[:port]`` (1883) or ``mqtts://`` (8883, TLS): each archived result is
+    published as JSON on ``stand/<stand id>/result``."""
+
+
 class ArchiveTable(BaseModel):
     """``[archive]``: where runs are archived (a database URL; default: the user's own)."""
 
@@ -228,6 +238,7 @@ class Config(BaseModel):
     display: DisplayTable = DisplayTable()
     archive: ArchiveTable | None = None
     tooling: ToolingTable | None = None
+    plant: PlantTable | None = None
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measure.measure` needs from the configuration."""

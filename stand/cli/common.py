@@ -365,6 +365,11 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
         ) from exc
     if not args.quiet:
         print(f"archived as run {run_id}", file=sys.stderr)
+    from stand.mqtt import publish_archived
+
+    said = publish_archived(result, cfg)
+    if said and (not args.quiet or said.startswith("not")):
+        print(said, file=sys.stderr)
 
 
 def archive_url(args: argparse.Namespace, cfg: Any = None) -> str:

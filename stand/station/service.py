@@ -304,6 +304,13 @@ class Station:
             run_id = archive_result(result, self.archive_url, config=str(config))
         except StandError as exc:
             notes.append(f"not archived ({exc}); the run is kept in {run}")
+            return run_id, tuple(notes)
+        from stand.mqtt import publish_archived
+        from stand.pipeline import load_config_text
+
+        said = publish_archived(result, load_config_text(str(config))[0])
+        if said and said.startswith("not"):
+            notes.append(said)
         return run_id, tuple(notes)
 
     # -- the archive ---------------------------------------------------------------------
