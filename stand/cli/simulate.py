@@ -57,11 +57,11 @@ def run(args: argparse.Namespace) -> int:
 
         check_output(args.out, force=args.force)  # before the work, and again when written
     job = job_from(args)
-    stored = None
+    stored, believed = None, None
     if args.config:
         from stand.pipeline import load_config_text
 
-        stored = load_config_text(args.config)[2]
+        believed, _, stored = load_config_text(args.config)
     scene, params, source = load_scene(args.scene)
     scene = with_masses(scene, scene_masses(args), args.rpm, args.index)
     if args.seed is not None:
@@ -82,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
                 "config_toml": stored or config_toml(scene.config()),
                 "software": f"stand {__version__}",
                 JOB_ATTR: job.to_text() if job else "",
-                STAND_ATTR: scene.stand.stand_id(),
+                STAND_ATTR: (believed or scene).stand.stand_id(),
             },
         )
         write_recording(
