@@ -59,6 +59,8 @@ def _with_line(path: Path, text: bytes) -> RecordingError:
     return RecordingError("not a candump log", path=str(path))  # pragma: no cover
 
 
+EXACT_TICKS = 1 << 53
+"""A stamp's integer count of its last digit below this is an exact double."""
 CANDUMP_BLOCK = 1 << 23
 """Bytes of a candump log parsed at a time (whole lines): bounds the parser's memory."""
 _HEX = np.full(256, 255, np.uint8)
@@ -104,14 +106,19 @@ def _group(block: np.ndarray) -> tuple[np.ndarray, ...] | None:
     if (channel == 32).any():
         return None
     whole, frac = _DIGIT[block[:, 1:dot]], _DIGIT[block[:, dot + 1 : close]]
-    if (whole == 255).any() or (frac == 255).any() or whole.shape[1] + frac.shape[1] > 15:
-        return None  # a sign, or more digits than a double holds exactly: the slow path
-    ticks = np.zeros(len(block), np.int64)
+    if (whole == 255).any() or (frac == 255).any() or whole.shape[1] + frac.shape[1] > 18:
+        return None  # a sign, or more digits than an int64 holds: the slow path
+    ticks = np.zeros(len(block), np.int64)  # the stamp as an integer count of its last digit
     for k in range(whole.shape[1]):
         ticks = ticks * 10 + whole[:, k]
     for k in range(frac.shape[1]):
         ticks = ticks * 10 + frac[:, k]
-    t_s = ticks / float(10 ** frac.shape[1])  # one correctly rounded division, as float()
+    if int(ticks.max()) >= EXACT_TICKS:
+        return None  # the count itself would round as a double: the slow path
+    # the count and the power of ten are exact doubles, so this is one correctly rounded
+    # division: the double nearest the decimal, exactly what float() of the text gives
+    # (epoch stamps with microseconds, 16 digits, are below 2**53)
+    t_s = ticks.astype(np.float64) / float(10 ** frac.shape[1])
     can_id = _hex_value(block[:, sp2 + 1 : h])
     nib = _HEX[block[:, h + 1 : end]]
     if can_id is None or (nib == 255).any():
@@ -343,18 +350,22 @@ def messages_from_frames(frames: Frames, channel: str | None = None) -> Iterator
         )
 
 
-def iter_log(path: str | Path, *, fast: bool = False) -> Iterator[Frames]:
+def iter_log(
+    path: str | Path, *, fast: bool = False, warn: list[Diagnostic] | None = None
+) -> Iterator[Frames]:
     """Any python-can log in blocks of frames (candump in blocks; other formats whole).
 
     ``fast``: a candump log block by block as it is read, raising
     :class:`UnusualLogError` if a block needs the slow path (start again without).
+    ``warn`` collects what the reader read around (a cut line, a short BLF, lines that
+    are not frames).
     """
     path = Path(path)
     check_input(path)
     if path.suffix.lower() == ".log":
-        yield from (iter_candump_fast(path) if fast else iter_candump(path))
+        yield from (iter_candump_fast(path) if fast else iter_candump(path, warn))
     else:
-        yield read_log(path)
+        yield read_log(path, warn)
 
 
 _TEXT_LOG_LINE = {

@@ -586,14 +586,15 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
         from stand.drivers.logs import iter_log
         from stand.errors import UnusualLogError
 
+        warn: list[Diagnostic] = []
         try:  # a candump log streams block by block; anything unusual: again, the slow way
-            for block in iter_log(path, fast=True):
+            for block in iter_log(path, fast=True, warn=warn):
                 builder.add(block)
         except UnusualLogError:
             builder = StreamBuilder()
-            for block in iter_log(path):
+            for block in iter_log(path, warn=warn):
                 builder.add(block)
-        rec = Recording(str(path), Frames.empty())
+        rec = Recording(str(path), Frames.empty(), warnings=tuple(warn))
     return rec, builder.streams(strict_status=strict_status)
 
 

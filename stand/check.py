@@ -57,7 +57,11 @@ def check_against(
             "(or say --check-any)"
         )
     b, a = before.solution.U_kg_m, after.solution.U_kg_m
-    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])))
+    said = tuple(
+        replace(w, message=f"the run before ({previous}): {w.message}")
+        for w in (*rec.warnings, *streams.warnings)
+    )
+    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])), said)
 
 
 SAME_STAND = ("M1", "M2", "C1", "C2", "H1", "H2")
@@ -116,4 +120,6 @@ def with_check(
     """``result`` as the check of ``previous``: before and after, URR, and what a worse
     plane suggests (:func:`check_against`, :func:`check_notes`)."""
     check = check_against(previous, cfg, params, result.measurement, strict=strict, matrix=matrix)
-    return replace(result, check=check, warnings=(*result.warnings, *check_notes(check)))
+    return replace(
+        result, check=check, warnings=(*result.warnings, *check.warnings, *check_notes(check))
+    )

@@ -399,7 +399,7 @@ def solve_recording(
         stand_id=str(rec.meta.get(STAND_ATTR) or cfg.stand.stand_id()),
     )
     return build_result(
-        m, cfg, params, stream_warnings=streams.warnings, provenance=prov,
+        m, cfg, params, stream_warnings=(*rec.warnings, *streams.warnings), provenance=prov,
         options=options, streams=streams,
     )  # fmt: skip
 

@@ -131,6 +131,8 @@ class Check:
     previous_run: str
     before_kg_m: tuple[complex, complex]
     after_kg_m: tuple[complex, complex]
+    warnings: tuple[Diagnostic, ...] = ()
+    """What reading the run before left to say (a cut line, a short log ...)."""
 
     @property
     def urr(self) -> tuple[float | None, float | None]:

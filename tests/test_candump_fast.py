@@ -46,8 +46,9 @@ def test_fast_and_regular_expression_agree(
     path.write_text("\n".join(lines) + ("\n" if last_newline else ""))
     fast = logs._fast_candump(np.fromfile(path, np.uint8))
     slow = logs._read_candump_text(path)
-    digits = max(len(x.split(")")[0].replace(".", "")) - 1 for x in lines)
-    assert fast is not None or digits > 15  # more digits than a double holds: the slow path
+    # a stamp whose digits, as one integer, are no exact double takes the slow path
+    ticks = max(int(x[1 : x.index(")")].replace(".", "")) for x in lines)
+    assert (fast is None) == (ticks >= 2**53), ticks
     assert fast is None or same(fast, slow)
     assert same(logs.read_candump(path), slow)
 
@@ -103,3 +104,22 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
     for n in (1, 2):
         assert np.array_equal(got.nodes[n].index, want.nodes[n].index)
         assert np.array_equal(got.nodes[n].counts, want.nodes[n].counts)
+
+
+def test_epoch_stamps_take_the_fast_path_with_the_same_doubles(tmp_path: Path) -> None:
+    """candump -l and python-can's logger stamp frames with epoch seconds and microseconds
+    (16 digits): the fast path takes them (no fallback) and gives the very doubles float()
+    gives the text; 19 digits (beyond an int64) fall back, with the same answer."""
+    stamps = [f"({1763799999 + k // 7}.{(k * 131071) % 1_000_000:06d})" for k in range(3000)]
+    text = "".join(f"{s} can0 141#A00F6400000100{k % 100:02d} R\n" for k, s in enumerate(stamps))
+    path = tmp_path / "epoch.log"
+    path.write_text(text)
+    fast = list(logs.iter_candump_fast(path))  # raises UnusualLogError on a fallback
+    t = np.concatenate([f.t_s for f in fast])
+    assert np.array_equal(t, [float(s[1:-1]) for s in stamps])
+    assert same(logs._fast_candump(np.frombuffer(text.encode(), np.uint8)),
+                logs._read_candump_text(path))  # fmt: skip
+    long = tmp_path / "long.log"
+    long.write_text("(1763799999999.999999) can0 141#00\n")
+    assert logs._fast_candump(np.frombuffer(long.read_bytes(), np.uint8)) is None
+    assert logs.read_candump(long).t_s[0] == float("1763799999999.999999")

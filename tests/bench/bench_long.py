@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 STAND = str(Path(sys.executable).with_name("stand"))
+EPOCH_S = 1763799999.0
+"""Host stamps start here (2025-11-22, epoch seconds): 16 digits with microseconds."""
 HEX = np.full(256, 255, np.uint8)
 for _k, _c in enumerate(b"0123456789ABCDEF"):
     HEX[_c] = _k
@@ -134,6 +136,9 @@ def make_run(tmp: Path, seconds: float) -> tuple[Path, Path, Path]:
     data["run"]["seconds"] = seconds
     scene = type(sc).model_validate(data, strict=False)
     frames = simulate(scene, p).frames
+    # stamped as candump -l and python-can's logger stamp them: epoch seconds, microseconds
+    frames = type(frames)(frames.t_s + EPOCH_S, frames.can_id, frames.dlc, frames.data,
+                          frames.flags)  # fmt: skip
     cfg = tmp / "cfg.toml"
     cfg.write_text(config_toml(scene.config()))
     h5 = tmp / f"run{seconds:g}.h5"
