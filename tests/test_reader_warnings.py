@@ -74,3 +74,23 @@ def test_a_reader_warning_of_the_run_before_reaches_the_check(
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     assert any("the run before" in w and "cut short" in w for w in out["warnings"]), out
+
+
+@pytest.mark.parametrize(
+    "args",
+    [["--rpm", "1e300", "--unbalance", "100@0", "--unbalance", "100@0"],
+     ["--rpm", "999999", "--unbalance", "1e300@0", "--unbalance", "100@0"],
+     ["--rpm", "1e300", "--unbalance", "100@0", "--unbalance", "100@0", "--json"]],
+)  # fmt: skip
+def test_forward_beyond_any_stand_is_one_line_and_no_numpy_warning(args: list[str]) -> None:
+    """Refused before any arithmetic: nothing of numpy's (RuntimeWarning: overflow) is
+    printed, not even by a fresh interpreter (the warnings filter of the tests is not
+    the user's)."""
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "stand.cli", "forward", "--config", CFG, *args],
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert r.returncode == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "beyond any" in lines[0], r.stderr

@@ -137,7 +137,16 @@ def parse_unbalance(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(
             f"expected a finite unbalance >= 0 g mm and a finite angle, got {text!r}"
         )
+    if g_mm > MAX_UNBALANCE_G_MM:
+        raise argparse.ArgumentTypeError(
+            f"{g_mm:g} g mm is beyond any rotor (at most {MAX_UNBALANCE_G_MM:g} g mm: a tonne "
+            "at a metre)"
+        )
     return g_mm, deg
+
+
+MAX_UNBALANCE_G_MM = 1e9
+"""The largest unbalance typed in: 1 t at 1 m (the model's arithmetic stays meaningful)."""
 
 
 def print_warnings(warnings: Iterable[Diagnostic]) -> None:
