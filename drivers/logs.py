@@ -215,11 +215,25 @@ def read_candump(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     ------
     RecordingError
         Naming the file and the first line that is not a frame.
+    TooLargeError
+        More frames than this machine has memory for (by the file's size).
     """
+    from stand.drivers.budget import log_budget
+
+    log_budget(path)
     return Frames.concat(list(iter_candump(path, warn)))
 
 
 def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
+    """A candump log read whole by the regular expression (refused first when this machine
+    has no memory for it: :func:`stand.drivers.budget.slow_text_budget`)."""
+    from stand.drivers.budget import slow_text_budget
+
+    slow_text_budget(path)
+    return _read_candump_whole(path, warn)
+
+
+def _read_candump_whole(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read a candump ``.log`` (``candump -L`` format, as python-can writes it).
 
     A last line cut short (no newline after it, as a killed candump leaves it)

@@ -544,6 +544,9 @@ def _read_checked(
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
         with _h5py().File(p, "r", locking=False) as f:
             n, meta, warnings = _open_run(f, p)
+            from stand.drivers.budget import frames_budget
+
+            frames_budget(n, str(p))
             step = max(n, 1) if rows is None else rows
             for lo in range(0, n, step):
                 block = _frame_rows(f, lo, min(lo + step, n))
@@ -576,6 +579,7 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
     """
+    from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder
 
     builder = StreamBuilder()
@@ -587,6 +591,8 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
         from stand.errors import UnusualLogError
 
         warn: list[Diagnostic] = []
+        if Path(path).suffix.lower() == ".log" and Path(path).is_file():
+            log_budget(Path(path))
         try:  # a candump log streams block by block; anything unusual: again, the slow way
             for block in iter_log(path, fast=True, warn=warn):
                 builder.add(block)

@@ -19,7 +19,10 @@ from typing import Any
 
 
 def _restore(cls: type[StandError], args: tuple[Any, ...], state: dict[str, Any]) -> StandError:
-    err = cls.__new__(cls)
+    try:
+        err = cls.__new__(cls)
+    except TypeError:  # MemoryError's own __new__ refuses a subclass made this way
+        err = BaseException.__new__(cls)
     Exception.__init__(err, *args)
     err.__dict__.update(state)
     return err
@@ -256,3 +259,23 @@ class StationBusyError(StandError, RuntimeError):
     def __init__(self, message: str, *, running: str):
         self.running = running
         super().__init__(message)
+
+
+class TooLargeError(StandError, MemoryError):
+    """An input whose work would need more memory than this machine has: refused before
+    anything is allocated.
+
+    Attributes
+    ----------
+    what : str
+        The file or scene.
+    needed_bytes, available_bytes : int
+        The estimate, and what the machine has free for it.
+    """
+
+    def __init__(self, message: str, *, what: str, needed_bytes: int, available_bytes: int):
+        self.what, self.needed_bytes, self.available_bytes = what, needed_bytes, available_bytes
+        super().__init__(
+            f"{what}: {message}: it would need about {needed_bytes / 1e9:.3g} GB of memory, "
+            f"this machine has {available_bytes / 1e9:.3g} GB free"
+        )

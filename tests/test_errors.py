@@ -24,6 +24,7 @@ SAMPLES = {
     "BusTimeoutError": {"channel": "virtual:x", "timeout_s": 2.0},
     "ArchiveError": {"url": "sqlite:///a.sqlite"},
     "StationBusyError": {"running": "the check run of A-1"},
+    "TooLargeError": {"what": "run.log", "needed_bytes": 10**11, "available_bytes": 10**10},
 }  # fmt: skip
 CLASSES = [
     c for _, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, errors.StandError)
@@ -49,6 +50,9 @@ def test_every_error_pickles_whole_and_is_a_stdlib_type(cls: type[errors.StandEr
     back = pickle.loads(pickle.dumps(err))
     assert type(back) is cls and str(back) == str(err) and back.__dict__ == err.__dict__
     assert (
-        any(issubclass(cls, t) for t in (ValueError, OSError, ConnectionError, RuntimeError))
+        any(
+            issubclass(cls, t)
+            for t in (ValueError, OSError, ConnectionError, RuntimeError, MemoryError)
+        )
         or cls is errors.StandError
     )

@@ -266,6 +266,28 @@ def _blf_short(d: Path, run: Path) -> tuple[list[str], str]:
     return ["inspect", str(p)], ""
 
 
+# --- inputs too large for this machine: refused before anything is allocated ------------
+@case("huge: a sparse 40 GB candump log")
+def _sparse(d: Path, run: Path) -> tuple[list[str], str]:
+    p = d / "run.log"
+    with p.open("wb") as f:
+        f.truncate(40 * 10**9)  # sparse: no disk used
+    return ["solve", str(p), "--config", _cfg(d)], "GB of memory"
+
+
+for _name, _old, _new in [
+    ("a scene of 1e6 s", "seconds = 8.0", "seconds = 1e6"),
+    ("a scene at 1e9 rpm", "rpm = 900.0", "rpm = 1e9"),
+]:  # fmt: skip
+
+    def _huge_scene(d: Path, run: Path, old=_old, new=_new) -> tuple[list[str], str]:  # type: ignore[no-untyped-def]
+        text = (ROOT / "stand" / "data" / "scenes" / "demo.toml").read_text()
+        (d / "scene.toml").write_text(text.replace(old, new))
+        return ["simulate", str(d / "scene.toml"), "--out", str(d / "x.h5")], "GB of memory"
+
+    case(f"huge: {_name}")(_huge_scene)
+
+
 # --- configs -----------------------------------------------------------------------------
 for _name, _text, _says in [
     ("TOML nested 5000 deep", "a = " + "[" * 5000 + "]" * 5000 + "\n", "cfg.toml"),

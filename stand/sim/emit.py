@@ -113,9 +113,26 @@ def _sensor_side(
     return a
 
 
+def scene_frames(scene: Scene) -> float:
+    """About how many frames a scene makes: per node a SAMPLES frame per 3 samples, a MARK
+    per revolution, a STATUS per second (the run-up's ramp counted at full speed)."""
+    seconds = scene.run.seconds + (scene.effects.run_up.ramp_s if scene.effects.run_up else 0)
+    per_s = scene.nodes.rate_hz / 3 + scene.run.rpm / 60 + 1
+    return 2 * per_s * seconds
+
+
+def scene_budget(scene: Scene) -> None:
+    """Refuse a scene whose frames this machine has no memory for (before any is made)."""
+    from stand.drivers.budget import frames_budget
+
+    frames_budget(scene_frames(scene), f"the scene ({scene.run.seconds:g} s at "
+                  f"{scene.run.rpm:g} rpm)", "to simulate")  # fmt: skip
+
+
 def simulate(scene: Scene, p: StandParameters) -> Simulation:
     """Simulate the scene: its frames, and the truth they were made from."""
     start = time.perf_counter()
+    scene_budget(scene)
     e = scene.effects
     rate = scene.nodes.rate_hz
     speed, t_start = scene_speed(scene)
