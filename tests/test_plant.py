@@ -55,6 +55,18 @@ def _stand(url: str, stand: int) -> tuple[float, list[int]]:
     return time.perf_counter() - start, shared
 
 
+def _fresh_database(postgres_url: str, name: str) -> str:
+    """A new, empty database on the session's server (other tests archive into theirs)."""
+    import sqlalchemy as sa
+
+    engine = sa.create_engine(postgres_url, isolation_level="AUTOCOMMIT")
+    with engine.connect() as conn:
+        conn.exec_driver_sql(f"DROP DATABASE IF EXISTS {name}")
+        conn.exec_driver_sql(f"CREATE DATABASE {name}")
+    engine.dispose()
+    return postgres_url.replace("/postgres?", f"/{name}?")
+
+
 def test_ten_stands_lose_and_double_nothing_on_postgresql(postgres_url: str) -> None:
     """Ten processes archiving 100 runs each at once (and 20 runs all ten archive): 1020 rows,
     each once, each stand's 100 under its id, the shared ones with one id everywhere."""
@@ -63,6 +75,7 @@ def test_ten_stands_lose_and_double_nothing_on_postgresql(postgres_url: str) -> 
     from stand.archive import Archive
     from stand.archive.schema import planes, runs
 
+    postgres_url = _fresh_database(postgres_url, "ten_stands")
     ctx = multiprocessing.get_context("spawn")
     start = time.perf_counter()
     with ctx.Pool(TEN) as pool:
