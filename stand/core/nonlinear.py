@@ -36,7 +36,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import nnls
 
 from stand.core.model import ComplexArray, StandParameters, inverse_matrix, mass_matrix
 
@@ -152,7 +151,12 @@ def _real(z: ComplexArray) -> np.ndarray:
 
 
 def fit_kind(
-    p: StandParameters, omega: float, A: ComplexArray, cov3: np.ndarray, kind: str
+    p: StandParameters,
+    omega: float,
+    A: ComplexArray,
+    cov3: np.ndarray,
+    kind: str,
+    min_chi2: float = 0.0,
 ) -> OddFit:
     """Fit the odd harmonics ``a = columns @ size`` with ``size >= 0``, weighted by noise.
 
@@ -164,14 +168,17 @@ def fit_kind(
     A = np.atleast_2d(np.asarray(A, dtype=complex))
     orders = orders_of(A)
     a = np.concatenate([A[n - 1] for n in orders])
-    return fit_columns(kind, columns(p, omega, A, kind, orders), a, cov3)
+    return fit_columns(kind, columns(p, omega, A, kind, orders), a, cov3, min_chi2)
 
 
-def fit_columns(kind: str, B: ComplexArray, a: ComplexArray, cov3: np.ndarray) -> OddFit:
+def fit_columns(
+    kind: str, B: ComplexArray, a: ComplexArray, cov3: np.ndarray, min_chi2: float = 0.0
+) -> OddFit:
     """``a = B @ size``, ``size >= 0``: non-negative least squares whitened by the noise.
 
     ``a`` holds ``m`` orders of both nodes, ``(a_1, a_2)`` per order; each order's
-    (4, 4) covariance is ``cov3``.
+    (4, 4) covariance is ``cov3``.  Harmonics whose chi^2 is below ``min_chi2`` are not
+    fitted (nothing stands out of the noise to explain): sizes 0, residual 1.
     """
     n = len(a)  # complex entries; _real stacks their real parts, then their imaginary parts
     C = np.zeros((2 * n, 2 * n))
@@ -180,7 +187,11 @@ def fit_columns(kind: str, B: ComplexArray, a: ComplexArray, cov3: np.ndarray) -
         C[np.ix_(idx, idx)] = cov3
     L = np.linalg.cholesky(C + np.eye(2 * n) * 1e-30 * max(np.trace(C), 1e-300))
     y = np.linalg.solve(L, _real(a))
+    if float(y @ y) < min_chi2:
+        return OddFit(kind=kind, size_n=np.zeros(B.shape[1]), residual=1.0, chi2=float(y @ y))
     X = np.linalg.solve(L, _real(B))
+    from scipy.optimize import nnls  # here: scipy.optimize takes 0.3 s to import
+
     size, _ = nnls(X, y)
     resid = a - B @ size
     return OddFit(
@@ -244,7 +255,7 @@ def detect(
     """
     best: Nonlinearity | None = None
     for kind in KINDS:
-        fit = fit_kind(p, omega, A, cov3, kind)
+        fit = fit_kind(p, omega, A, cov3, kind, CHI2_MIN)
         if fit.residual > RESIDUAL_MAX or fit.chi2 < CHI2_MIN:
             continue
         dU = implied_error(p, omega, A, fit)
