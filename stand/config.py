@@ -183,7 +183,8 @@ class ToolingTable(BaseModel):
     model_config = STRICT
 
     name: Annotated[str, Field(pattern=r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")]
-    """Letters, digits, ``. _ -`` (it names a file in the tooling folder)."""
+    """Letters, digits, ``. _ -`` (it names a file in the tooling folder; the same rule as
+    :data:`stand.tooling.TOOLING_NAME`)."""
     folder: Annotated[str, Field(min_length=1, max_length=4000)] | None = None
     """Where the tooling's measurement is kept (default: ``tooling/`` in the user's data
     folder, beside the archive)."""

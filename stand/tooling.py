@@ -12,6 +12,7 @@ covariance added to the run's (the 95 % intervals hold both).
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -24,6 +25,8 @@ from stand.errors import ConfigError, RecordingError
 
 TOOLING_VERSION = 1
 """Version of the stored tooling file."""
+TOOLING_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+"""What a tooling may be called (its file's name): the config's ``[tooling] name`` rule."""
 
 
 @dataclass(frozen=True)
@@ -138,6 +141,12 @@ def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | No
     name = name or (cfg.tooling.name if cfg.tooling else None)
     if not name:
         raise ConfigError("name the tooling: --name NAME, or [tooling] name in the config")
+    if not TOOLING_NAME.fullmatch(name):
+        raise ConfigError(
+            f"a tooling's name is 1 to 64 letters, digits, '.', '_' or '-' (it names a file), "
+            f"got {name!r}",
+            key="tooling.name",
+        )
     U_t, cov_t, U_r, cov_r = index_split(
         m0.solution.U_kg_m,
         np.asarray(m0.solution.cov_U).real,

@@ -102,6 +102,9 @@ def test_tooling_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFix
     (tmp_path / "toolings" / "mandrel-A.json").write_text("{")
     assert main(["solve", run]) == 2
     assert "mandrel-A.json: not a tooling file" in capsys.readouterr().err
+    assert main(["tooling", "measure", run, run, "--name", "../escape"]) == 2
+    assert "[tooling.name]" in capsys.readouterr().err
+    assert not (tmp_path / "escape.json").exists()
     bad = tmp_path / "bad.toml"
     bad.write_text(Path(cfg).read_text().replace('name = "mandrel-A"', 'name = "../x"'))
     assert main(["solve", run, "--config", str(bad)]) == 2

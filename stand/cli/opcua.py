@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from stand.cli.common import add_archive_argument, archive_url
 
@@ -25,7 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--password-file", metavar="FILE", help="the user's password (first line)")
 
 
-def read_access(args: argparse.Namespace) -> object:
+def read_access(args: argparse.Namespace) -> Any:
     """The options' user and password (:class:`stand.opcua.Access`)."""
     from stand.errors import UsageError
     from stand.opcua import Access
@@ -61,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         stand,
         args.host,
         args.port,
-        read_access(args),  # type: ignore[arg-type]
+        read_access(args),
     )
 
     async def main() -> None:
