@@ -33,6 +33,7 @@ APP = DRIVERS | {
     "stand.archive",
     "stand.check",
     "stand.tooling",
+    "stand.field",
 }
 
 ALLOWED: dict[str, set[str]] = {
@@ -68,6 +69,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/correct.py": NUMERIC | CORE,
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},
     "stand/influence.py": NUMERIC | APP,
+    # the field method in N planes from readings at several speeds
+    "stand/field.py": NUMERIC | APP | {"stand.config"},
     "stand/check.py": NUMERIC | APP,
     # the archive: results into a database (SQLAlchemy; schema migrations by Alembic)
     "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},

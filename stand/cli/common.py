@@ -49,6 +49,17 @@ def parse_rpm(text: str) -> float:
     return rpm
 
 
+def positive_float(text: str) -> float:
+    """A finite number > 0 (a mass, a length)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
 def parse_mass(text: str) -> tuple[int, float, float, float | None]:
     """``PLANE:GRAMS@DEG[:RADIUS_MM]``: a mass on (grams > 0) or off (< 0) the simulated
     rotor, at an angle from the reference mark against the direction of rotation."""

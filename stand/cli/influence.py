@@ -9,18 +9,26 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
-from stand.cli.common import add_force_argument, print_warnings, write_text_output
+from stand.cli.common import (
+    add_force_argument,
+    positive_float,
+    print_warnings,
+    write_text_output,
+)
 from stand.cli.format import dump_json, show
 from stand.config import STRICT
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.result import json_text
 
 PLANES = 2
+"""The planes of the stand's own answer (a run solved through the matrix)."""
+MAX_PLANES = 16
+"""The most correction planes a runs file may name."""
 
 
 class TrialTable(BaseModel):
     model_config = STRICT
-    plane: Annotated[int, Field(ge=1, le=PLANES)]
+    plane: Annotated[int, Field(ge=1, le=MAX_PLANES)]
     mass_g: PositiveFloat
     angle_deg: FiniteFloat
     radius_mm: PositiveFloat | None = None
@@ -31,14 +39,25 @@ class RunEntry(BaseModel):
 
     model_config = STRICT
     sensors: list[Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]] | None = None
-    file: str | None = None
+    file: str | Annotated[list[str], Field(min_length=1)] | None = None
+    speeds_rpm: list[PositiveFloat] | None = None
     trial: TrialTable | None = None
     trial_left_on: bool = False
+
+
+Pair = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
 
 
 class RunsFile(BaseModel):
     model_config = STRICT
     runs: Annotated[list[RunEntry], Field(min_length=1)]
+    matrix: (
+        Annotated[list[Annotated[list[Pair], Field(min_length=1)]], Field(min_length=1)] | None
+    ) = None
+    """Influence coefficients typed in: a row per reading, ``[amplitude, phase_deg]`` per
+    plane (reading per g at the trial radius)."""
+    weights: list[PositiveFloat] | None = None
+    """Per reading, for ``--method wls`` (and ``minmax``)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -62,11 +81,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="MATRIX.json",
         help="use a stored influence matrix: only the first run is needed",
     )
+    p.add_argument(
+        "--method",
+        choices=("ls", "wls", "minmax"),
+        default="ls",
+        help="least squares (default), weighted least squares (weights = [...] per reading in "
+        "the runs file, or each recorded reading's noise), or min-max (the smallest worst "
+        "reading)",
+    )
+    p.add_argument(
+        "--max-mass-g",
+        type=positive_float,
+        metavar="G",
+        help="the largest correction mass in any plane [g] (at its radius)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def _entries(path: str) -> list[Any]:
-    """``(file or None, typed readings, Trial, left_on)`` per run of the runs file."""
+def _entries(path: str) -> tuple[RunsFile, list[Any]]:
+    """The runs file and ``(file(s) or None, typed readings, Trial, left_on)`` per run."""
     from stand.calib.influence import Trial, phasors
     from stand.config import read_toml, validate
 
@@ -95,34 +128,55 @@ def _entries(path: str) -> list[Any]:
             t = e.trial  # no radius: the plane's correction radius (set by influence_runs)
             r = None if t.radius_mm is None else t.radius_mm * 1e-3
             trial = Trial(t.plane, t.mass_g * 1e-3, t.angle_deg, r)
-        run_file = None if e.file is None else str(Path(path).parent / e.file)
+        files = [e.file] if isinstance(e.file, str) else e.file
+        run_file = None if files is None else [str(Path(path).parent / f) for f in files]
         out.append((run_file, typed, trial, e.trial_left_on))
     if any(f is None for f, *_ in out) and any(f is not None for f, *_ in out):
         raise ConfigError(
             "typed-in and recorded runs are mixed: one kind per runs file", source=path
         )
-    return out
+    return spec, out
+
+
+def _is_field(spec: RunsFile, entries: list[Any], args: argparse.Namespace) -> bool:
+    """Whether the runs ask for more than the stand's two-plane answer at one speed."""
+    planes = {e[2].plane for e in entries if e[2] is not None}
+    return bool(
+        spec.matrix is not None
+        or (planes and max(planes) > PLANES)
+        or args.method != "ls"
+        or args.max_mass_g is not None
+        or any(e.speeds_rpm for e in spec.runs)
+        or any(f is not None and len(f) > 1 for f, *_ in entries)
+        or entries[0][0] is None
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     from stand.influence import influence_runs
 
-    entries = _entries(args.runs)
-    recorded = entries[0][0] is not None
+    spec, entries = _entries(args.runs)
+    if _is_field(spec, entries, args):
+        if args.matrix:
+            raise UsageError(
+                "--matrix: a stored matrix serves the stand's two-plane answer at its speed; "
+                "for N planes or several speeds put the trial runs (or matrix = ...) in the "
+                "runs file"
+            )
+        return run_field(args, spec, entries)
+    entries = [(f[0], typed, trial, on) for f, typed, trial, on in entries]
     runs, cfg, params, text, omega = influence_runs(entries, args.config)
     tried = {r.trial.plane for r in runs[1:] if r.trial is not None}
     if args.matrix:
         from stand.matrix import read_matrix
 
         matrix = read_matrix(args.matrix)
-        matrix.check(None if cfg is None else cfg.rotor.type, live=recorded)
-    elif recorded and len(tried) < PLANES and len(runs) == 1 + len(tried) and omega:
+        matrix.check(None if cfg is None else cfg.rotor.type, live=True)
+    elif len(tried) < PLANES and len(runs) == 1 + len(tried) and omega:
         return _suggest(args, runs, params, omega, sorted(set(range(1, PLANES + 1)) - tried))
     else:
         matrix = _measured_matrix(args, runs, cfg, text, entries, omega)
-    if recorded:
-        return _recorded(args, entries[0][0], runs, matrix)
-    return _typed(args, runs, matrix, cfg, params)
+    return _recorded(args, entries[0][0], runs, matrix)
 
 
 def _measured_matrix(
@@ -223,78 +277,75 @@ def _suggest(
     return 0
 
 
-def _weight(w: Any) -> dict[str, Any]:
-    return {
-        "mass_g": round(w.mass_kg * 1e3, 4),
-        "angle_deg": round(w.angle_deg, 2),
-        "position": None if w.position is None else w.position + 1,
-    }
+def run_field(args: argparse.Namespace, spec: Any, entries: list[Any]) -> int:
+    """`stand influence` for N planes, several speeds, another method or a mass cap."""
+    from stand.field import field_from_runs, field_json
 
-
-def _typed(args: argparse.Namespace, runs: list[Any], matrix: Any, cfg: Any, params: Any) -> int:
-    """Typed-in readings: the unbalance through the matrix, corrected as the config says."""
-    from stand.core.balance import correction
-    from stand.core.influence import solve_influence
-    from stand.core.model import unbalance_to_polar
-    from stand.pipeline import tolerance_of
-
-    sol = solve_influence(matrix.imap, runs[0].readings)
-    c = None if cfg is None else cfg.correction
-    R = (1.0, 1.0) if params is None else (params.R1, params.R2)
-    tol = None if cfg is None else tolerance_of(cfg, params)
-    planes = []
-    for i, U in enumerate(sol.U_kg_m):
-        corr = correction(
-            complex(U),
-            R[i],
-            remove=c is not None and c.mode == "remove",
-            positions=0 if c is None else c.positions,
-            position0_deg=0.0 if c is None else c.position0_deg,
-            steps_kg=[] if c is None else [w * 1e-3 for w in c.weights_g],
-            step_kg=0.0 if c is None else c.weight_step_g * 1e-3,
-        )
-        (q,), (phi,) = unbalance_to_polar([U])
-        per = None if tol is None else tol.per_plane_kg_m[i]
-        planes.append(
-            {
-                "plane": i + 1,
-                "action": "remove" if corr.remove else "add",
-                "weights": [_weight(w) for w in corr.weights],
-                "unbalance_mass_g": round(q / R[i] * 1e3, 4),
-                "unbalance_angle_deg": round(float(phi), 2),
-                "within_tolerance": None if per is None else bool(q <= per),
-            }
-        )
-    out: dict[str, Any] = {
-        "planes": planes,
-        "radius": "the trial radius" if params is None else "each plane's correction radius",
-        "influence_per_g": [  # in the instrument's own convention (conjugated back)
-            [
-                [round(z.real * 1e-3 * R[j], 6), -round(z.imag * 1e-3 * R[j], 6)]
-                for j, z in enumerate(row)
-            ]
-            for row in matrix.imap.alpha
-        ],
-        "condition_number": round(sol.condition_number, 4),
-        "warnings": [w.message for w in sol.diagnostics],
-    }
+    result, notes, cfg = field_from_runs(
+        spec,
+        entries,
+        config=args.config,
+        method=args.method,
+        max_mass_g=args.max_mass_g,
+        source=args.runs,
+    )
+    if args.save:
+        _save(args, result, cfg, entries)
+    out = field_json(result, cfg)
+    out["warnings"] = [n.message for n in [*notes, *result.solution.diagnostics]]
     if args.json:
         dump_json(out)
         return 0
-    print(
-        f"correction, at {out['radius']} (angles in the same sense and from the same zero as "
-        "the trial angles):"
+    _print(out)
+    print_warnings([*notes, *result.solution.diagnostics])
+    return 0
+
+
+def _save(args: argparse.Namespace, result: Any, cfg: Any, entries: list[Any]) -> None:
+    from stand.core.influence import InfluenceMap
+    from stand.matrix import matrix_document
+
+    try:
+        imap = InfluenceMap(result.alpha)
+    except ModelError as exc:
+        raise ConfigError(f"--save: {exc}", source=args.runs) from None
+    doc = matrix_document(
+        imap,
+        readings="typed in" if result.typed else "support acceleration",
+        rpm=None,
+        rotor_type=None if cfg is None else cfg.rotor.type,
+        config_sha256=None,
+        runs=[f for files, *_ in entries if files for f in files],
     )
-    for p in planes:
+    doc["speeds_rpm"] = [r.speed_rpm for r in result.readings]
+    write_text_output(args.save, json_text(doc), force=args.force, inputs=[args.runs])
+
+
+def _print(out: dict[str, Any]) -> None:
+    print(
+        f"correction in {len(out['planes'])} planes ({out['method_name']}), at "
+        f"{out['radius']} (angles in the same sense and from the same zero as the trial angles):"
+    )
+    for p in out["planes"]:
         ws = " + ".join(
             f"{w['mass_g']:.3f} g at {w['angle_deg']:.1f} deg"
             + ("" if w["position"] is None else f" (position {w['position']})")
             for w in p["weights"]
         )
-        verdict = {None: "", True: " (within tolerance: no correction needed)", False: ""}
-        print(f"  plane {p['plane']}: {p['action']} {ws}{verdict[p['within_tolerance']]}")
-    print(f"influence matrix condition number {out['condition_number']:.3g}")
-    if args.save:
-        print(f"influence matrix stored in {args.save}")
-    print_warnings(sol.diagnostics)
-    return 0
+        note = "  (left out: not independent)" if p["dependent"] else ""
+        note += "  (at the mass limit)" if p["at_limit"] else ""
+        print(f"  plane {p['plane']}: {p['action']} {ws or 'nothing'}{note}")
+    print(f"readings before -> after ({out['unit']}):")
+    for r in out["readings"]:
+        speed = "" if r["speed_rpm"] is None else f" at {r['speed_rpm']:g} rpm"
+        after = r["after"][0]
+        left = (
+            "0"
+            if after <= 1e-9 * out["worst_before"]
+            else f"{after:.4g} at {r['after'][1]:.0f} deg"
+        )
+        print(f"  sensor {r['sensor']}{speed}: {r['before'][0]:.4g} -> {left}")
+    print(
+        f"rms {out['rms_before']:.4g} -> {out['rms_after']:.4g}, worst {out['worst_before']:.4g}"
+        f" -> {out['worst_after']:.4g}; condition number {out['condition_number']:.3g}"
+    )
