@@ -27,7 +27,7 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
-from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError, model_validator
 
 from stand.config_correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config_correction import check_correction
@@ -125,6 +125,18 @@ SHAFT_AGREE = 0.01
 1 % of the support span), or the config is refused."""
 
 
+class CorrectionPlane(BaseModel):
+    """``[[rotor.planes]]``: a correction plane for balancing across speeds (N planes on a
+    bending rotor, :mod:`stand.speeds`): where along the shaft, at what radius."""
+
+    model_config = STRICT
+
+    position_m: Annotated[FiniteFloat, Field(ge=0.0)]
+    """From the shaft's left end [m], as ``[rotor.shaft]`` measures."""
+    radius_m: Length
+    """The correction radius [m]."""
+
+
 class RotorTable(BaseModel):
     """``[rotor]``: mass (kg), inertia (kg m^2), lengths and radii (m); M3, J3 and a, b, c,
     d may instead follow from a ``[rotor.shaft]`` table."""
@@ -145,15 +157,36 @@ class RotorTable(BaseModel):
     """The rotor's first free-free bending frequency [Hz] (optional): the rigid model's
     limit is judged against it (:mod:`stand.core.flexible`)."""
     shaft: ShaftTable | None = None
+    planes: Annotated[list[CorrectionPlane], Field(max_length=16)] = []
+    """The correction planes for balancing across speeds (``stand solve --across-speeds``);
+    they need the shaft."""
+
+    @model_validator(mode="after")
+    def _planes_on_the_shaft(self) -> RotorTable:
+        if self.planes and self.shaft is None:
+            raise ValueError("[[rotor.planes]] needs the shaft ([rotor.shaft]) they lie on")
+        if self.planes and self.shaft is not None:
+            length = sum(s.length_m for s in self.shaft.sections)
+            for k, pl in enumerate(self.planes):
+                if pl.position_m > length:
+                    raise ValueError(
+                        f"planes[{k}] at {pl.position_m:g} m is beyond the shaft's {length:g} m"
+                    )
+            at = [pl.position_m for pl in self.planes]
+            if len(set(at)) != len(at):
+                raise ValueError("two [[rotor.planes]] at the same place")
+        return self
 
     def beam(self) -> Any:
         """The shaft's beam model (:class:`stand.core.beam.BeamRotor`), or None without a
-        ``[rotor.shaft]`` table (a rigid rotor)."""
+        ``[rotor.shaft]`` table (a rigid rotor); the ``[[rotor.planes]]`` get nodes."""
         if self.shaft is None:
             return None
         from stand.core.beam import beam_rotor
 
-        return beam_rotor(*self.shaft.core_args())
+        return beam_rotor(
+            *self.shaft.core_args(), extra_positions_m=[pl.position_m for pl in self.planes]
+        )
 
 
 class ToleranceTable(BaseModel):
@@ -254,7 +287,7 @@ class Config(BaseModel):
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
-                    "id", "bending_hz", "shaft"):  # fmt: skip
+                    "id", "bending_hz", "shaft", "planes"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 

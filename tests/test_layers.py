@@ -34,6 +34,7 @@ APP = DRIVERS | {
     "stand.check",
     "stand.tooling",
     "stand.field",
+    "stand.speeds",
 }
 
 ALLOWED: dict[str, set[str]] = {
@@ -71,6 +72,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/influence.py": NUMERIC | APP,
     # the field method in N planes from readings at several speeds
     "stand/field.py": NUMERIC | APP | {"stand.config"},
+    # balancing across speeds: N planes through the beam model
+    "stand/speeds.py": NUMERIC | APP,
     "stand/check.py": NUMERIC | APP,
     # the archive: results into a database (SQLAlchemy; schema migrations by Alembic)
     "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},

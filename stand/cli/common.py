@@ -106,9 +106,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument(
         "--apply",
+        nargs="+",
         metavar="RUN",
         help="apply the correction RUN's result prescribes, as an operator would (its "
-        "config's mode, positions and weights)",
+        "config's mode, positions and weights); several runs at different speeds: their "
+        "correction across speeds in the config's [[rotor.planes]]",
     )
     g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]")
     g.add_argument(
@@ -125,10 +127,15 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
     from stand.sim import Mass
 
     masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
-    if getattr(args, "apply", None):
+    runs = getattr(args, "apply", None) or []
+    if len(runs) == 1:
         from stand.pipeline import correction_masses
 
-        masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(args.apply)]
+        masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
+    elif runs:
+        from stand.speeds import correction_masses_across_speeds
+
+        masses += [Mass(p, g, a, r, x) for p, g, a, r, x in correction_masses_across_speeds(runs)]
     return masses
 
 

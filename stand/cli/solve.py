@@ -17,6 +17,7 @@ from stand.cli.common import (
     add_force_argument,
     add_measure_arguments,
     add_uncertainty_arguments,
+    positive_float,
     solve_options,
     write_text_output,
 )
@@ -42,6 +43,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--summary", metavar="FILE", help="write a summary of all runs: .csv or .json")
     add_uncertainty_arguments(p)
     add_force_argument(p, "--summary")
+    g = p.add_argument_group("balancing across speeds (a bending rotor)")
+    g.add_argument(
+        "--across-speeds",
+        action="store_true",
+        help="the runs are one rotor at several speeds: one correction in the config's "
+        "[[rotor.planes]] that keeps every speed low",
+    )
+    g.add_argument(
+        "--method",
+        choices=("ls", "wls", "minmax"),
+        default="ls",
+        help="with --across-speeds: least squares of the shares of the tolerance (default), "
+        "weighted by each reading's noise, or min-max (the smallest worst share)",
+    )
+    g.add_argument(
+        "--max-mass-g",
+        type=positive_float,
+        metavar="G",
+        help="with --across-speeds: the largest correction mass in any plane [g]",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -49,6 +70,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"stand solve: --jobs must be >= 1, got {args.jobs}")
     if args.summary and not args.summary.lower().endswith((".csv", ".json")):
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
+    if args.across_speeds:
+        return run_across_speeds(args)
+    if args.method != "ls" or args.max_mass_g is not None:
+        raise UsageError("stand solve: --method and --max-mass-g go with --across-speeds")
     options = solve_options(args)
     if args.summary:  # refuse a summary that cannot be written before solving
         from stand.drivers.files import check_output
@@ -156,4 +181,41 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
             file=sys.stderr,
         )
         return 2
+    return 0
+
+
+def run_across_speeds(args: argparse.Namespace) -> int:
+    """One correction in N planes for the runs at several speeds; per speed, what it leaves."""
+    from stand.cli.format import ANGLE_NOTE, dump_json
+    from stand.speeds import balance_speeds, speeds_json
+
+    if args.summary or args.jobs != 1:
+        raise UsageError("stand solve: --across-speeds gives one answer: no --summary or --jobs")
+    out = speeds_json(
+        balance_speeds(args.runs, args.config, method=args.method, max_mass_g=args.max_mass_g)
+    )
+    if args.json:
+        dump_json(out)
+        return 0
+    print(f"correction in {len(out['planes'])} planes for {len(out['speeds'])} speeds:")
+    for p in out["planes"]:
+        ws = " + ".join(f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg" for w in p["weights"])
+        extra = " (left out: the other planes do what it would)" if p["dependent"] else ""
+        print(
+            f"  plane {p['plane']} at {p['position_mm']:g} mm: {p['action']} {ws or 'nothing'} "
+            f"at radius {p['radius_mm']:g} mm{extra}"
+        )
+    print(f"({ANGLE_NOTE})")
+    print("speed [rpm]   plane 1 before -> after [g mm]   plane 2 before -> after   permissible")
+    for s in out["speeds"]:
+        (b1, b2), (a1, a2) = s["before"], s["after"]
+        per = s["permissible_g_mm"]
+        verdict = {None: "", True: "  pass", False: "  FAIL"}[s["pass_after"]]
+        print(
+            f"  {s['rpm']:9.0f}   {b1['unbalance_g_mm']:9.1f} -> {a1['unbalance_g_mm']:8.1f}"
+            f"          {b2['unbalance_g_mm']:9.1f} -> {a2['unbalance_g_mm']:8.1f}"
+            f"   {'' if per is None else f'{per[0]:.0f} / {per[1]:.0f}'}{verdict}"
+        )
+    for w in out["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
     return 0

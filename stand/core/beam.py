@@ -56,14 +56,23 @@ def beam_rotor(
     plane_positions_m: tuple[float, float],
     masses: Sequence[PointMass] = (),
     elements: int = ELEMENTS,
+    *,
+    extra_positions_m: Sequence[float] = (),
 ) -> BeamRotor:
-    """The beam model of a shaft in its supports (see the module docstring)."""
+    """The beam model of a shaft in its supports (see the module docstring);
+    ``extra_positions_m``: more places that get a node of their own (correction planes
+    beyond the two, :func:`receptance_at`)."""
     bounds, x = [0.0], 0.0
     for s in sections:
         x += s.length_m
         bounds.append(x)
     total = bounds[-1]
-    marks = [*support_positions_m, *plane_positions_m, *(p.at_m for p in masses)]
+    marks = [
+        *support_positions_m,
+        *plane_positions_m,
+        *(p.at_m for p in masses),
+        *extra_positions_m,
+    ]
     if not all(0.0 <= m <= total for m in marks):
         raise ModelError(f"supports, planes and masses must lie on the shaft (0 to {total} m)")
     cuts = sorted(set(bounds) | set(marks))
@@ -140,6 +149,28 @@ def plane_loads(rotor: BeamRotor, U_kg_m: ArrayLike) -> ComplexArray:
 def receptance(rotor: BeamRotor, p: StandParameters, omega_rad_s: float) -> ComplexArray:
     """``H`` with ``A = H U``: support accelerations [m/s^2] per unbalance [kg m], 2 x 2."""
     X = nodal_response(rotor, p, omega_rad_s, plane_loads(rotor, np.eye(2)))
+    H: ComplexArray = np.asarray(-(omega_rad_s**2) * X[list(rotor.support_nodes), :])
+    return H
+
+
+def node_at(rotor: BeamRotor, at_m: float) -> int:
+    """The node at ``at_m`` [m from the left end] (ModelError if none is there: the place
+    was not given to :func:`beam_rotor`)."""
+    i = int(np.argmin(np.abs(rotor.x_m - at_m)))
+    if abs(rotor.x_m[i] - at_m) > 1e-9 * max(1.0, float(rotor.x_m[-1])):
+        raise ModelError(f"no node of the shaft at {at_m:g} m")
+    return i
+
+
+def receptance_at(
+    rotor: BeamRotor, p: StandParameters, omega_rad_s: float, positions_m: Sequence[float]
+) -> ComplexArray:
+    """Support accelerations [m/s^2] per unbalance [kg m] at each of ``positions_m`` (the
+    correction planes of a balancing across speeds): 2 x N."""
+    U = np.zeros((len(rotor.x_m), len(positions_m)), complex)
+    for j, at in enumerate(positions_m):
+        U[node_at(rotor, at), j] = 1.0
+    X = nodal_response(rotor, p, omega_rad_s, U)
     H: ComplexArray = np.asarray(-(omega_rad_s**2) * X[list(rotor.support_nodes), :])
     return H
 

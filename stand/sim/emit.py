@@ -31,7 +31,7 @@ from stand.sim.physics import (
     steady_forward,
     support_force,
 )
-from stand.sim.scene import Scene, node_unbalance, per_node, unbalance_kg_m
+from stand.sim.scene import Scene, node_unbalance, per_node, scene_beam, unbalance_kg_m
 
 FULL_SCALE = 32767
 """Largest count a node sends; -32768 is reserved for invalid samples."""
@@ -139,7 +139,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     t_end = t_start + scene.run.seconds
     q_r, phi = unbalance_kg_m(scene)
     U = unbalance_from_polar(q_r, phi)
-    beam = scene.rotor.beam()  # a [rotor.shaft] table: the rotor bends
+    beam = scene_beam(scene)  # a [rotor.shaft] table: the rotor bends
     if beam is not None and scene.needs_integration:
         from stand.errors import ConfigError
 

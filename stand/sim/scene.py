@@ -65,7 +65,7 @@ class _Table(BaseModel):
     @model_validator(mode="after")
     def _two_nodes(self) -> _Table:
         for name, value in self:
-            if isinstance(value, list) and len(value) != NODES:
+            if isinstance(value, list) and name != "axial" and len(value) != NODES:
                 raise ValueError(
                     f"{name}: expected one value or {NODES} (one per node), got {len(value)}"
                 )
@@ -104,13 +104,25 @@ class DistributedUnbalance(_Table):
     shape: Literal["uniform", "bow"] = "bow"
 
 
+class AxialUnbalance(_Table):
+    """``[[unbalance.axial]]`` (a rotor with ``[rotor.shaft]`` only): an unbalance at a place
+    along the shaft [m from its left end], ``g_mm`` at ``angle_deg`` (a correction in a
+    third plane, a coupling)."""
+
+    position_m: Annotated[FiniteFloat, Field(ge=0.0)]
+    g_mm: NonNegative
+    angle_deg: FiniteFloat
+
+
 class UnbalanceTable(_Table):
     """``[unbalance]``: ``U_i = q_i R_i`` [g mm] at the seed's angle ``phi_i`` [deg], and
-    optionally an unbalance spread along a bending shaft."""
+    optionally an unbalance spread along a bending shaft and unbalances at other places
+    along it."""
 
     plane1: PlaneUnbalance
     plane2: PlaneUnbalance
     distributed: DistributedUnbalance | None = None
+    axial: Annotated[list[AxialUnbalance], Field(max_length=64)] = []
 
 
 class NodesTable(_Table):
@@ -338,12 +350,14 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
         )
     # a shaft table gives the rotor's values (and the rotor bends)
     scene = scene.model_copy(update={"rotor": with_shaft(scene.config(), str(path)).rotor})
-    if scene.unbalance.distributed is not None and scene.rotor.shaft is None:
-        raise ConfigError(
-            "an unbalance spread along the rotor needs the shaft ([rotor.shaft])",
-            source=str(path),
-            key="unbalance.distributed",
-        )
+    for key in ("distributed", "axial"):
+        if getattr(scene.unbalance, key) and scene.rotor.shaft is None:
+            raise ConfigError(
+                "an unbalance spread along the rotor or away from its two planes needs the "
+                "shaft ([rotor.shaft])",
+                source=str(path),
+                key=f"unbalance.{key}",
+            )
     check_correction(scene.correction, scene.rotor, str(path))
     params = parameters_of(scene.config(), str(path))
     return scene, params, str(path)
@@ -391,6 +405,9 @@ class Mass:
     grams: float
     angle_deg: float
     radius_m: float | None = None
+    position_m: float | None = None
+    """Along the shaft [m from its left end]: a plane of ``[[rotor.planes]]`` (balancing
+    across speeds); None: plane 1 or 2 of the stand."""
 
 
 def with_masses(
@@ -413,7 +430,23 @@ def with_masses(
         * cmath.exp(-1j * math.radians(scene.unbalance.plane2.angle_deg)),
     ]  # g mm
     radius_mm = (scene.rotor.R1 * 1e3, scene.rotor.R2 * 1e3)
+    axial = list(scene.unbalance.axial)
     for m in masses:
+        if m.position_m is not None:
+            if scene.rotor.shaft is None or m.radius_m is None:
+                raise ConfigError(
+                    "a mass along the shaft needs the shaft ([rotor.shaft]) and a radius",
+                    key="apply",
+                )
+            u = m.grams * m.radius_m * 1e3 * cmath.exp(-1j * math.radians(m.angle_deg))
+            axial.append(
+                AxialUnbalance(
+                    position_m=m.position_m,
+                    g_mm=abs(u),
+                    angle_deg=float(-math.degrees(cmath.phase(u)) % 360.0),
+                )
+            )
+            continue
         if m.plane not in (1, 2):
             raise ConfigError(f"plane {m.plane}: a rotor has planes 1 and 2", key="add")
         r = radius_mm[m.plane - 1] if m.radius_m is None else m.radius_m * 1e3
@@ -425,6 +458,7 @@ def with_masses(
         for i, u in enumerate(U)
     }
     planes["distributed"] = scene.unbalance.distributed
+    planes["axial"] = axial
     run = scene.run if rpm is None else scene.run.model_copy(update={"rpm": rpm})
     if index_deg is not None:
         run = run.model_copy(update={"index_deg": index_deg})
@@ -432,16 +466,37 @@ def with_masses(
 
 
 def node_unbalance(scene: Scene, beam: Any) -> Any:
-    """The scene's distributed unbalance per node of ``beam`` [kg m] (None without one)."""
+    """The scene's unbalance along the shaft per node of ``beam`` [kg m]: the spread one and
+    those at other places (None without either, or without a beam)."""
     d = scene.unbalance.distributed
-    if d is None or beam is None:
+    if (d is None and not scene.unbalance.axial) or beam is None:
         return None
     import numpy as np
 
-    from stand.core.beam import distributed_unbalance
+    from stand.core.beam import distributed_unbalance, node_at
 
     x = beam.x_m
-    e = np.full(len(x), d.eccentricity_um * 1e-6)
-    if d.shape == "bow":
-        e = e * np.sin(math.pi * (x - x[0]) / (x[-1] - x[0]))
-    return distributed_unbalance(beam, e, d.angle_deg)
+    out = np.zeros(len(x), complex)
+    if d is not None:
+        e = np.full(len(x), d.eccentricity_um * 1e-6)
+        if d.shape == "bow":
+            e = e * np.sin(math.pi * (x - x[0]) / (x[-1] - x[0]))
+        out += distributed_unbalance(beam, e, d.angle_deg)
+    for a in scene.unbalance.axial:
+        out[node_at(beam, a.position_m)] += (
+            a.g_mm * 1e-6 * cmath.exp(-1j * math.radians(a.angle_deg))
+        )
+    return out
+
+
+def scene_beam(scene: Scene) -> Any:
+    """The scene's beam model with a node at every place an unbalance sits (None for a
+    rigid rotor)."""
+    if scene.rotor.shaft is None:
+        return None
+    from stand.core.beam import beam_rotor
+
+    at = [pl.position_m for pl in scene.rotor.planes] + [
+        a.position_m for a in scene.unbalance.axial
+    ]
+    return beam_rotor(*scene.rotor.shaft.core_args(), extra_positions_m=at)

@@ -1,0 +1,288 @@
+"""Balancing across speeds: N correction planes from runs at several speeds, one result.
+
+A bending rotor's two-plane answer holds at the speed it was measured at
+only (README, flexible rotors).  With the shaft (``[rotor.shaft]``) and N
+correction planes (``[[rotor.planes]]``), the beam model gives, at each
+speed ``w_k``, how the supports answer an unbalance in each correction plane
+(``Hn_k``, 2 x N, :func:`stand.core.beam.receptance_at`) and in the stand's two
+measuring planes (``H2_k``, 2 x 2).  Each run's own answer is the two-plane
+unbalance ``U_k = H2_k^-1 A_k`` that moves the supports as the rotor does; a
+correction ``W`` in the N planes changes it to::
+
+    U_k + H2_k^-1 Hn_k W        (the "equivalent" two-plane unbalance at w_k)
+
+Every speed's pair, divided by the planes' permissible unbalance (ISO
+21940-11, the config's ``[tolerance]``), is one block of readings for the
+core's solver (:func:`stand.core.multiplane.solve_multiplane`): least squares
+makes the sum of the squared shares of the tolerance small, min-max the
+largest; weighted least squares weights each by one over its own noise.  The
+result predicts, for every speed, what each plane keeps, and whether it
+passes.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from stand.core.multiplane import MultiPlaneSolution, solve_multiplane
+from stand.errors import ConfigError, ModelError
+from stand.matrix import SAME_SPEED
+
+
+@dataclass(frozen=True)
+class SpeedReading:
+    """One speed: its run, its own two-plane answer, and what the correction leaves.
+
+    ``U_kg_m``/``after_kg_m``: the equivalent two-plane unbalance before and (predicted)
+    after; ``permissible_kg_m``: per plane (None without ``[tolerance]``).
+    """
+
+    run: str
+    rpm: float
+    result: Any
+    U_kg_m: np.ndarray
+    after_kg_m: np.ndarray
+    permissible_kg_m: tuple[float, float] | None
+
+    @property
+    def passes(self) -> bool | None:
+        """Whether both planes are within their permissible unbalance after the correction."""
+        if self.permissible_kg_m is None:
+            return None
+        return bool(np.all(np.abs(self.after_kg_m) <= np.asarray(self.permissible_kg_m)))
+
+    @property
+    def passed_before(self) -> bool | None:
+        if self.permissible_kg_m is None:
+            return None
+        return bool(np.all(np.abs(self.U_kg_m) <= np.asarray(self.permissible_kg_m)))
+
+
+@dataclass(frozen=True)
+class PlaneCorrection:
+    """One correction plane: where, at what radius, the correction ``W`` [kg m] and the
+    weights or holes it means (:class:`stand.core.balance.Correction`)."""
+
+    plane: int
+    position_m: float
+    radius_m: float
+    W_kg_m: complex
+    correction: Any
+    dependent: bool
+    at_limit: bool
+
+
+@dataclass(frozen=True)
+class SpeedsResult:
+    """A correction in N planes for runs at several speeds."""
+
+    speeds: tuple[SpeedReading, ...]
+    planes: tuple[PlaneCorrection, ...]
+    method: str
+    solution: MultiPlaneSolution
+    correction_mode: str
+    warnings: tuple[Any, ...]
+
+    @property
+    def passes(self) -> bool | None:
+        verdicts = [s.passes for s in self.speeds]
+        return None if None in verdicts else all(v for v in verdicts)
+
+
+def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any, str]:
+    """Each run's own result, in order of speed, and the config that solves them."""
+    from stand.pipeline import load_config_text, solve_recording, stored_config
+
+    if len(paths) < 2:
+        raise ConfigError("balancing across speeds takes runs at two speeds or more")
+    results = [solve_recording(p, config) for p in paths]
+    if config:
+        cfg, params, _ = load_config_text(config)
+    else:  # the first run's own (solve_recording read it)
+        meta = {"config_toml": results[0].provenance.config_toml}
+        cfg, params, _ = stored_config(meta, paths[0])
+    order = sorted(range(len(paths)), key=lambda k: results[k].omega_rad_s)
+    for a, b in itertools.pairwise(order):
+        wa, wb = results[a].omega_rad_s, results[b].omega_rad_s
+        if wb / wa - 1 <= SAME_SPEED:
+            raise ConfigError(
+                f"{paths[a]} and {paths[b]} are both at about {wa * 30 / math.pi:.0f} rpm: "
+                "give each speed once",
+                source=paths[b],
+            )
+    return [(paths[k], results[k]) for k in order], cfg, params, paths[0]
+
+
+def balance_speeds(
+    paths: Sequence[str],
+    config: str | None = None,
+    *,
+    method: str = "ls",
+    max_mass_g: float | None = None,
+) -> SpeedsResult:
+    """The N-plane correction for runs at several speeds (see the module docstring)."""
+    from stand.core.balance import correction
+    from stand.core.beam import receptance, receptance_at
+
+    runs, cfg, params, first = _runs(paths, config)
+    beam = cfg.rotor.beam()
+    planes = cfg.rotor.planes
+    if beam is None or not planes:
+        raise ConfigError(
+            "balancing across speeds needs the shaft ([rotor.shaft]) and the correction "
+            "planes ([[rotor.planes]]) in the config",
+            source=config or first,
+            key="rotor.planes",
+        )
+    at = [pl.position_m for pl in planes]
+    rows_A, rows_alpha, weights, per = [], [], [], []
+    for _, res in runs:
+        w = res.omega_rad_s
+        E = np.linalg.inv(receptance(beam, params, w))
+        scale = np.ones(2) if res.tolerance is None else np.asarray(res.tolerance.per_plane_kg_m)
+        per.append(None if res.tolerance is None else res.tolerance.per_plane_kg_m)
+        rows_A.append(res.U_kg_m / scale)
+        rows_alpha.append((E @ receptance_at(beam, params, w, at)) / scale[:, None])
+        cov = np.asarray(res.measurement.solution.cov_U).real
+        weights.append(scale / np.sqrt((cov.diagonal()[0::2] + cov.diagonal()[1::2]) / 2))
+    A, alpha = np.concatenate(rows_A), np.vstack(rows_alpha)
+    radius = np.array([pl.radius_m for pl in planes])
+    caps = None if max_mass_g is None else max_mass_g * 1e-3 * radius
+    try:
+        sol = solve_multiplane(
+            A,
+            alpha,
+            method,
+            weights=np.concatenate(weights) if method == "wls" else None,
+            caps=caps,
+        )
+    except ModelError as exc:
+        raise ConfigError(str(exc), source=config or first) from None
+    speeds = []
+    for k, (path, res) in enumerate(runs):
+        scale = np.ones(2) if per[k] is None else np.asarray(per[k])
+        speeds.append(
+            SpeedReading(
+                run=path,
+                rpm=res.omega_rad_s * 30 / math.pi,
+                result=res,
+                U_kg_m=res.U_kg_m,
+                after_kg_m=sol.residual[2 * k : 2 * k + 2] * scale,
+                permissible_kg_m=per[k],
+            )
+        )
+    c = cfg.correction
+    out = tuple(
+        PlaneCorrection(
+            plane=j + 1,
+            position_m=pl.position_m,
+            radius_m=pl.radius_m,
+            W_kg_m=complex(sol.W[j]),
+            correction=correction(
+                -complex(sol.W[j]),
+                pl.radius_m,
+                remove=c.mode == "remove",
+                positions=c.positions,
+                position0_deg=c.position0_deg,
+                steps_kg=[m * 1e-3 for m in c.weights_g],
+                step_kg=c.weight_step_g * 1e-3,
+            ),
+            dependent=j in sol.dependent,
+            at_limit=sol.at_cap[j],
+        )
+        for j, pl in enumerate(planes)
+    )
+    notes = tuple(sol.diagnostics) + tuple(
+        w for _, res in runs for w in res.warnings if w.code != "near_bending_mode"
+    )
+    return SpeedsResult(
+        tuple(speeds), out, method, sol, "remove" if c.mode == "remove" else "add", notes
+    )
+
+
+def correction_masses_across_speeds(
+    paths: Sequence[str], config: str | None = None
+) -> list[tuple[int, float, float, float, float]]:
+    """What an operator puts on (grams > 0) or takes off (< 0) for the N-plane correction of
+    runs at several speeds: ``(plane, grams, angle_deg, radius_m, position_m)`` each."""
+    result = balance_speeds(paths, config)
+    sign = 1.0 if result.correction_mode == "add" else -1.0
+    return [
+        (p.plane, sign * w.mass_kg * 1e3, w.angle_deg, p.radius_m, p.position_m)
+        for p in result.planes
+        for w in p.correction.weights
+        if w.mass_kg > 0
+    ]
+
+
+def _pair(U: np.ndarray) -> list[dict[str, Any]]:
+    from stand.core.model import unbalance_to_polar
+
+    q, phi = unbalance_to_polar(U)
+    return [
+        {
+            "plane": i + 1,
+            "unbalance_g_mm": round(float(q[i]) * 1e6, 3),
+            "angle_deg": round(float(phi[i]), 2),
+        }
+        for i in range(len(U))
+    ]
+
+
+def speeds_json(result: SpeedsResult) -> dict[str, Any]:
+    """The result as one strict-JSON object (g, mm, deg, rpm at this edge)."""
+    from stand.core.model import unbalance_to_polar
+
+    planes = []
+    for p in result.planes:
+        (q,), (phi,) = unbalance_to_polar([-p.W_kg_m])
+        planes.append(
+            {
+                "plane": p.plane,
+                "position_mm": round(p.position_m * 1e3, 3),
+                "radius_mm": round(p.radius_m * 1e3, 3),
+                "action": result.correction_mode,
+                "weights": [
+                    {
+                        "mass_g": round(w.mass_kg * 1e3, 4),
+                        "angle_deg": round(w.angle_deg, 2),
+                        "position": None if w.position is None else w.position + 1,
+                    }
+                    for w in p.correction.weights
+                    if w.mass_kg > 0
+                ],
+                "unbalance_g_mm": round(float(q) * 1e6, 3),
+                "unbalance_angle_deg": round(float(phi), 2),
+                "dependent": p.dependent,
+                "at_limit": p.at_limit,
+            }
+        )
+    return {
+        "kind": "correction across speeds",
+        "method": result.method,
+        "correction_mode": result.correction_mode,
+        "planes": planes,
+        "speeds": [
+            {
+                "rpm": round(s.rpm, 3),
+                "run": s.run,
+                "before": _pair(s.U_kg_m),
+                "after": _pair(s.after_kg_m),
+                "permissible_g_mm": None
+                if s.permissible_kg_m is None
+                else [round(x * 1e6, 3) for x in s.permissible_kg_m],
+                "pass_before": s.passed_before,
+                "pass_after": s.passes,
+            }
+            for s in result.speeds
+        ],
+        "pass": result.passes,
+        "condition_number": round(result.solution.condition_number, 4),
+        "warnings": [w.message for w in result.warnings],
+    }
