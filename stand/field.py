@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.core.multiplane import MultiPlaneSolution, solve_multiplane
+from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.errors import ConfigError, ModelError
 
 
@@ -122,9 +122,6 @@ def reading_weights(cov: Any) -> np.ndarray | None:
         return None
     out: np.ndarray = 1.0 / np.sqrt(var)
     return out
-
-
-METHOD_NAMES = {"ls": "least squares", "wls": "weighted least squares", "minmax": "min-max"}
 
 
 def _polar(z: complex, typed: bool) -> list[float]:

@@ -225,3 +225,39 @@ def production(out: dict[str, Any]) -> tuple[str, str]:
     ax.grid(True, alpha=0.3)
     fig.autofmt_xdate()
     return polar_png, png(fig)
+
+
+def speed_bars(out: dict[str, Any]) -> str:
+    """Balancing across speeds: per speed, each plane's equivalent unbalance before and
+    after the correction (log scale: before is thousands of g mm, after a few) against
+    the permissible value."""
+    import matplotlib.pyplot as plt
+
+    speeds = out["speeds"]
+    fig, axes = plt.subplots(1, len(speeds), figsize=(3.2 * len(speeds), 3.0), sharey=True)
+    axes = np.atleast_1d(axes)
+    values = [p["unbalance_g_mm"] for s in speeds for k in ("before", "after") for p in s[k]]
+    floor = max(min([*values, 1.0]) / 3, 1e-3)
+    pers = [q for s in speeds for q in (s["permissible_g_mm"] or [])]
+    top = 3 * max([*values, *pers, floor])
+    for ax, s in zip(axes, speeds, strict=True):
+        x = np.arange(len(s["before"]))
+        before = [max(p["unbalance_g_mm"], floor) for p in s["before"]]
+        after = [max(p["unbalance_g_mm"], floor) for p in s["after"]]
+        ax.bar(x - 0.2, before, 0.38, color="0.7", label="before")
+        colour = "tab:green" if s["pass_after"] in (True, None) else "tab:red"
+        ax.bar(x + 0.2, after, 0.38, color=colour, label="after")
+        if s["permissible_g_mm"]:
+            for i, per in enumerate(s["permissible_g_mm"]):
+                ax.plot([i - 0.45, i + 0.45], [per, per], "k--", lw=1)
+        ax.set_yscale("log")
+        ax.set_ylim(floor, top)
+        ax.set_xticks(x, [f"plane {p['plane']}" for p in s["before"]])
+        ax.set_title(f"{s['rpm']:.0f} rpm", fontsize=10)
+        ax.grid(True, axis="y", alpha=0.3)
+    axes[0].set_ylabel("unbalance [g mm]")
+    axes[0].plot([], [], "k--", lw=1, label="permissible")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, -0.06))  # fmt: skip
+    fig.tight_layout()
+    return png(fig)

@@ -368,3 +368,68 @@ the rotors; green: the tolerance; red: the mean and its 95 % region.</p>
 <h2>Over time</h2><img alt="initial unbalance over time" src="{trend_png}">
 </body></html>
 """
+
+
+def render_speeds(out: dict[str, Any]) -> str:
+    """A correction across speeds (``stand report --across-speeds``, the station's
+    History) as one HTML page: the corrections in N planes, and per speed what each
+    measuring plane keeps, before and after, against its permissible value."""
+    from stand.plots import speed_bars
+
+    e = html.escape
+    planes = "".join(
+        f"<tr><td class=l>{p['plane']}</td><td>{p['position_mm']:g}</td><td>{p['radius_mm']:g}</td>"
+        f"<td class=l>{p['action']} "
+        + (
+            " + ".join(f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f}°" for w in p["weights"])
+            or "nothing"
+        )
+        + (" (left out: not independent)" if p["dependent"] else "")
+        + (" (at the mass limit)" if p["at_limit"] else "")
+        + "</td></tr>"
+        for p in out["planes"]
+    )
+    verdict = {
+        True: "<span class=pass>pass</span>",
+        False: "<span class=fail>FAIL</span>",
+        None: "–",
+    }
+    rows = []
+    for s in out["speeds"]:
+        per = s["permissible_g_mm"] or [None, None]
+        cells = "".join(
+            f"<td>{b['unbalance_g_mm']:.1f}</td><td>{a['unbalance_g_mm']:.1f}</td>"
+            f"<td>{'–' if q is None else f'{q:.0f}'}</td>"
+            for b, a, q in zip(s["before"], s["after"], per, strict=True)
+        )
+        rows.append(
+            f"<tr><td>{s['rpm']:.0f}</td>{cells}<td>{verdict[s['pass_after']]}</td>"
+            f"<td class=l>{e(s['run'])}</td></tr>"
+        )
+    warnings = "".join(f"<p class=warn>{e(w)}</p>" for w in out["warnings"])
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>Correction across speeds</title>
+<style>{_CSS}</style></head><body>
+<header><h1>Correction across speeds</h1>
+<span class=badge>{verdict[out["pass"]]}</span></header>
+<p>{len(out["planes"])} correction planes, {len(out["speeds"])} speeds
+({ {"ls": "least squares", "wls": "weighted least squares", "minmax": "min-max"}[out["method"]] }
+of each speed's share of the tolerance).</p>
+<h2>Correction</h2>
+<table><tr><th class=l>plane</th><th>at [mm from the left end]</th><th>radius [mm]</th>
+<th class=l>what to do</th></tr>{planes}</table>
+<p class=muted>Angles from the reference mark, counted <b>against the direction of
+rotation</b>.</p>
+<h2>At each speed, predicted after the correction</h2>
+<img alt="per speed: each plane before and after" src="{speed_bars(out)}">
+<table><tr><th rowspan=2>speed [rpm]</th><th colspan=3>plane 1 [g mm]</th>
+<th colspan=3>plane 2 [g mm]</th><th rowspan=2>verdict</th><th class=l rowspan=2>run</th></tr>
+<tr><th>before</th><th>after</th><th>permissible</th><th>before</th><th>after</th>
+<th>permissible</th></tr>{"".join(rows)}</table>
+<p class=muted>Each speed's unbalance in the stand's two measuring planes: what moves the
+supports as the bending rotor does at that speed. Grey: before; green (red: over the
+tolerance): after, as the beam model predicts; dashed: the permissible value.
+Check each speed with a run after the correction.</p>
+{warnings}
+</body></html>
+"""

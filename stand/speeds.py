@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.core.multiplane import MultiPlaneSolution, solve_multiplane
+from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.errors import ConfigError, ModelError
 from stand.matrix import SAME_SPEED
 
@@ -266,6 +266,7 @@ def speeds_json(result: SpeedsResult) -> dict[str, Any]:
     return {
         "kind": "correction across speeds",
         "method": result.method,
+        "method_name": METHOD_NAMES[result.method],
         "correction_mode": result.correction_mode,
         "planes": planes,
         "speeds": [

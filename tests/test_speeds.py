@@ -101,3 +101,45 @@ def test_across_speeds_needs_the_planes_and_method_needs_across_speeds(
     assert "[rotor.planes]" in err and err.count("\n") == 1, err
     assert main(["solve", str(bow_runs["raw900"]), "--method", "minmax"]) == 2
     assert "go with --across-speeds" in capsys.readouterr().err
+
+
+def test_the_station_shows_the_correction_across_speeds_of_archived_runs(
+    bow_runs: dict[str, Path], tmp_path: Path
+) -> None:
+    """History: one rotor's archived runs at three speeds, ticked, give the page with the
+    three-plane correction and every speed's bars; a run outside the runs folder is not
+    read."""
+    from stand.archive import archive_result
+    from stand.errors import UsageError
+    from stand.pipeline import solve_recording
+    from stand.station.service import Station
+
+    rotors = Path(__file__).resolve().parents[1] / "stand" / "data" / "rotors"
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    station = Station(rotors, bow_runs["raw900"].parent, url, lambda *a: (1.0, 1.0))
+    ids = [archive_result(solve_recording(str(bow_runs[f"raw{r}"])), url) for r in SPEEDS]
+    page = station.speeds_page(ids)
+    assert "Correction across speeds" in page and page.count("<span class=pass>pass</span>") == 4
+    assert "data:image/png;base64," in page and "against the direction of\nrotation" in page
+    other = Station(rotors, tmp_path / "elsewhere", url, lambda *a: (1.0, 1.0))
+    with pytest.raises(UsageError, match="outside"):
+        other.speeds_page(ids)
+    with pytest.raises(UsageError, match="no run 999"):
+        station.speeds_page([999])
+
+
+def test_the_report_across_speeds(
+    bow_runs: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`stand report RUN... --across-speeds` writes the page; several runs without it, or
+    with --check, are one line each."""
+    raw = [str(bow_runs[f"raw{rpm}"]) for rpm in SPEEDS]
+    page = tmp_path / "speeds.html"
+    assert main(["report", *raw, "--across-speeds", "-o", str(page)]) == 0
+    text = page.read_text()
+    assert "add 28.26 g at 239.9°" in text and "1800" in text
+    capsys.readouterr()
+    assert main(["report", *raw, "-o", str(tmp_path / "x.html")]) == 2
+    assert "several with --across-speeds" in capsys.readouterr().err
+    assert main(["report", *raw, "--across-speeds", "--check", raw[0], "-o", "y.html"]) == 2
+    assert "--check is for one run" in capsys.readouterr().err

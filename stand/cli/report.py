@@ -14,7 +14,12 @@ from stand.cli.common import (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("run", metavar="RUN", help="run file (.h5) or python-can log")
+    p.add_argument(
+        "run",
+        nargs="+",
+        metavar="RUN",
+        help="run file (.h5) or python-can log; several with --across-speeds",
+    )
     p.add_argument("-o", "--out", metavar="REPORT.html", help="the HTML certificate to write")
     p.add_argument("--pdf", metavar="REPORT.pdf", help="the PDF to write (printed by Chromium)")
     p.add_argument(
@@ -32,6 +37,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="--check against a run of another rotor, stand or speed anyway",
     )
+    p.add_argument(
+        "--across-speeds",
+        action="store_true",
+        help="the runs are one rotor at several speeds: the report of their correction in "
+        "the config's [[rotor.planes]] (as stand solve --across-speeds)",
+    )
+    p.add_argument(
+        "--method",
+        choices=("ls", "wls", "minmax"),
+        default="ls",
+        help="with --across-speeds: as stand solve",
+    )
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
     add_force_argument(p, "the outputs")
@@ -46,12 +63,23 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.out and not args.pdf:
         raise UsageError("stand report: give -o REPORT.html, --pdf REPORT.pdf, or both")
-    inputs = [i for i in (args.run, args.config, args.check) if i]
+    if len(args.run) > 1 and not args.across_speeds:
+        raise UsageError("stand report: one run, or several with --across-speeds")
+    inputs = [i for i in (*args.run, args.config, args.check) if i]
     for out in (args.out, args.pdf):
         if out:
             check_output(out, force=args.force, inputs=inputs)  # before the work
+    if args.across_speeds:
+        from stand.report import render_speeds
+        from stand.speeds import balance_speeds, speeds_json
+
+        if args.check:
+            raise UsageError("stand report: --check is for one run, not --across-speeds")
+        speeds = balance_speeds(args.run, args.config, method=args.method)
+        return _write(args, render_speeds(speeds_json(speeds)), inputs)
     options = solve_options(args, traces=True)
-    result = solve_recording(args.run, args.config, options)
+    run = args.run[0]
+    result = solve_recording(run, args.config, options)
     if args.check:
         from stand.pipeline import stored_config
 
@@ -60,13 +88,17 @@ def run(args: argparse.Namespace) -> int:
         else:
             from stand.drivers.recording import read_recording
 
-            cfg, params, _ = stored_config(read_recording(args.run).meta, args.run)
+            cfg, params, _ = stored_config(read_recording(run).meta, run)
         from stand.check import with_check
 
         result = with_check(
             result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
         )
-    page = render(result)
+    return _write(args, render(result), inputs)
+
+
+def _write(args: argparse.Namespace, page: str, inputs: list[str]) -> int:
+    """The page as HTML (-o) and as PDF (--pdf)."""
     if args.out:
         write_text_output(args.out, page, force=args.force, inputs=inputs)
         print(f"wrote {args.out}")

@@ -47,6 +47,8 @@ from stand.errors import ModelError
 
 METHODS = ("ls", "wls", "minmax")
 """The criteria: least squares, weighted least squares, min-max."""
+METHOD_NAMES = {"ls": "least squares", "wls": "weighted least squares", "minmax": "min-max"}
+"""Each criterion as the operator reads it."""
 SIGNIFICANCE_MIN = 0.2
 """Darlow's significance factor at or below which a plane counts as not independent
 (the value Darlow recommends)."""

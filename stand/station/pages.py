@@ -312,7 +312,22 @@ def history_screen(station: Station) -> None:
     columns = [{"name": k, "label": k, "field": k, "align": "left"}
                for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
                          "plane 2", "report")]  # fmt: skip
-    table = ui.table(columns=columns, rows=[]).classes("w-full").mark("history-table")
+    table = (
+        ui.table(columns=columns, rows=[], row_key="run", selection="multiple")
+        .classes("w-full")
+        .mark("history-table")
+    )
+
+    def across_speeds() -> None:
+        ids = sorted(r["run"] for r in table.selected)
+        if len(ids) < 2:
+            ui.notify("tick one rotor's runs at two speeds or more", type="warning")
+            return
+        ui.navigate.to(f"/speeds/{','.join(map(str, ids))}", new_tab=True)
+
+    ui.button("Correct across speeds", on_click=across_speeds).props("size=lg outline").mark(
+        "history-speeds"
+    )
     table.add_slot(
         "body-cell-report",
         '<q-td :props="props"><a :href="props.value" target="_blank">report</a>'
@@ -388,6 +403,21 @@ def add_routes(station: Station) -> None:
             return FileResponse(station.report_file(run_id), media_type="text/html")
         except StandError as exc:
             return PlainTextResponse(str(exc), status_code=404)
+
+    @app.get("/speeds/{run_ids}")
+    def speeds(run_ids: str) -> Any:
+        from fastapi.responses import HTMLResponse
+
+        try:
+            ids = [int(x) for x in run_ids.split(",")]
+        except ValueError:
+            return PlainTextResponse("runs: archive ids separated by commas", status_code=400)
+        try:
+            return HTMLResponse(station.speeds_page(ids))
+        except UsageError as exc:  # no such run, or outside the folders
+            return PlainTextResponse(str(exc), status_code=404)
+        except StandError as exc:  # runs that do not make a correction across speeds
+            return PlainTextResponse(str(exc), status_code=422)
 
     @app.get("/report/{run_id}/pdf")
     def certificate_pdf(run_id: int) -> Any:

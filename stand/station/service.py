@@ -346,6 +346,24 @@ class Station:
             raise UsageError(f"run {run_id} has no report in {self.runs_dir}")
         return report
 
+    def speeds_page(self, run_ids: list[int]) -> str:
+        """The correction across speeds of archived runs (one rotor at several speeds) as
+        an HTML page (:func:`stand.speeds.balance_speeds`, :func:`stand.report.render_speeds`)."""
+        from stand.archive.query import run_file
+        from stand.report import render_speeds
+        from stand.speeds import balance_speeds, speeds_json
+
+        paths = []
+        for run_id in run_ids:
+            found = run_file(self.archive_url, run_id)
+            if found is None:
+                raise UsageError(f"no run {run_id} in the archive")
+            path = Path(found).resolve()
+            if not path.is_relative_to(self.runs_dir):
+                raise UsageError(f"run {run_id} is outside {self.runs_dir}")
+            paths.append(str(path))
+        return render_speeds(speeds_json(balance_speeds(paths)))
+
     def certificate_pdf(self, run_id: int) -> Path:
         """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
         the first time it is asked for, and again if the report changed since
