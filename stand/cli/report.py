@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from stand.cli.common import (
+    add_across_speeds_arguments,
     add_force_argument,
     add_measure_arguments,
     add_uncertainty_arguments,
@@ -37,18 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="--check against a run of another rotor, stand or speed anyway",
     )
-    p.add_argument(
-        "--across-speeds",
-        action="store_true",
-        help="the runs are one rotor at several speeds: the report of their correction in "
-        "the config's [[rotor.planes]] (as stand solve --across-speeds)",
-    )
-    p.add_argument(
-        "--method",
-        choices=("ls", "wls", "minmax"),
-        default="ls",
-        help="with --across-speeds: as stand solve",
-    )
+    add_across_speeds_arguments(p)
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
     add_force_argument(p, "the outputs")
@@ -75,7 +65,9 @@ def run(args: argparse.Namespace) -> int:
 
         if args.check:
             raise UsageError("stand report: --check is for one run, not --across-speeds")
-        speeds = balance_speeds(args.run, args.config, method=args.method)
+        speeds = balance_speeds(
+            args.run, args.config, method=args.method, max_mass_g=args.max_mass_g
+        )
         return _write(args, render_speeds(speeds_json(speeds)), inputs)
     options = solve_options(args, traces=True)
     run = args.run[0]

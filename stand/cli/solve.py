@@ -14,10 +14,10 @@ from pathlib import Path
 from typing import Any
 
 from stand.cli.common import (
+    add_across_speeds_arguments,
     add_force_argument,
     add_measure_arguments,
     add_uncertainty_arguments,
-    positive_float,
     solve_options,
     write_text_output,
 )
@@ -43,26 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--summary", metavar="FILE", help="write a summary of all runs: .csv or .json")
     add_uncertainty_arguments(p)
     add_force_argument(p, "--summary")
-    g = p.add_argument_group("balancing across speeds (a bending rotor)")
-    g.add_argument(
-        "--across-speeds",
-        action="store_true",
-        help="the runs are one rotor at several speeds: one correction in the config's "
-        "[[rotor.planes]] that keeps every speed low",
-    )
-    g.add_argument(
-        "--method",
-        choices=("ls", "wls", "minmax"),
-        default="ls",
-        help="with --across-speeds: least squares of the shares of the tolerance (default), "
-        "weighted by each reading's noise, or min-max (the smallest worst share)",
-    )
-    g.add_argument(
-        "--max-mass-g",
-        type=positive_float,
-        metavar="G",
-        help="with --across-speeds: the largest correction mass in any plane [g]",
-    )
+    add_across_speeds_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
