@@ -143,3 +143,26 @@ def test_the_report_across_speeds(
     assert "several with --across-speeds" in capsys.readouterr().err
     assert main(["report", *raw, "--across-speeds", "--check", raw[0], "-o", "y.html"]) == 2
     assert "--check is for one run" in capsys.readouterr().err
+
+
+@pytest.mark.realtime
+def test_balance_live_across_speeds_on_the_simulated_stand(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`stand balance --scene auger-bow --speeds 900,1500,1800`: a run at each speed in turn
+    (recorded beside --out), then the three-plane correction and its report."""
+    out = tmp_path / "bow.h5"
+    args = ["balance", "--scene", "auger-bow", "--speeds", "900,1500,1800", "--out", str(out)]
+    capsys.readouterr()
+    assert main([*args, "--no-archive", "--quiet", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["pass"] is True and [round(s["rpm"]) for s in res["speeds"]] == list(SPEEDS)
+    assert all((tmp_path / f"bow-{rpm}rpm.h5").is_file() for rpm in SPEEDS)
+    assert (tmp_path / "bow-speeds.html").is_file() and res["report"].endswith("bow-speeds.html")
+
+
+@pytest.mark.parametrize("speeds", ["900,900", "900", "900,abc", "900,-5"])
+def test_bad_speed_lists_are_one_line(speeds: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["balance", "--scene", "auger-bow", "--speeds", speeds]) == 2
+    err = capsys.readouterr().err
+    assert "--speeds" in err and "Traceback" not in err

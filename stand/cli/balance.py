@@ -3,10 +3,27 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
-from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE, add_live_measure_arguments
+from stand.cli.common import (
+    DEFAULT_TARGET_PCT,
+    TOLERANCE_SHARE,
+    add_across_speeds_arguments,
+    add_live_measure_arguments,
+    parse_rpm,
+)
+
+
+def parse_speeds(text: str) -> list[float]:
+    """``900,1500,1800``: two speeds or more [rpm], each given once."""
+    speeds = [parse_rpm(x) for x in text.split(",")]
+    if len(speeds) < 2 or len(set(speeds)) != len(speeds):
+        raise argparse.ArgumentTypeError(
+            f"expected two speeds or more, each once (e.g. 900,1500,1800), got {text!r}"
+        )
+    return speeds
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,6 +49,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="the run before the correction: show the residual unbalance and the "
         "unbalance reduction ratio per plane",
     )
+    p.add_argument(
+        "--speeds",
+        type=parse_speeds,
+        metavar="RPM,RPM,...",
+        help="balance a bending rotor across speeds: a run at each speed in turn (the "
+        "operator is asked to set each; a --scene runs at each), then one correction in the "
+        "config's [[rotor.planes]] (as stand solve --across-speeds)",
+    )
+    add_across_speeds_arguments(p, flag=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
     from stand.cli.panel import measure_live_from_args
     from stand.result import to_json
 
+    if args.speeds:
+        return _across_speeds(args)
     if args.report:  # refuse a report path that cannot be written before measuring
         from stand.drivers.files import check_output
 
@@ -72,4 +100,51 @@ def run(args: argparse.Namespace) -> int:
     if not args.json:
         print(f"report: {report}")
     archive_live(args, result, cfg)  # last: an archive that fails loses neither run nor report
+    return 0
+
+
+def _across_speeds(args: argparse.Namespace) -> int:
+    """A run at each of ``--speeds`` (recorded as RUN-<rpm>rpm.h5), then the correction
+    across them, its report beside the runs."""
+    import copy
+
+    from stand.cli.common import archive_live, run_path, solve_options, targets_from
+    from stand.cli.format import dump_json, print_speeds
+    from stand.cli.panel import measure_live_from_args
+    from stand.errors import UsageError
+    from stand.matrix import SAME_SPEED
+    from stand.report import render_speeds
+    from stand.speeds import balance_speeds, speeds_json
+
+    if args.check or args.rpm:
+        raise UsageError("stand balance: --speeds sets the speeds: no --check or --rpm")
+    stem = Path(run_path(args)).with_suffix("")
+    report = args.report or f"{stem}-speeds.html"
+    runs = []
+    for rpm in args.speeds:
+        one = copy.copy(args)
+        one.out, one.rpm = f"{stem}-{rpm:g}rpm.h5", rpm
+        if not args.scene:  # a real stand: the operator sets the speed
+            print(f"set the rotor to {rpm:g} rpm, then press Enter", file=sys.stderr)
+            input()
+        result, cfg, _ = measure_live_from_args(
+            one, "balance", targets_from(one, TOLERANCE_SHARE), solve_options(one)
+        )
+        got = result.omega_rad_s * 30 / math.pi
+        if abs(got / rpm - 1) > SAME_SPEED:
+            raise UsageError(f"the run at {rpm:g} rpm went at {got:.0f} rpm: set the speed again")
+        archive_live(one, result, cfg)
+        runs.append(one.out)
+    out = speeds_json(
+        balance_speeds(runs, args.config, method=args.method, max_mass_g=args.max_mass_g)
+    )
+    out["report"] = report
+    if args.json:
+        dump_json(out)
+    else:
+        print_speeds(out)
+        print(f"report: {report}")
+    from stand.cli.common import write_text_output
+
+    write_text_output(report, render_speeds(out), force=args.force, inputs=runs)
     return 0

@@ -167,28 +167,30 @@ MAX_UNBALANCE_G_MM = 1e9
 """The largest unbalance typed in: 1 t at 1 m (the model's arithmetic stays meaningful)."""
 
 
-def add_across_speeds_arguments(p: argparse.ArgumentParser) -> None:
-    """``--across-speeds``, ``--method``, ``--max-mass-g``: one rotor's runs at several
-    speeds corrected in the config's ``[[rotor.planes]]`` (:mod:`stand.speeds`)."""
+def add_across_speeds_arguments(p: argparse.ArgumentParser, *, flag: bool = True) -> None:
+    """``--across-speeds`` (unless ``flag`` is False), ``--method``, ``--max-mass-g``: one
+    rotor's runs at several speeds corrected in the config's ``[[rotor.planes]]``
+    (:mod:`stand.speeds`)."""
     g = p.add_argument_group("balancing across speeds (a bending rotor)")
-    g.add_argument(
-        "--across-speeds",
-        action="store_true",
-        help="the runs are one rotor at several speeds: one correction in the config's "
-        "[[rotor.planes]] that keeps every speed low",
-    )
+    if flag:
+        g.add_argument(
+            "--across-speeds",
+            action="store_true",
+            help="the runs are one rotor at several speeds: one correction in the config's "
+            "[[rotor.planes]] that keeps every speed low",
+        )
     g.add_argument(
         "--method",
         choices=("ls", "wls", "minmax"),
         default="ls",
-        help="with --across-speeds: least squares of each speed's share of the tolerance "
+        help="across speeds: least squares of each speed's share of the tolerance "
         "(default), weighted by each reading's noise, or min-max (the smallest worst share)",
     )
     g.add_argument(
         "--max-mass-g",
         type=positive_float,
         metavar="G",
-        help="with --across-speeds: the largest correction mass in any plane [g]",
+        help="across speeds: the largest correction mass in any plane [g]",
     )
 
 

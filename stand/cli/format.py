@@ -257,3 +257,27 @@ def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
     else:
         print_summary(out)
         print_warnings((*rec.warnings, *streams.warnings))
+
+
+def print_speeds(out: dict[str, Any]) -> None:
+    """A correction across speeds (:func:`stand.speeds.speeds_json`): the planes, then per
+    speed each measuring plane before and after against its permissible value."""
+    print(f"correction in {len(out['planes'])} planes for {len(out['speeds'])} speeds:")
+    for p in out["planes"]:
+        ws = " + ".join(f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg" for w in p["weights"])
+        extra = " (left out: the other planes do what it would)" if p["dependent"] else ""
+        print(
+            f"  plane {p['plane']} at {p['position_mm']:g} mm: {p['action']} {ws or 'nothing'} "
+            f"at radius {p['radius_mm']:g} mm{extra}"
+        )
+    print(f"({ANGLE_NOTE})")
+    print("speed [rpm]   plane 1 before -> after [g mm]   plane 2 before -> after   permissible")
+    for s in out["speeds"]:
+        (b1, b2), (a1, a2) = s["before"], s["after"]
+        per = s["permissible_g_mm"]
+        verdict = {None: "", True: "  pass", False: "  FAIL"}[s["pass_after"]]
+        print(
+            f"  {s['rpm']:9.0f}   {b1['unbalance_g_mm']:9.1f} -> {a1['unbalance_g_mm']:8.1f}"
+            f"          {b2['unbalance_g_mm']:9.1f} -> {a2['unbalance_g_mm']:8.1f}"
+            f"   {'' if per is None else f'{per[0]:.0f} / {per[1]:.0f}'}{verdict}"
+        )

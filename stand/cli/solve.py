@@ -167,7 +167,7 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
 
 def run_across_speeds(args: argparse.Namespace) -> int:
     """One correction in N planes for the runs at several speeds; per speed, what it leaves."""
-    from stand.cli.format import ANGLE_NOTE, dump_json
+    from stand.cli.format import dump_json, print_speeds
     from stand.speeds import balance_speeds, speeds_json
 
     if args.summary or args.jobs != 1:
@@ -178,25 +178,7 @@ def run_across_speeds(args: argparse.Namespace) -> int:
     if args.json:
         dump_json(out)
         return 0
-    print(f"correction in {len(out['planes'])} planes for {len(out['speeds'])} speeds:")
-    for p in out["planes"]:
-        ws = " + ".join(f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg" for w in p["weights"])
-        extra = " (left out: the other planes do what it would)" if p["dependent"] else ""
-        print(
-            f"  plane {p['plane']} at {p['position_mm']:g} mm: {p['action']} {ws or 'nothing'} "
-            f"at radius {p['radius_mm']:g} mm{extra}"
-        )
-    print(f"({ANGLE_NOTE})")
-    print("speed [rpm]   plane 1 before -> after [g mm]   plane 2 before -> after   permissible")
-    for s in out["speeds"]:
-        (b1, b2), (a1, a2) = s["before"], s["after"]
-        per = s["permissible_g_mm"]
-        verdict = {None: "", True: "  pass", False: "  FAIL"}[s["pass_after"]]
-        print(
-            f"  {s['rpm']:9.0f}   {b1['unbalance_g_mm']:9.1f} -> {a1['unbalance_g_mm']:8.1f}"
-            f"          {b2['unbalance_g_mm']:9.1f} -> {a2['unbalance_g_mm']:8.1f}"
-            f"   {'' if per is None else f'{per[0]:.0f} / {per[1]:.0f}'}{verdict}"
-        )
+    print_speeds(out)
     for w in out["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
     return 0
