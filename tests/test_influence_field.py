@@ -133,3 +133,39 @@ def test_bad_runs_files_are_one_line_naming_the_key(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err, err
     assert "Traceback" not in err
+
+
+def test_recorded_runs_at_two_speeds_give_the_scene_s_unbalance_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Trial runs recorded at 600 and 800 rpm (one run file per speed): four readings, two
+    planes; the correction cancels the demo scene's 5000 g mm at 30 deg and 3000 at 200 deg
+    (within 2 %, 2 deg: the runs' noise through the trial runs' matrix)."""
+    runs = []
+    for name, add in (("r0", []), ("t1", ["--add", "1:20@0"]), ("t2", ["--add", "2:20@0"])):
+        files = []
+        for rpm in ("600", "800"):
+            path = tmp_path / f"{name}-{rpm}.h5"
+            assert main(["simulate", "demo", "--rpm", rpm, *add, "--out", str(path)]) == 0
+            files.append(path.name)
+        runs.append(files)
+    (tmp_path / "runs.toml").write_text(
+        f"[[runs]]\nfile = {runs[0]}\n"
+        f"[[runs]]\nfile = {runs[1]}\ntrial = {{ plane = 1, mass_g = 20, angle_deg = 0 }}\n"
+        f"[[runs]]\nfile = {runs[2]}\ntrial = {{ plane = 2, mass_g = 20, angle_deg = 0 }}\n"
+    )
+    out = run_json(["influence", str(tmp_path / "runs.toml"), "--method", "wls"], capsys)
+    assert [(r["sensor"], round(r["speed_rpm"])) for r in out["readings"]] == [
+        (1, 600),
+        (2, 600),
+        (1, 800),
+        (2, 800),
+    ]
+    want = [(5000, 30), (3000, 200)]
+    for p, (g_mm, deg) in zip(out["planes"], want, strict=True):
+        assert p["unbalance_mass_g"] * p["radius_mm"] == pytest.approx(g_mm, rel=0.02)
+        assert abs((p["unbalance_angle_deg"] - deg + 180) % 360 - 180) < 2
+    (tmp_path / "twice.toml").write_text(f"[[runs]]\nfile = {[runs[0][0], runs[0][0]]}\n")
+    capsys.readouterr()
+    assert main(["influence", str(tmp_path / "twice.toml")]) == 2
+    assert "one run file per speed" in capsys.readouterr().err
