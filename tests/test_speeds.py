@@ -166,3 +166,26 @@ def test_bad_speed_lists_are_one_line(speeds: str, capsys: pytest.CaptureFixture
     assert main(["balance", "--scene", "auger-bow", "--speeds", speeds]) == 2
     err = capsys.readouterr().err
     assert "--speeds" in err and "Traceback" not in err
+
+
+def test_advise_proposes_the_speeds_and_a_third_plane_for_the_bending_auger(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The 1.7 m auger: a two-plane correction at the lowest good speed leaves over 10 % of a
+    first-mode unbalance at 1500 rpm, so a plane at mid-span (the mode's antinode) joins the
+    two; the same shaft 3x as thick (its mode 3x higher) keeps two planes."""
+    root = Path(__file__).resolve().parents[1]
+    capsys.readouterr()
+    assert main(["advise", "--config", str(root / "examples" / "auger-shaft.toml"), "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)["across_speeds"]
+    assert plan["planes_mm"] == [170.0, 850.0, 1530.0] and plan["two_plane_left"] > 0.1
+    assert len(plan["speeds_rpm"]) == 3 and plan["speeds_rpm"][-1] == 1500.0
+    stiff = tmp_path / "stiff.toml"
+    stiff.write_text(
+        (root / "examples" / "auger-shaft.toml")
+        .read_text()
+        .replace("diameter_m = 0.060", "diameter_m = 0.180")
+    )
+    assert main(["advise", "--config", str(stiff), "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)["across_speeds"]
+    assert plan["planes_mm"] == [170.0, 1530.0] and plan["two_plane_left"] < 0.1

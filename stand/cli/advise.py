@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from stand.cli.common import parse_rpm
 from stand.cli.format import dump_json
@@ -31,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
         from stand.core.flexible import rigid_limit_rpm
 
         limit = rigid_limit_rpm(cfg.rotor.bending_hz)
-    out = {
+    out: dict[str, Any] = {
         "natural_frequencies_hz": list(a.natural_frequencies_hz),
         "natural_frequencies_rpm": [f * 60 for f in a.natural_frequencies_hz],
         "recommended_rpm": list(a.recommended_rpm) if a.recommended_rpm else None,
@@ -50,6 +51,17 @@ def run(args: argparse.Namespace) -> int:
             for r in a.rows
         ],
     }
+    plan = None
+    if beam is not None and a.recommended_rpm and top:
+        from stand.calib.advisor import plan_across_speeds
+
+        plan = plan_across_speeds(params, beam, a.recommended_rpm[0], top)
+        out["across_speeds"] = {
+            "speeds_rpm": [round(s, 1) for s in plan.speeds_rpm],
+            "planes_mm": [round(x * 1e3, 1) for x in plan.planes_m],
+            "two_plane_left": round(plan.two_plane_left, 4),
+            "reasons": list(plan.reasons),
+        }
     if args.json:
         dump_json(out)
         return 0
@@ -74,6 +86,16 @@ def run(args: argparse.Namespace) -> int:
             f"  - the rotor's first bending frequency is {f_ff:g} Hz ({60 * f_ff:.0f} rpm): "
             f"the rigid model stays within 1 % up to {limit:.0f} rpm{then}"
         )
+    if plan is not None:
+        print(
+            "across speeds (a bending rotor): run at "
+            + ", ".join(f"{s:.0f}" for s in plan.speeds_rpm)
+            + " rpm, correct in planes at "
+            + ", ".join(f"{x * 1e3:.0f}" for x in plan.planes_m)
+            + " mm ([[rotor.planes]]; stand balance --speeds)"
+        )
+        for reason in plan.reasons:
+            print(f"  - {reason}")
     print("     rpm  x top mode  g mm per m/s2  shift for C +-5 %  ")
     for r in a.rows[:: max(1, len(a.rows) // 12)]:
         flag = "  near a natural frequency" if r.near_resonance else ""
