@@ -185,3 +185,70 @@ def advise(
         tuple(reasons),
         None if bend is None else bend / (2 * math.pi),
     )
+
+
+TWO_PLANE_LEFT = 0.10
+"""A bending rotor balanced in two planes at the lowest speed that keeps more than 10 % of
+a bow's support vibration at the top speed needs a plane more (at the mode's antinode)."""
+
+
+@dataclass(frozen=True)
+class SpeedsPlan:
+    """Balancing across speeds: the speeds to run, the planes to correct in, why."""
+
+    speeds_rpm: tuple[float, ...]
+    planes_m: tuple[float, ...]
+    two_plane_left: float
+    """Of a bowed rotor's support vibration at the top speed, what a two-plane correction
+    at the lowest speed leaves (fraction)."""
+    reasons: tuple[str, ...]
+
+
+def plan_across_speeds(p: StandParameters, beam: Any, low_rpm: float, top_rpm: float) -> SpeedsPlan:
+    """Three speeds from ``low_rpm`` to ``top_rpm`` (geometric), and the planes: the
+    stand's two, plus the first bending mode's antinode between them when a two-plane
+    correction at ``low_rpm`` leaves more than :data:`TWO_PLANE_LEFT` of a bowed rotor's
+    support vibration at ``top_rpm`` (a half sine of eccentricity between the supports,
+    through the beam model), plus one per bending mode below the top speed (N + 2 planes
+    for N modes in the range)."""
+    from scipy.linalg import eigh
+
+    from stand.core.beam import lumped_masses, nodal_response, receptance
+
+    K, M = beam.K.copy(), beam.M.copy()
+    for i, (m, c) in zip(beam.support_nodes, ((p.M1, p.C1), (p.M2, p.C2)), strict=True):
+        K[2 * i, 2 * i] += c
+        M[2 * i, 2 * i] += m
+    lam, vec = eigh(K, M, subset_by_index=[0, 5])
+    wn = np.sqrt(np.maximum(lam, 0.0))
+    lo, hi = float(rpm_to_rad_s(low_rpm)), float(rpm_to_rad_s(top_rpm))
+    span = sorted(beam.x_m[list(beam.support_nodes)])
+    bow = np.clip(np.sin(np.pi * (beam.x_m - span[0]) / (span[1] - span[0])), 0.0, None)
+    U = lumped_masses(beam) * bow * 1e-4  # a bowed rotor (the scale does not matter)
+
+    def supports(w: float, Un: Any) -> Any:
+        return -(w**2) * nodal_response(beam, p, w, Un)[list(beam.support_nodes)]
+
+    planes = np.zeros(len(beam.x_m), complex)
+    planes[list(beam.plane_nodes)] = -np.linalg.solve(receptance(beam, p, lo), supports(lo, U))
+    left = float(np.linalg.norm(supports(hi, U + planes)) / np.linalg.norm(supports(hi, U)))
+    at = [float(beam.x_m[j]) for j in beam.plane_nodes]
+    inside = (beam.x_m > min(at)) & (beam.x_m < max(at))
+    reasons = [
+        f"a two-plane correction at {low_rpm:.0f} rpm leaves {100 * left:.0f} % of a bowed "
+        f"rotor's support vibration at {top_rpm:.0f} rpm"
+    ]
+    modes = [k for k in range(2, len(wn)) if wn[k] < hi * RESONANCE_BAND]
+    if left > TWO_PLANE_LEFT and 2 not in modes:
+        modes = [2, *modes]
+    for k in modes:
+        phi = np.where(inside, np.abs(vec[0::2, k]), 0.0)
+        x = round(float(beam.x_m[int(np.argmax(phi))]), 3)
+        if all(abs(x - a) > 0.05 * (span[1] - span[0]) for a in at):
+            at.append(x)
+            reasons.append(
+                f"a plane at {1e3 * x:.0f} mm: the antinode of bending mode {k - 1} "
+                f"({wn[k] / (2 * math.pi):.1f} Hz in the stand)"
+            )
+    speeds = tuple(float(s) for s in np.geomspace(low_rpm, top_rpm, 3))
+    return SpeedsPlan(speeds, tuple(sorted(at)), left, tuple(reasons))
