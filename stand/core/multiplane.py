@@ -108,7 +108,7 @@ def significance_factors(alpha: ArrayLike) -> NDArray[np.float64]:
 
     >>> f = significance_factors([[1, 2, 1], [1, 2, 0], [0, 0, 1]])
     >>> [round(float(x), 3) for x in f]
-    [0.0, 1.0, 0.816]
+    [0.0, 1.0, 0.866]
     """
     a = np.asarray(alpha, dtype=np.complex128)
     norms = np.linalg.norm(a, axis=0)

@@ -1,0 +1,262 @@
+"""The stand's calibration judged from production: each correction as a datum, drift alarms.
+
+A rotor corrected as the software prescribed and checked after gives the
+stand's response to a known unbalance: the initial run's support phasors
+``A0``, the check's ``A1`` [m/s^2] and the correction ``dU`` put on [kg m]
+(``U = q R e^{-i phi}``).  With the calibration right, ``A1 - A0 =
+F(theta) dU`` (:func:`stand.core.model.forward` at the run's speed); the
+residual::
+
+    r = (A1 - A0) - F(theta) dU
+
+is noise: the two runs' (their covariances) and the operator's placement
+(each plane's mass off by ``sigma_m`` relative and its angle by
+``sigma_phi``: ``dU_j (eps_m - i eps_phi)``).  Whitened by that covariance,
+``z^T z`` is chi-square with 4 degrees of freedom.  A drifting stand adds
+``J dtheta`` to ``r`` (``J``: the response's derivative with respect to each
+parameter, relative for stiffnesses, masses and sensor gains, in radians for
+the reference angle), so:
+
+- the **alarm** is Page's CUSUM on ``z^T z``: ``S_k = max(0, S_{k-1} + z^T z -
+  CUSUM_K)``, raised when ``S_k > CUSUM_H``; under a stable stand the chance
+  of an alarm within :data:`RUN_LENGTH` data is at most :data:`FALSE_ALARM`
+  (the constants are set by simulation, ``tests/test_drift.py`` checks them);
+- **what moved** is the single parameter whose generalised least-squares fit
+  explains the residuals best, with its interval; a support's stiffness and
+  mass act alike at one speed (``C/w^2 - M``), and the answer says so.
+
+Pure numerics: arrays in, arrays out.
+"""
+
+from __future__ import annotations
+
+import cmath
+import dataclasses
+import functools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from stand.core.model import StandParameters, forward
+from stand.errors import ModelError
+
+PARAMETERS = ("C1", "C2", "M1", "M2", "reference_angle", "gain1", "gain2")
+"""What may drift: support stiffnesses and masses, the reference sensor's angle, the two
+accelerometers' gains."""
+WATCHED = ("C1", "C2", "reference_angle", "gain1", "gain2")
+"""The directions the CUSUMs watch, each way (a support's mass acts as its stiffness at one
+speed: watching C_i watches both)."""
+CUSUM_K = 0.5
+"""Each CUSUM's allowance [standard deviations per datum]: half the shift of a drift worth
+catching (one standard deviation per datum: C1 -8 % on the demo stand with 2 %, 2 deg
+placement scatter)."""
+CUSUM_H = 12.0
+"""The alarm threshold: with :data:`CUSUM_K`, at most :data:`FALSE_ALARM` chance of any of
+the ten CUSUMs raising an alarm within :data:`RUN_LENGTH` data of a stable stand (by
+simulation, ``tests/test_drift.py``)."""
+FALSE_ALARM = 0.01
+RUN_LENGTH = 1000
+ALIKE = 0.99
+"""Two parameters whose effects on the data correlate above this cannot be told apart."""
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Datum:
+    """One corrected and checked rotor: speed [rad/s], the phasors before and after
+    [m/s^2] and their real covariances (4 x 4 on ``[Re A1, Im A1, Re A2, Im A2]``), and
+    the correction put on per plane [kg m]."""
+
+    omega_rad_s: float
+    A0: NDArray[np.complex128]
+    A1: NDArray[np.complex128]
+    cov0: FloatArray
+    cov1: FloatArray
+    dU_kg_m: NDArray[np.complex128]
+
+
+def _real(z: NDArray[np.complex128]) -> FloatArray:
+    return np.column_stack([z.real, z.imag]).ravel()
+
+
+@functools.lru_cache(maxsize=256)
+def _F(p: StandParameters, omega: float) -> NDArray[np.complex128]:
+    """``forward`` as a 2 x 2 matrix (every datum of a series shares the speed: cached)."""
+    F = np.array(np.asarray(forward(p, omega, np.eye(2)), dtype=np.complex128).T)  # rows: supports
+    F.flags.writeable = False
+    return F
+
+
+def _perturbed(p: StandParameters, name: str, x: float) -> StandParameters:
+    return dataclasses.replace(p, **{name: getattr(p, name) * (1 + x)})
+
+
+def response(
+    p: StandParameters, omega: float, dU: NDArray[np.complex128], delta: dict[str, float]
+) -> NDArray[np.complex128]:
+    """The stand's response ``F dU`` [m/s^2] with the parameters moved by ``delta``
+    (relative for C, M and gains, radians for the reference angle)."""
+    q = p
+    for name in ("C1", "C2", "M1", "M2"):
+        if delta.get(name):
+            q = _perturbed(q, name, delta[name])
+    out = _F(q, float(omega)) @ np.asarray(dU, dtype=np.complex128)
+    out = out * np.array([1 + delta.get("gain1", 0.0), 1 + delta.get("gain2", 0.0)])
+    # a reference mark seen later by ``d`` turns every phasor by e^{+i d} (the model's sense)
+    turned: NDArray[np.complex128] = out * cmath.exp(1j * delta.get("reference_angle", 0.0))
+    return turned
+
+
+def jacobian(p: StandParameters, d: Datum, names: Sequence[str] = PARAMETERS) -> FloatArray:
+    """``d [Re, Im] (F dU) / d theta`` (4 x len(names)), central differences (1e-6)."""
+    h = 1e-6
+    cols = []
+    for name in names:
+        up = response(p, d.omega_rad_s, d.dU_kg_m, {name: h})
+        down = response(p, d.omega_rad_s, d.dU_kg_m, {name: -h})
+        cols.append(_real((up - down) / (2 * h)))
+    return np.column_stack(cols)
+
+
+def covariance(p: StandParameters, d: Datum, scatter_rel: float, scatter_rad: float) -> FloatArray:
+    """The residual's real covariance: both runs' noise and the operator's placement."""
+    F = _F(p, float(d.omega_rad_s))
+    Fr = np.block([[F.real, -F.imag], [F.imag, F.real]])  # on [Re U, Im U] -> [Re A, Im A]
+    cu = np.zeros((4, 4))
+    for j, u in enumerate(d.dU_kg_m):
+        a = np.array([u.real, u.imag])
+        b = np.array([u.imag, -u.real])
+        block = scatter_rel**2 * np.outer(a, a) + scatter_rad**2 * np.outer(b, b)
+        idx = [j, 2 + j]
+        cu[np.ix_(idx, idx)] = block
+    ca = Fr @ cu @ Fr.T  # ordered [Re A1, Re A2, Im A1, Im A2]
+    order = [0, 2, 1, 3]
+    return np.asarray(d.cov0 + d.cov1 + ca[np.ix_(order, order)], dtype=float)
+
+
+def residual(p: StandParameters, d: Datum) -> FloatArray:
+    """``(A1 - A0) - F dU`` as ``[Re, Im]`` per support [m/s^2]."""
+    return _real(d.A1 - d.A0 - response(p, d.omega_rad_s, d.dU_kg_m, {}))
+
+
+def whitened(
+    p: StandParameters, d: Datum, scatter_rel: float, scatter_rad: float
+) -> tuple[FloatArray, FloatArray]:
+    """The whitened residual ``z`` (4) and Jacobian (4 x P): ``L^-1 r``, ``L^-1 J`` with
+    ``L L^T`` the residual's covariance."""
+    try:
+        L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
+    except np.linalg.LinAlgError as exc:
+        raise ModelError("a datum's covariance is not positive definite") from exc
+    return np.linalg.solve(L, residual(p, d)), np.linalg.solve(L, jacobian(p, d))
+
+
+def scores(zs: Sequence[FloatArray], Js: Sequence[FloatArray]) -> FloatArray:
+    """Each datum's standardised score along each watched direction, both ways: ``(n, 10)``,
+    each N(0, 1) on a stable stand (``J_k^T z / |J_k|``)."""
+    cols = [PARAMETERS.index(n) for n in WATCHED]
+    out = []
+    for z, J in zip(zs, Js, strict=True):
+        Jk = J[:, cols]
+        u = (Jk.T @ z) / np.linalg.norm(Jk, axis=0)
+        out.append(np.concatenate([u, -u]))
+    return np.array(out).reshape(len(out), 2 * len(cols))
+
+
+def cusum(u: FloatArray, k: float = CUSUM_K, h: float = CUSUM_H) -> tuple[FloatArray, int | None]:
+    """Page's one-sided CUSUMs of the scores ``u`` (n x streams): the largest path per datum,
+    and the index of the first datum at which any stream exceeds ``h`` (None: no alarm)."""
+    S = np.zeros(u.shape[1])
+    top = np.zeros(len(u))
+    first = None
+    for i, x in enumerate(u):
+        S = np.maximum(0.0, S + x - k)
+        top[i] = float(S.max())
+        if first is None and top[i] > h:
+            first = i
+    return top, first
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One parameter fitted alone: its change (relative, or radians), 95 % half-width,
+    the chi-square left, and the parameters it cannot be told apart from."""
+
+    name: str
+    change: float
+    interval95: float
+    chi2: float
+    alike: tuple[str, ...]
+
+
+def single_fits(zs: Sequence[FloatArray], Js: Sequence[FloatArray]) -> list[Fit]:
+    """Each parameter fitted alone to the whitened residuals, best (least chi-square) first."""
+    z = np.concatenate(zs)
+    J = np.vstack(Js)
+    norms = np.linalg.norm(J, axis=0)
+    corr = (J.T @ J) / np.outer(norms, norms)
+    fits = []
+    for k, name in enumerate(PARAMETERS):
+        jk = J[:, k]
+        info = float(jk @ jk)
+        if info <= 0:
+            continue
+        change = float(jk @ z) / info
+        left = z - jk * change
+        alike = tuple(
+            PARAMETERS[m] for m in range(len(PARAMETERS)) if m != k and abs(corr[k, m]) > ALIKE
+        )
+        fits.append(Fit(name, change, 1.96 / math.sqrt(info), float(left @ left), alike))
+    return sorted(fits, key=lambda f: f.chi2)
+
+
+def fit(
+    p: StandParameters,
+    data: Sequence[Datum],
+    name: str,
+    scatter_rel: float,
+    scatter_rad: float,
+    iterations: int = 4,
+) -> Fit:
+    """``name`` alone fitted to the data by Gauss-Newton (the response is not linear in it:
+    an 8 % stiffness change seen through the old one's slope reads 7 %)."""
+    change = 0.0
+    for _ in range(iterations):
+        q = _moved(p, name, change)
+        pairs = [_whitened_at(p, q, d, name, change, scatter_rel, scatter_rad) for d in data]
+        z = np.concatenate([a for a, _ in pairs])
+        jk = np.concatenate([b for _, b in pairs])
+        info = float(jk @ jk)
+        if info <= 0:
+            raise ModelError(f"the data do not tell {name}")
+        change += float(jk @ z) / info
+    left = z - jk * (float(jk @ z) / info)
+    return Fit(name, change, 1.96 / math.sqrt(info), float(left @ left), ())
+
+
+def _moved(p: StandParameters, name: str, change: float) -> StandParameters:
+    return _perturbed(p, name, change) if name in ("C1", "C2", "M1", "M2") else p
+
+
+def _whitened_at(
+    p: StandParameters,
+    q: StandParameters,
+    d: Datum,
+    name: str,
+    change: float,
+    scatter_rel: float,
+    scatter_rad: float,
+) -> tuple[FloatArray, FloatArray]:
+    """The whitened residual and the column for ``name`` at ``change`` (the covariance stays
+    the calibration's: it is the noise's)."""
+    L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
+    extra = {} if name in ("C1", "C2", "M1", "M2") else {name: change}
+    r = _real(d.A1 - d.A0 - response(q, d.omega_rad_s, d.dU_kg_m, extra))
+    h = 1e-6
+    up = response(p, d.omega_rad_s, d.dU_kg_m, {name: change + h})
+    down = response(p, d.omega_rad_s, d.dU_kg_m, {name: change - h})
+    return np.linalg.solve(L, r), np.linalg.solve(L, _real((up - down) / (2 * h)))
