@@ -73,8 +73,10 @@ def test_support_1_softening_8_percent_is_found_and_named(demo) -> None:
         data = series(demo, 900, 200, np.random.default_rng(100 + seed), change_at=100,
                       truth=c1_down(0.08))  # fmt: skip
         pairs = [whitened(demo, d, *SCATTER) for d in data]
-        _, first = cusum(scores([z for z, _ in pairs], [j for _, j in pairs]))
+        c = cusum(scores([z for z, _ in pairs], [j for _, j in pairs]))
+        first = c.alarm_at
         assert first is not None and first >= 100, first
+        assert c.change_at is not None and abs(c.change_at - 100) <= 30, c.change_at
         delays.append(first - 100 + 1)
         after = data[100:]
         best = single_fits([z for z, _ in pairs[100:]], [j for _, j in pairs[100:]])[0]

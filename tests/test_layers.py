@@ -35,6 +35,8 @@ APP = DRIVERS | {
     "stand.tooling",
     "stand.field",
     "stand.speeds",
+    "stand.health",
+    "stand.production",
 }
 
 ALLOWED: dict[str, set[str]] = {
@@ -74,6 +76,10 @@ ALLOWED: dict[str, set[str]] = {
     "stand/field.py": NUMERIC | APP | {"stand.config"},
     # balancing across speeds: N planes through the beam model
     "stand/speeds.py": NUMERIC | APP,
+    # the stand judged from production: corrections as calibration data, drift, refits
+    "stand/health.py": NUMERIC | APP | {"stand.config"},
+    # a simulated production series (runs, corrections, checks) into the archive
+    "stand/production.py": NUMERIC | APP | {"stand.sim", "stand.config"},
     "stand/check.py": NUMERIC | APP,
     # the archive: results into a database (SQLAlchemy; schema migrations by Alembic)
     "stand/archive": NUMERIC | APP | {"stand.archive", "sqlalchemy", "alembic", "platformdirs"},

@@ -2,7 +2,9 @@
 
 One row per run (its job, its file and digest, its verdict, the run it
 checks), one row per plane (the unbalance as a complex number in kg m, its
-95 % radius, the tolerance and the URR when it was a check).  SI units and
+95 % radius, the tolerance and the URR when it was a check), and one row
+per confirmed correction with its check (the calibration datum of
+:mod:`stand.health`).  SI units and
 complex parts in columns; the whole result as JSON beside them, so that a
 report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -72,3 +74,22 @@ planes = Table(
     Column("leftover_kg_m", Float, nullable=False),  # what rounding the correction leaves
     Column("urr", Float),  # when the run checks another
 )
+
+corrections = Table(
+    "corrections",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("initial_sha256", String(64), nullable=False),  # the run before the correction
+    Column("check_sha256", String(64), nullable=False, unique=True),  # the check after it
+    Column("stand_id", String(64)),
+    Column("rotor_type", String(64)),
+    Column("rpm", Float, nullable=False),
+    Column("config_sha256", String(64), nullable=False),  # the calibration it was made with
+    Column("confirmed_by", String(64)),  # the operator who confirmed it applied
+    Column("applied", String(16), nullable=False),  # "as shown" or "typed" (what was put on)
+    Column("start_time", String(40), nullable=False),  # the check run's
+    Column("archived_at", String(40), nullable=False),
+    Column("datum_json", Text, nullable=False),  # phasors, covariances, correction, config
+)  # revision 0003: each confirmed correction and its check (stand.health)
+Index("ix_corrections_group", corrections.c.stand_id, corrections.c.rotor_type,
+      corrections.c.start_time)  # fmt: skip

@@ -150,6 +150,37 @@ class Archive:
         except sa.exc.SQLAlchemyError as exc:
             raise ArchiveError(_reason(exc), url=self.shown) from exc
 
+    def add_correction(self, row: dict[str, Any]) -> int:
+        """Write one correction datum (:mod:`stand.health`); a check already stored (the
+        same digest) is not written again: its id is returned."""
+        import sqlalchemy as sa
+
+        from stand.archive.schema import corrections
+
+        with self.transaction() as conn:
+            found = conn.execute(
+                sa.select(corrections.c.id).where(corrections.c.check_sha256 == row["check_sha256"])
+            ).scalar()
+            if found is not None:
+                return int(found)
+            stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+            new = conn.execute(corrections.insert().values(**row, archived_at=stamp))
+            return int(new.inserted_primary_key[0])
+
+    def correction_rows(self, stand: str | None = None, rotor_type: str | None = None) -> list[Any]:
+        """The correction data, oldest first, of a stand and a rotor type (None: any)."""
+        import sqlalchemy as sa
+
+        from stand.archive.schema import corrections
+
+        q = sa.select(corrections).order_by(corrections.c.start_time, corrections.c.id)
+        if stand is not None:
+            q = q.where(corrections.c.stand_id == stand)
+        if rotor_type is not None:
+            q = q.where(corrections.c.rotor_type == rotor_type)
+        with self.transaction() as conn:
+            return list(conn.execute(q).mappings())
+
     def run_id(self, file_sha256: str) -> int | None:
         """The id of the run with this file digest, if archived."""
         import sqlalchemy as sa

@@ -16,6 +16,13 @@ from stand.cli.common import (
 )
 
 
+def parse_masses(text: str) -> list[tuple[int, float, float, float | None]]:
+    """``1:55.5@30,2:-12@200:80``: the masses put on, as ``--add`` takes each."""
+    from stand.cli.common import parse_mass
+
+    return [parse_mass(x) for x in text.split(",")]
+
+
 def parse_speeds(text: str) -> list[float]:
     """``900,1500,1800``: two speeds or more [rpm], each given once."""
     speeds = [parse_rpm(x) for x in text.split(",")]
@@ -58,6 +65,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "config's [[rotor.planes]] (as stand solve --across-speeds)",
     )
     add_across_speeds_arguments(p, flag=False)
+    g = p.add_argument_group("the check as a calibration datum (stand health)")
+    g.add_argument(
+        "--applied",
+        action="store_true",
+        help="with --check: the operator confirms the correction PREVIOUS_RUN prescribed was "
+        "put on as shown: the pair is stored as a calibration datum",
+    )
+    g.add_argument(
+        "--applied-masses",
+        type=parse_masses,
+        metavar="PLANE:GRAMS@DEG[:RADIUS_MM],...",
+        help="with --check: what was put on instead (negative grams: taken off): the pair is "
+        "stored as a calibration datum with these masses",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,6 +94,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.speeds:
         return _across_speeds(args)
+    if (args.applied or args.applied_masses) and not args.check:
+        from stand.errors import UsageError
+
+        raise UsageError("stand balance: --applied and --applied-masses go with --check")
     if args.report:  # refuse a report path that cannot be written before measuring
         from stand.drivers.files import check_output
 
@@ -100,7 +125,50 @@ def run(args: argparse.Namespace) -> int:
     if not args.json:
         print(f"report: {report}")
     archive_live(args, result, cfg)  # last: an archive that fails loses neither run nor report
+    if args.check:
+        _store_datum(args, result, cfg, params)
     return 0
+
+
+def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: object) -> None:
+    """A check after a confirmed correction: the pair into the archive (stand health)."""
+    from stand.archive import Archive, file_digest
+    from stand.cli.common import archive_url
+    from stand.health import datum_row
+    from stand.pipeline import correction_masses, solve_recording
+
+    if not (args.applied or args.applied_masses):
+        print(
+            "not a calibration datum: confirm the correction was put on as shown with "
+            "--applied (or --applied-masses)",
+            file=sys.stderr,
+        )
+        return
+    if args.no_archive:
+        print("not stored as a calibration datum: --no-archive", file=sys.stderr)
+        return
+    run_file = result.provenance.run_file  # type: ignore[attr-defined]
+    before = solve_recording(args.check)
+    if args.applied_masses:
+        R = (params.R1, params.R2)  # type: ignore[attr-defined]
+        masses = [
+            (p, g, a, R[p - 1] if r is None else r * 1e-3) for p, g, a, r in args.applied_masses
+        ]
+    else:
+        masses = correction_masses(args.check)
+    row = datum_row(
+        before,
+        result,
+        masses,
+        initial_sha256=file_digest(args.check),
+        check_sha256=file_digest(run_file),
+        confirmed_by=args.operator,
+        applied="typed" if args.applied_masses else "as shown",
+    )
+    with Archive(archive_url(args, cfg)) as a:
+        a.add_correction(row)
+    if not args.quiet:
+        print("stored as a calibration datum (stand health)", file=sys.stderr)
 
 
 def _across_speeds(args: argparse.Namespace) -> int:

@@ -10,7 +10,12 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
-from stand.cli.common import add_force_argument, write_text_output
+from stand.cli.common import (
+    add_archive_argument,
+    add_force_argument,
+    archive_url,
+    write_text_output,
+)
 from stand.cli.format import dump_json
 from stand.config import STRICT
 from stand.errors import ConfigError
@@ -37,6 +42,7 @@ class CalibFile(BaseModel):
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "runs",
+        nargs="?",
         metavar="RUNS.toml",
         help="[[runs]] file = RUN, masses = [{plane, mass_g, angle_deg}, ...] (the test "
         "masses on the proving rotor in that run; angles from the reference mark, "
@@ -51,9 +57,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--out",
-        required=True,
         metavar="CALIBRATED.toml",
-        help="the calibrated configuration to write",
+        help="the calibrated configuration to write (with --from-archive, default: beside "
+        "the config, CFG-recalibrated.toml; never the config itself without --force)",
     )
     add_force_argument(p, "--out")
     p.add_argument(
@@ -62,11 +68,34 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="a new rotor type on an identified stand (the config's): identify its "
         "M3, J3 and centre of mass instead of the stand",
     )
+    g = p.add_argument_group("recalibration from production (stand health)")
+    g.add_argument(
+        "--from-archive",
+        action="store_true",
+        help="re-identify the stand from the corrected and checked rotors in the archive "
+        "(the data since the change stand health found) instead of trial runs",
+    )
+    g.add_argument(
+        "--fit",
+        metavar="NAMES",
+        help="with --from-archive: the parameters to fit, e.g. C1 or C1,C2 (C1 C2 M1 M2 "
+        "gain1 gain2; default: what stand health says moved)",
+    )
+    g.add_argument("--stand", metavar="ID", help="with --from-archive: this stand's data")
+    g.add_argument("--rotor-type", metavar="TYPE", help="with --from-archive: this type's data")
+    add_archive_argument(g)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
+
+    if args.from_archive:
+        return _from_archive(args)
+    if not args.runs or not args.out:
+        from stand.errors import UsageError
+
+        raise UsageError("stand calibrate: give RUNS.toml and --out (or --from-archive)")
 
     from stand.calib.identify import NAMES, CalibrationRun, identify
     from stand.config import load_config, read_toml, validate
@@ -219,3 +248,88 @@ def _write(
         inputs=[args.config, args.runs],
     )
     return header
+
+
+FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
+
+
+def _from_archive(args: argparse.Namespace) -> int:
+    """``--from-archive``: the stand re-identified from production data; the new config
+    written beside the old (with a diff), the last rotors' answers old and new."""
+    import difflib
+
+    from stand.config import load_config, read_toml, updated_toml
+    from stand.drivers.files import check_output
+    from stand.errors import UsageError
+    from stand.health import answers, refit
+
+    out_path = args.out or str(
+        Path(args.config).with_name(Path(args.config).stem + "-recalibrated.toml")
+    )
+    if Path(out_path).resolve() == Path(args.config).resolve() and not args.force:
+        raise UsageError("stand calibrate: --out is the config itself: add --force to replace it")
+    check_output(out_path, force=args.force, inputs=[])
+    names = None
+    if args.fit:
+        names = [n.strip() for n in args.fit.split(",") if n.strip()]
+        bad = [n for n in names if n not in FITTABLE]
+        if bad or not names:
+            raise UsageError(
+                f"--fit: {', '.join(bad) or 'nothing'}: choose from {', '.join(FITTABLE)}"
+            )
+    cfg, params = load_config(args.config)
+    r = refit(archive_url(args, cfg), params, names, stand=args.stand, rotor_type=args.rotor_type)
+    stand = cfg.stand.model_copy(
+        update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
+        | {"calibrated": dt.date.today().isoformat()}
+    )
+    gain = list(cfg.sensors.gain)
+    for f in r.fits:
+        if f.name.startswith("gain"):
+            gain[int(f.name[-1]) - 1] *= 1 + f.change
+    new = cfg.model_copy(
+        update={"stand": stand, "sensors": cfg.sensors.model_copy(update={"gain": gain})}
+    )
+    original, _ = read_toml(args.config)
+    header = [
+        f"# recalibrated by stand calibrate --from-archive from {len(r.group.rows) - r.start} "
+        f"corrected rotors (from datum {r.start + 1} of {len(r.group.rows)}):",
+        *(
+            f"#   {f.name} {100 * f.change:+.3f} +- {100 * f.interval95:.3f} % (95 %)"
+            for f in r.fits
+        ),
+    ]
+    text = "\n".join(header) + "\n" + updated_toml(original, new)
+    write_text_output(out_path, text, force=args.force, inputs=[args.config])
+    diff = list(
+        difflib.unified_diff(
+            original.splitlines(), text.splitlines(), args.config, out_path, lineterm="", n=0
+        )
+    )
+    rows = answers(r)
+    if args.json:
+        dump_json(
+            {
+                "fits": [
+                    {"parameter": f.name, "change_pct": round(100 * f.change, 4),
+                     "interval95_pct": round(100 * f.interval95, 4)}
+                    for f in r.fits
+                ],
+                "data": len(r.group.rows) - r.start,
+                "config": out_path,
+                "diff": diff,
+                "last_rotors": rows,
+            }
+        )  # fmt: skip
+        return 0
+    print("\n".join(line[2:] for line in header))
+    print("\n".join(diff))
+    print("the last rotors' initial unbalance, old -> new calibration [g mm at deg]:")
+    for e in rows:
+        (o1, o2), (n1, n2) = e["old"], e["new"]
+        print(
+            f"  {e['check_sha256']}: plane 1 {o1[0]:.0f} at {o1[1]:.0f} -> {n1[0]:.0f} at "
+            f"{n1[1]:.0f}; plane 2 {o2[0]:.0f} at {o2[1]:.0f} -> {n2[0]:.0f} at {n2[1]:.0f}"
+        )
+    print(f"wrote {out_path}")
+    return 0

@@ -391,7 +391,7 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
     add_bus_arguments(p)
 
 
-def add_archive_argument(p: argparse.ArgumentParser) -> None:
+def add_archive_argument(p: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
     """``--archive URL``: the archive's database."""
     p.add_argument(
         "--archive",

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from stand import __version__
 from stand.cli.common import (
+    add_archive_argument,
     add_bus_arguments,
     add_job_arguments,
     add_scene_arguments,
@@ -38,6 +39,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "simulated stand (default: the scene's own)",
     )
     p.add_argument("--seed", type=int, help="random seed (overrides [run] seed)")
+    p.add_argument(
+        "--series",
+        type=int,
+        metavar="N",
+        help="a production series of N rotors, each run, corrected as prescribed (with "
+        "[effects.placement]'s scatter) and checked, on a stand that may drift "
+        "([effects.drift]); the runs go to --out-dir, results and calibration data to the "
+        "archive",
+    )
+    p.add_argument("--out-dir", metavar="DIR", help="with --series: where the runs go")
+    add_archive_argument(p)
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     add_scene_arguments(p)
     add_job_arguments(p)
@@ -50,6 +62,8 @@ def run(args: argparse.Namespace) -> int:
     from stand.drivers.streams import rebuild
     from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
+    if args.series is not None:
+        return _series(args)
     if not args.out and not args.bus:
         raise UsageError("stand simulate: give --out FILE, --bus, or both")
     if args.out:
@@ -105,4 +119,33 @@ def run(args: argparse.Namespace) -> int:
         finally:
             bus.shutdown()
         print(f"sent {sent} frames", file=sys.stderr)
+    return 0
+
+
+def _series(args: argparse.Namespace) -> int:
+    """``--series N``: a simulated production series into the archive."""
+    from stand.archive import url_for
+    from stand.production import simulate_series
+
+    if args.series < 1 or not args.out_dir:
+        raise UsageError("stand simulate: --series N (N >= 1) needs --out-dir DIR")
+    if args.out or args.bus:
+        raise UsageError("stand simulate: --series writes --out-dir and the archive only")
+    folder = Path(args.out_dir)
+    if not folder.is_dir():
+        raise UsageError(f"stand simulate: --out-dir {folder}: no such folder")
+    url = url_for(args.archive)
+    done = simulate_series(
+        args.scene,
+        args.series,
+        str(folder),
+        url,
+        seed=args.seed or 0,
+        on_rotor=lambda i: (
+            print(f"rotor {i} of {args.series}", file=sys.stderr)
+            if i % 10 == 0 or i == args.series
+            else None
+        ),
+    )
+    print(f"{done} rotors balanced, corrected and checked; their data in {url}")
     return 0

@@ -167,18 +167,30 @@ def scores(zs: Sequence[FloatArray], Js: Sequence[FloatArray]) -> FloatArray:
     return np.array(out).reshape(len(out), 2 * len(cols))
 
 
-def cusum(u: FloatArray, k: float = CUSUM_K, h: float = CUSUM_H) -> tuple[FloatArray, int | None]:
-    """Page's one-sided CUSUMs of the scores ``u`` (n x streams): the largest path per datum,
-    and the index of the first datum at which any stream exceeds ``h`` (None: no alarm)."""
+@dataclass(frozen=True)
+class Cusum:
+    """The CUSUMs over a series: the largest path per datum, the first datum over the
+    threshold (None: no alarm), and where the alarming stream last stood at zero before it
+    (the change's estimated start: the first datum after that zero)."""
+
+    top: FloatArray
+    alarm_at: int | None
+    change_at: int | None
+
+
+def cusum(u: FloatArray, k: float = CUSUM_K, h: float = CUSUM_H) -> Cusum:
+    """Page's one-sided CUSUMs of the scores ``u`` (n x streams)."""
     S = np.zeros(u.shape[1])
+    last_zero = np.full(u.shape[1], -1)
     top = np.zeros(len(u))
-    first = None
     for i, x in enumerate(u):
         S = np.maximum(0.0, S + x - k)
+        last_zero[S == 0.0] = i
         top[i] = float(S.max())
-        if first is None and top[i] > h:
-            first = i
-    return top, first
+        if top[i] > h:
+            stream = int(np.argmax(S))
+            return Cusum(top[: i + 1], i, int(last_zero[stream]) + 1)
+    return Cusum(top, None, None)
 
 
 @dataclass(frozen=True)
@@ -220,43 +232,63 @@ def fit(
     name: str,
     scatter_rel: float,
     scatter_rad: float,
-    iterations: int = 4,
+    iterations: int = 5,
 ) -> Fit:
-    """``name`` alone fitted to the data by Gauss-Newton (the response is not linear in it:
-    an 8 % stiffness change seen through the old one's slope reads 7 %)."""
-    change = 0.0
+    """``name`` alone fitted to the data (:func:`fit_many`)."""
+    return fit_many(p, data, (name,), scatter_rel, scatter_rad, iterations)[0]
+
+
+def fit_many(
+    p: StandParameters,
+    data: Sequence[Datum],
+    names: Sequence[str],
+    scatter_rel: float,
+    scatter_rad: float,
+    iterations: int = 5,
+) -> list[Fit]:
+    """``names`` fitted together to the data by Gauss-Newton (the response is not linear in
+    them: an 8 % stiffness change seen through the old one's slope reads 7 %), each with its
+    95 % half-width from the information matrix."""
+    change = dict.fromkeys(names, 0.0)
     for _ in range(iterations):
-        q = _moved(p, name, change)
-        pairs = [_whitened_at(p, q, d, name, change, scatter_rel, scatter_rad) for d in data]
-        z = np.concatenate([a for a, _ in pairs])
-        jk = np.concatenate([b for _, b in pairs])
-        info = float(jk @ jk)
-        if info <= 0:
-            raise ModelError(f"the data do not tell {name}")
-        change += float(jk @ z) / info
-    left = z - jk * (float(jk @ z) / info)
-    return Fit(name, change, 1.96 / math.sqrt(info), float(left @ left), ())
+        q = p
+        for n in names:
+            q = _moved(q, n, change[n]) if n in ("C1", "C2", "M1", "M2") else q
+        extra = {n: v for n, v in change.items() if n not in ("C1", "C2", "M1", "M2")}
+        zs, Js = [], []
+        for d in data:
+            L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
+            r = _real(d.A1 - d.A0 - response(q, d.omega_rad_s, d.dU_kg_m, extra))
+            zs.append(np.linalg.solve(L, r))
+            Js.append(np.linalg.solve(L, _columns(p, d, names, change)))
+        z, J = np.concatenate(zs), np.vstack(Js)
+        info = J.T @ J
+        try:
+            cov = np.linalg.inv(info)
+        except np.linalg.LinAlgError as exc:
+            raise ModelError(f"the data cannot tell {', '.join(names)} apart") from exc
+        step = cov @ (J.T @ z)
+        for n, dx in zip(names, step, strict=True):
+            change[n] += float(dx)
+    left = z - J @ step
+    chi2 = float(left @ left)
+    return [
+        Fit(n, change[n], 1.96 * math.sqrt(float(cov[k, k])), chi2, ()) for k, n in enumerate(names)
+    ]
+
+
+def _columns(
+    p: StandParameters, d: Datum, names: Sequence[str], at: dict[str, float]
+) -> FloatArray:
+    """The response's derivative with respect to each of ``names`` at ``at``: 4 x n."""
+    h = 1e-6
+    cols = []
+    for n in names:
+        up = response(p, d.omega_rad_s, d.dU_kg_m, {**at, n: at[n] + h})
+        down = response(p, d.omega_rad_s, d.dU_kg_m, {**at, n: at[n] - h})
+        cols.append(_real((up - down) / (2 * h)))
+    return np.column_stack(cols)
 
 
 def _moved(p: StandParameters, name: str, change: float) -> StandParameters:
     return _perturbed(p, name, change) if name in ("C1", "C2", "M1", "M2") else p
-
-
-def _whitened_at(
-    p: StandParameters,
-    q: StandParameters,
-    d: Datum,
-    name: str,
-    change: float,
-    scatter_rel: float,
-    scatter_rad: float,
-) -> tuple[FloatArray, FloatArray]:
-    """The whitened residual and the column for ``name`` at ``change`` (the covariance stays
-    the calibration's: it is the noise's)."""
-    L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
-    extra = {} if name in ("C1", "C2", "M1", "M2") else {name: change}
-    r = _real(d.A1 - d.A0 - response(q, d.omega_rad_s, d.dU_kg_m, extra))
-    h = 1e-6
-    up = response(p, d.omega_rad_s, d.dU_kg_m, {name: change + h})
-    down = response(p, d.omega_rad_s, d.dU_kg_m, {name: change - h})
-    return np.linalg.solve(L, r), np.linalg.solve(L, _real((up - down) / (2 * h)))

@@ -243,6 +243,38 @@ class ToolingEffect(_Table):
     plane2: PlaneUnbalance
 
 
+DriftParameter = Literal["C1", "C2", "M1", "M2"]
+
+
+class DriftEffect(_Table):
+    """``[effects.drift]``: a production series (``stand simulate --series``) on a stand
+    that changes from rotor ``from_rotor`` on (1-based): ``step_pct`` at once (e.g.
+    ``{ C1 = -8.0 }``) and ``per_rotor_pct`` more with every rotor after it; the runs keep
+    the calibration the software believes."""
+
+    from_rotor: Annotated[int, Field(ge=1)] = 1
+    step_pct: dict[DriftParameter, Annotated[float, Field(gt=-90.0, lt=900.0)]] = {}
+    per_rotor_pct: dict[DriftParameter, Annotated[float, Field(gt=-10.0, lt=10.0)]] = {}
+
+    def factor(self, name: str, rotor: int) -> float:
+        """How much ``name`` is multiplied by at ``rotor`` (1-based)."""
+        if rotor < self.from_rotor:
+            return 1.0
+        step = {str(k): v for k, v in self.step_pct.items()}.get(name, 0.0)
+        per = {str(k): v for k, v in self.per_rotor_pct.items()}.get(name, 0.0)
+        ramp = per * (rotor - self.from_rotor)
+        return float(max(0.01, 1 + (step + ramp) / 100))
+
+
+class PlacementEffect(_Table):
+    """``[effects.placement]``: the operator's scatter when the correction is put on
+    (``--series``): each mass off by ``mass_pct`` (relative) and its angle by ``angle_deg``
+    (standard deviations)."""
+
+    mass_pct: NonNegative = 0.0
+    angle_deg: NonNegative = 0.0
+
+
 class Dropout(_Table):
     """The bus carries nothing from ``at_s`` for ``seconds``."""
 
@@ -268,6 +300,8 @@ class Effects(_Table):
     clearance: Clearance | None = None
     dropout: Dropout | None = None
     tooling: ToolingEffect | None = None
+    drift: DriftEffect | None = None
+    placement: PlacementEffect | None = None
 
     def named(self) -> list[str]:
         """The effects the scene names, in table order."""
