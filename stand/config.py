@@ -233,6 +233,22 @@ class PlantTable(BaseModel):
     published as JSON on ``stand/<stand id>/result``."""
 
 
+class CalibrationTable(BaseModel):
+    """``[calibration]``: how well the stand's calibration is known (half-widths of uniform
+    bands, seed 003): every result's ``calibration_interval_g_mm`` follows from them."""
+
+    model_config = STRICT
+
+    C_pct: Annotated[FiniteFloat, Field(ge=0.0, le=100.0)] = 5.0
+    """C1, C2 [%]."""
+    M_pct: Annotated[FiniteFloat, Field(ge=0.0, le=100.0)] = 2.0
+    """M1, M2, M3, J3 [%]."""
+    length_mm: Annotated[FiniteFloat, Field(ge=0.0, le=1e3)] = 1.0
+    """a, b, c, d [mm]."""
+    gain_pct: Annotated[FiniteFloat, Field(ge=0.0, le=100.0)] = 1.0
+    """Each sensor's gain [%]."""
+
+
 class ArchiveTable(BaseModel):
     """``[archive]``: where runs are archived (a database URL; default: the user's own)."""
 
@@ -273,6 +289,7 @@ class Config(BaseModel):
     archive: ArchiveTable | None = None
     tooling: ToolingTable | None = None
     plant: PlantTable | None = None
+    calibration: CalibrationTable = CalibrationTable()
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measure.measure` needs from the configuration."""

@@ -173,6 +173,24 @@ def _uncertainty(m: Measurement, params: StandParameters, options: SolveOptions)
     )
 
 
+def calibration_radius(
+    m: Measurement, cfg: Any, params: StandParameters, options: SolveOptions
+) -> tuple[float, float] | None:
+    """Each plane's 95 % radius [kg m] from what the calibration is known to (the config's
+    ``[calibration]`` bands, linearised, :mod:`stand.calib.tolerance`): what the stand's
+    knowledge allows, beside what the data allow.  None where the answer is not the rigid
+    model's (an influence matrix, a bending shaft)."""
+    from stand.calib.tolerance import Tolerances, parameter_uncertainty
+
+    if options.matrix is not None or cfg.rotor.shaft is not None:
+        return None
+    c = cfg.calibration
+    tol = Tolerances(c.C_pct / 100, c.M_pct / 100, c.length_mm * 1e-3, c.gain_pct / 100)
+    A = np.array([ph.A_m_s2 for ph in m.supports])
+    r = parameter_uncertainty(params, m.omega_rad_s, A, tol, draws=0)
+    return float(r.radius95_linear[0]), float(r.radius95_linear[1])
+
+
 def traces_of(streams: Any, omega_rad_s: float) -> Traces:
     """Spectra (up to 4x) and speed over the run, per node, for the report."""
     spectra: dict[int, tuple[np.ndarray, np.ndarray]] = {}
@@ -266,6 +284,7 @@ def build_result(
         positions=(c.positions, c.position0_deg),
         stand_name=cfg.stand.name,
         calibrated=cfg.stand.calibrated,
+        calibration_radius_kg_m=calibration_radius(m, cfg, params, options),
     )
 
 

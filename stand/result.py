@@ -191,6 +191,9 @@ class Result:
     stand_name: str | None = None
     calibrated: str | None = None
     """The date of the stand's last calibration (YYYY-MM-DD), if the config says."""
+    calibration_radius_kg_m: tuple[float, float] | None = None
+    """Per plane: the 95 % radius the calibration's own uncertainty allows (the config's
+    ``[calibration]``), beside the measurement's; None where not the rigid model's."""
 
     @property
     def U_kg_m(self) -> np.ndarray:
@@ -338,6 +341,15 @@ def _corrections(r: Result) -> list[dict[str, Any]]:
     return out
 
 
+def _limited_by(r: Result, i: int) -> str:
+    """Which interval is the wider: what the data allow (``measurement``) or what the
+    calibration is known to (``calibration``)."""
+    cal = r.calibration_radius_kg_m
+    if cal is None or cal[i] <= r.measurement.radius95_kg_m[i]:
+        return "measurement"
+    return "calibration"
+
+
 def _tolerance(r: Result) -> dict[str, Any]:
     t = r.tolerance
     assert t is not None
@@ -353,6 +365,7 @@ def _tolerance(r: Result) -> dict[str, Any]:
                 "pass": bool(u <= per),
                 "margin_g_mm": _g_mm(per - u),
                 "pass_with_uncertainty": bool(u + rad <= per),
+                "limited_by": _limited_by(r, i),
             }
         )
     return {
@@ -439,9 +452,13 @@ def to_json(r: Result) -> dict[str, Any]:
     order, operator, note, rotor type); ``provenance`` last.
     """
     m = r.measurement
+    planes = _planes(m, r.corrections, r.correction_mode)
+    for i, pl in enumerate(planes):  # what the stand's knowledge allows, beside the data
+        cal = r.calibration_radius_kg_m
+        pl["calibration_interval_g_mm"] = None if cal is None else _g_mm(cal[i])
     out: dict[str, Any] = {
         "rpm": round(float(rad_s_to_rpm(m.omega_rad_s)), 3),
-        "planes": _planes(m, r.corrections, r.correction_mode),
+        "planes": planes,
         "supports": _supports(m),
         "condition_number": float(m.solution.condition_number),
         "warnings": [w.message for w in r.warnings],

@@ -159,3 +159,28 @@ def test_the_issue_s_demo_case_is_flagged_within_10_rotors(
     (g,) = run_json(["health", "--archive", url], capsys)["groups"]
     assert g["alarm"] and g["alarm_at"] <= 10, g
     assert g["moved"]["part"].startswith("support 1"), g
+
+
+def test_every_answer_carries_the_calibration_s_own_interval(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The demo run on the aged stand (C1 -10 %, M1 +5 %) solved with the stored
+    calibration: plane 1 is about 5 % off, far outside the measurement's own interval; the
+    calibration's interval from [calibration] bands that admit such an age (C 10 %, M 5 %)
+    holds the truth, and the verdict says the calibration limits it.  The default bands
+    (C 5 %, M 2 %) do not hold it: they are what a fresh calibration is known to."""
+    aged = tmp_path / "aged.toml"
+    text = (SCENES / "demo.toml").read_text()
+    aged.write_text(text.replace("C1 = 4.5e4", "C1 = 40500.0").replace("M1 = 8.0", "M1 = 8.4"))
+    run = tmp_path / "aged.h5"
+    assert main(["simulate", str(aged), "--out", str(run)]) == 0
+    stored = (ROOT / "examples" / "demo-stand.toml").read_text()
+    wide = tmp_path / "wide.toml"
+    wide.write_text(stored + "\n[calibration]\nC_pct = 10.0\nM_pct = 5.0\n")
+    for config, holds in ((wide, True), (ROOT / "examples" / "demo-stand.toml", False)):
+        out = run_json(["solve", str(run), "--config", str(config)], capsys)
+        p1 = out["planes"][0]
+        off = abs(p1["unbalance_g_mm"] - 5000)
+        assert off > 10 * p1["uncertainty_g_mm"]  # the data alone say nothing of it
+        assert (off <= p1["calibration_interval_g_mm"]) is holds, (config, p1)
+        assert out["tolerance"]["planes"][0]["limited_by"] == "calibration"

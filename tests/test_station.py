@@ -281,8 +281,10 @@ async def _flow(station: Station) -> None:
         user.find("See the check").click()
         await user.should_see("S-42: WITHIN TOLERANCE", retries=20)
         await user.should_see("Open the certificate")
+        assert "stored as a calibration datum (stand health)" in station.snapshot().notes
         user.find(marker="nav-history").click()
         await user.should_see(marker="history-table", retries=20)
+        await user.should_see("Stand health (demo-auger at 900 rpm, 1 rotors): as calibrated")
         user.find(marker="history-serial").type("S-42")
         user.find(marker="history-search").click()
         table = user.find(ui.table).elements.pop()
@@ -296,6 +298,11 @@ async def _flow(station: Station) -> None:
         assert b"K0014/0 S-42" in dfq.content
         missing = await user.http_client.get("/export/qdas/no-such-type")
         assert missing.status_code == 404 and "nothing exported" in missing.text
+        ids = ",".join(str(r["run"]) for r in table.rows)  # one speed twice: no correction
+        same = await user.http_client.get(f"/speeds/{ids}")
+        assert same.status_code == 422 and "give each speed once" in same.text
+        bad = await user.http_client.get("/speeds/1,x")
+        assert bad.status_code == 400
 
 
 @pytest.mark.realtime

@@ -34,6 +34,13 @@ def print_measurement(out: dict[str, Any]) -> None:
             f"{u.number(p['uncertainty_g_mm']):>10} {p['angle_deg']:13.2f} "
             f"{u.mass_value(p['mass_g']):10.3f} at {u.length(p['radius_mm']).split()[0]}"
         )
+    cal = [p.get("calibration_interval_g_mm") for p in out["planes"]]
+    if None not in cal:
+        print(
+            "the calibration's own 95 % +-: "
+            + ", ".join(f"{u.number(c)}" for c in cal)
+            + f" {u.unbalance_unit} (what the stand's parameters are known to, [calibration])"
+        )
     print(f"({ANGLE_NOTE})")
     print("support  amplitude [m/s^2]  phase [deg]  95 % +-   revolutions")
     for s in out["supports"]:
@@ -137,10 +144,11 @@ def print_corrections(out: dict[str, Any]) -> None:
     for p in t["planes"]:
         verdict = "pass" if p["pass"] else "FAIL"
         how = "margin" if p["pass"] else "over by"
+        limit = " (limited by the calibration)" if p.get("limited_by") == "calibration" else ""
         print(
             f"  plane {p['plane']}: {u.unbalance(p['residual_g_mm'])} against "
             f"{u.number(p['permissible_g_mm'])} permissible: {verdict} "
-            f"({how} {u.unbalance(abs(p['margin_g_mm']))})"
+            f"({how} {u.unbalance(abs(p['margin_g_mm']))}){limit}"
         )
 
 

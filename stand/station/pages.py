@@ -244,6 +244,15 @@ def correct_screen(station: Station) -> None:
             ui.button("Apply the correction (simulated stand)", on_click=_guard(apply)).props(
                 "size=xl color=secondary"
             ).mark("apply")
+        elif s.phase == "done":
+
+            def confirm() -> None:
+                station.confirm_applied()
+                ui.notify("confirmed: the check will calibrate the stand too", type="positive")
+
+            ui.button("Applied as shown", on_click=_guard(confirm)).props(
+                "size=xl color=secondary"
+            ).mark("applied")
         ui.button("Start the check run", on_click=_guard(station.check, "/measure")).props(
             "size=xl color=primary"
         ).mark("check-run")
@@ -291,9 +300,31 @@ def check_screen(station: Station) -> None:
         ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
 
 
+def _health_panel(station: Station) -> None:
+    """Is the stand still as calibrated? One line per rotor type and speed (stand health)."""
+    try:
+        out = station.health()
+    except StandError as exc:
+        ui.label(f"stand health: {exc}").classes("text-body1")
+        return
+    with ui.card().classes("w-full").mark("health"):
+        if not out["groups"]:
+            ui.label("Stand health: no calibration data yet (confirm corrections as applied)")
+        for g in out["groups"]:
+            where = f"{g['rotor_type'] or 'rotor'} at {g['rpm']:.0f} rpm, {g['data']} rotors"
+            if not g["alarm"]:
+                ui.label(f"Stand health ({where}): as calibrated").classes("text-h6 pass")
+                continue
+            m = g["moved"] or {}
+            what = f": {m.get('part', '')} {m.get('change', 0):+.1f} {m.get('unit', '')}"
+            ui.label(f"Stand health ({where}): RECALIBRATE{what}").classes("text-h6 fail")
+
+
 def history_screen(station: Station) -> None:
-    """History: the archive by serial and rotor type; each run opens its report."""
+    """History: the archive by serial and rotor type; each run opens its report; the stand's
+    health from its corrected rotors."""
     ui.label("History").classes("big")
+    _health_panel(station)
     with ui.row().classes("items-end gap-4"):
         serial = ui.input("serial number").mark("history-serial")
         rotor = ui.select(["", *station.rotor_types()], label="rotor type", value="")

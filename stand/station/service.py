@@ -64,6 +64,9 @@ class Snapshot:
     applied: tuple[Any, ...] = ()
     applied_run: str | None = None
     """The run whose correction was put on the simulated rotor last (once only)."""
+    confirmed_run: str | None = None
+    """The run whose correction the operator confirmed as put on as shown: its check is a
+    calibration datum (:mod:`stand.health`)."""
     run_id: int | None = None
     tolerance_kg_m: tuple[float, float] | None = None
 
@@ -195,7 +198,12 @@ class Station:
             fresh = Snapshot(seq=s.seq + 1, phase="measuring", kind=kind, before=before,
                              started_s=_now(), **state)  # fmt: skip
             if kind == "check":  # the masses on the simulated rotor stay on it
-                fresh = replace(fresh, applied=s.applied, applied_run=s.applied_run)
+                fresh = replace(
+                    fresh,
+                    applied=s.applied,
+                    applied_run=s.applied_run,
+                    confirmed_run=s.confirmed_run,
+                )
             self._state = fresh
         self._thread = threading.Thread(
             target=self._measure, args=(kind, config, before), name="station-run", daemon=True
@@ -225,8 +233,16 @@ class Station:
         if s.applied_run == run:
             raise UsageError("this correction is on the rotor already: start the check run")
         masses = [Mass(p, g, a, r) for p, g, a, r in correction_masses(run, str(config))]
-        self._set(applied=s.applied + tuple(masses), applied_run=run)
+        self._set(applied=s.applied + tuple(masses), applied_run=run, confirmed_run=run)
         return self._state.applied
+
+    def confirm_applied(self) -> None:
+        """The operator confirms the correction shown was put on as shown: the check run
+        after it becomes a calibration datum."""
+        s = self._state
+        if s.phase != "done" or s.result is None:
+            raise UsageError("measure the rotor first: there is no correction to confirm")
+        self._set(confirmed_run=s.result.provenance.run_file)
 
     def next_rotor(self) -> None:
         """Forget the rotor measured (its runs stay in the archive): back to the start."""
@@ -248,6 +264,8 @@ class Station:
             return
         self._set(waiting="writing the report and archiving the run")
         run_id, notes = self._file(result, config)
+        if kind == "check" and run_id is not None:
+            notes = (*notes, self._datum(before, result, config))
         self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
@@ -312,6 +330,38 @@ class Station:
         if said and said.startswith("not"):
             notes.append(said)
         return run_id, tuple(notes)
+
+    def _datum(self, before: Any, result: Any, config: Path) -> str:
+        """A check after a confirmed correction into the archive as a calibration datum;
+        what was done, for the screen."""
+        from stand.archive import Archive, file_digest
+        from stand.health import datum_row
+        from stand.pipeline import correction_masses
+
+        prev = before.provenance.run_file
+        if self._state.confirmed_run != prev:
+            return "not a calibration datum: the correction was not confirmed as put on as shown"
+        try:
+            row = datum_row(
+                before,
+                result,
+                correction_masses(prev, str(config)),
+                initial_sha256=file_digest(prev),
+                check_sha256=file_digest(result.provenance.run_file),
+                confirmed_by=self._state.job.operator,
+                applied="as shown",
+            )
+            with Archive(self.archive_url) as a:
+                a.add_correction(row)
+        except StandError as exc:
+            return f"not stored as a calibration datum ({exc})"
+        return "stored as a calibration datum (stand health)"
+
+    def health(self) -> dict[str, Any]:
+        """What the archive's calibration data say (:func:`stand.health.health_json`)."""
+        from stand.health import health, health_json
+
+        return health_json(health(self.archive_url))
 
     # -- the archive ---------------------------------------------------------------------
     def history(
