@@ -125,8 +125,10 @@ def test_the_simulated_stand_in_another_process_over_udp_multicast(tmp_path: Pat
 
 
 def _readme_block(title: str) -> str:
-    """The first ```sh block after the paragraph that starts with ``title``."""
-    text = (ROOT / "README.md").read_text()
+    """The first ```sh block after the paragraph that starts with ``title``, in README or a
+    page of the documentation (docs/)."""
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    text = next(t for t in (p.read_text() for p in pages) if title in t)
     after = text[text.index(title) :]
     return after.split("```sh\n", 1)[1].split("```", 1)[0]
 
