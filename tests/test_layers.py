@@ -34,6 +34,7 @@ APP = DRIVERS | {
     "stand.check",
     "stand.tooling",
     "stand.field",
+    "stand.field_runs",
     "stand.speeds",
     "stand.health",
     "stand.production",
@@ -74,6 +75,7 @@ ALLOWED: dict[str, set[str]] = {
     "stand/influence.py": NUMERIC | APP,
     # the field method in N planes from readings at several speeds
     "stand/field.py": NUMERIC | APP | {"stand.config"},
+    "stand/field_runs.py": NUMERIC | APP | {"stand.config"},
     # balancing across speeds: N planes through the beam model
     "stand/speeds.py": NUMERIC | APP,
     # the stand judged from production: corrections as calibration data, drift, refits

@@ -279,7 +279,8 @@ def _suggest(
 
 def run_field(args: argparse.Namespace, spec: Any, entries: list[Any]) -> int:
     """`stand influence` for N planes, several speeds, another method or a mass cap."""
-    from stand.field import field_from_runs, field_json
+    from stand.field import field_json
+    from stand.field_runs import field_from_runs
 
     result, notes, cfg = field_from_runs(
         spec,
