@@ -345,27 +345,23 @@ def _node_warnings(
     return out, tuple(seen)
 
 
-def _rebuild_node(
-    node: int, dec: Decoded, t_s: NDArray[np.float64], t0: float, strict_status: bool
-) -> tuple[NodeStream, list[Diagnostic]]:
+def _status(
+    node: int,
+    dec: Decoded,
+    st_sel: NDArray[np.bool_],
+    st_t: NDArray[np.float64],
+    all_frames: NDArray[Any],
+    first_t: float,
+    t0: float,
+    strict_status: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], list[Diagnostic]]:
+    """The node's STATUS: its rate and scale per STATUS frame, and whether one came in time
+    (a support node without one is refused when ``strict_status``) and stayed the same."""
     warn: list[Diagnostic] = []
-    s_sel = dec.samples.node == node
-    st_sel = dec.status.node == node
-    m_sel = dec.marks.node == node
-    s_frame = dec.samples.frame[s_sel]
-    st_frame = dec.status.frame[st_sel]
-    m_frame = dec.marks.frame[m_sel]
-    all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)))
-    first_t, last_t = float(t_s[all_frames[0]]), float(t_s[all_frames[-1]])
-
-    # --- STATUS: rate and scale, and whether it came in time
-    st_t = t_s[st_frame]
     rate = dec.status.rate[st_sel].astype(np.float64)
     scale = dec.status.scale[st_sel].astype(np.float64)
-    if len(st_frame) == 0 or st_t[0] - first_t > STATUS_WITHIN_S:
-        came = (
-            "none came" if len(st_frame) == 0 else f"the first came after {st_t[0] - first_t:.2f} s"
-        )
+    if len(st_t) == 0 or st_t[0] - first_t > STATUS_WITHIN_S:
+        came = "none came" if len(st_t) == 0 else f"the first came after {st_t[0] - first_t:.2f} s"
         what = (
             f"node {node}: no STATUS within {STATUS_WITHIN_S} s of its first frame "
             f"(frame {int(all_frames[0])}, {came}): its samples cannot be scaled"
@@ -380,25 +376,160 @@ def _rebuild_node(
             seen = sorted(set(values.tolist()))
             message = f"node {node}: STATUS {name} changed during the run: {seen} {unit}"
             warn.append(Diagnostic(f"{name}_changed", message, float(values[-1])))
+    return rate, scale, warn
 
-    # --- restarts: seq jumps back, or a STATUS after silence
+
+def _restarts(
+    seq: NDArray[np.int64],
+    s_frame: NDArray[Any],
+    st_frame: NDArray[Any],
+    t_s: NDArray[np.float64],
+    all_frames: NDArray[Any],
+    rate: NDArray[np.float64],
+) -> NDArray[np.bool_]:
+    """Where the node restarted: a STATUS after silence, unless seq runs on across it as the
+    time passed predicts (a bus dropout is silence too)."""
+    st_t = t_s[st_frame]
     pos_in_node = np.searchsorted(all_frames, st_frame)
     gap_before = np.where(
         pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
     )
     after_silence = gap_before > SILENCE_S
-    del all_frames, pos_in_node, gap_before  # a long run's node: free as soon as done
-    seq = dec.samples.seq[s_sel].astype(np.int64)
     restart_at = np.zeros(len(seq), dtype=bool)
     hit = np.searchsorted(s_frame, st_frame[after_silence])
     ok = (hit > 0) & (hit < len(seq))  # a SAMPLES frame on either side of the silence
     hit, st_rate = hit[ok], rate[after_silence][ok]
-    # a bus dropout is silence too, but then seq runs on as the time passed predicts
     elapsed = t_s[s_frame[hit]] - t_s[s_frame[hit - 1]]
     expected = elapsed * st_rate / SAMPLES_PER_FRAME
     advance = (seq[hit] - seq[hit - 1]) % _WRAP
     continues = np.abs(advance - expected) <= DROPOUT_TOLERANCE * expected + 20
     restart_at[hit[~continues]] = True
+    return restart_at
+
+
+def _frame_warnings(node: int, n_seg: int, lost: int, kept: int) -> list[Diagnostic]:
+    """Restarts and lost SAMPLES frames, in words."""
+    warn = []
+    if n_seg > 1:
+        warn.append(
+            Diagnostic(
+                "node_restart",
+                f"node {node}: restarted {n_seg - 1} time(s); each part is timed on its own",
+                float(n_seg - 1),
+            )
+        )
+    if lost:
+        warn.append(
+            Diagnostic(
+                "lost_frames",
+                f"node {node}: {lost} SAMPLES frames lost "
+                f"({100 * lost / (lost + kept):.2g} %): their samples are "
+                "missing, the others keep their index",
+                float(lost),
+            )
+        )
+    return warn
+
+
+def _scale_runs(
+    st_frame: NDArray[Any], s_frame_k: NDArray[Any], scale: NDArray[np.float64], frame_start: Any
+) -> tuple[Any, Any]:
+    """Each STATUS scales the frames from the first one after it (the first STATUS also
+    those before it): runs of one scale [m/s^2 per count], found per STATUS, not per frame;
+    ``(first valid sample of each run, its scale)``, or ``(None, None)`` without STATUS."""
+    if not len(st_frame):
+        return None, None
+    begins = np.searchsorted(s_frame_k, st_frame)
+    begins[0] = 0
+    runs = np.concatenate((begins[1:] > begins[:-1], [True]))  # the STATUS that got frames
+    runs[0] = True
+    begins, values = begins[runs], scale[runs] * 1e-6
+    new = np.concatenate(([True], values[1:] != values[:-1]))  # merge equal neighbours
+    return frame_start[begins[new]].astype(np.int64), values[new]
+
+
+def _marks(
+    node: int,
+    dec: Decoded,
+    m_sel: NDArray[np.bool_],
+    m_frame: NDArray[Any],
+    s_frame_k: NDArray[Any],
+    seq_k: NDArray[np.int64],
+    F: NDArray[np.int64],
+    seg: NDArray[np.int32],
+) -> tuple[NDArray[np.float64], NDArray[np.int32], NDArray[np.int64], int, list[Diagnostic]]:
+    """The node's reference edges: each MARK's seq unwrapped against the nearest SAMPLES
+    frame of the node (by arrival), duplicates and inconsistent edges dropped, the
+    revolution counter unwrapped per segment; ``(position, segment, revolution, lost
+    marks, warnings)``."""
+    if not (len(m_frame) and len(s_frame_k)):
+        return np.zeros(0), np.zeros(0, np.int32), np.zeros(0, np.int64), 0, []
+    warn = []
+    j = np.searchsorted(s_frame_k, m_frame)
+    prev = np.maximum(j - 1, 0)
+    nxt = np.minimum(j, len(s_frame_k) - 1)
+    mseq = dec.marks.seq[m_sel].astype(np.int64)
+
+    def signed(ref: NDArray[np.int64]) -> NDArray[np.int64]:
+        d: NDArray[np.int64] = (mseq - seq_k[ref] + _WRAP // 2) % _WRAP - _WRAP // 2
+        return d
+
+    dp, dn = signed(prev), signed(nxt)
+    use_next = np.abs(dn) < np.abs(dp)
+    ref = np.where(use_next, nxt, prev)
+    Fm = F[ref] + np.where(use_next, dn, dp)
+    pos = SAMPLES_PER_FRAME * Fm + dec.marks.slot[m_sel] + dec.marks.frac[m_sel] / FRAC_SCALE
+    mseg = seg[ref]
+    rev = dec.marks.rev[m_sel].astype(np.int64)
+    order = np.lexsort((pos, mseg))
+    pos, mseg, rev = pos[order], mseg[order], rev[order]
+    uniq = np.ones(len(pos), dtype=bool)
+    uniq[1:] = (pos[1:] != pos[:-1]) | (mseg[1:] != mseg[:-1])
+    pos, mseg, rev = pos[uniq], mseg[uniq], rev[uniq]
+    good = consistent_edges(pos, mseg, rev)
+    if not good.all():
+        dropped = int(np.count_nonzero(~good))
+        warn.append(
+            Diagnostic(
+                "edges_dropped",
+                f"node {node}: {dropped} reference edge(s) dropped: their position or "
+                "revolution counter disagrees with their neighbours (a corrupt MARK frame)",
+                float(dropped),
+            )
+        )
+        pos, mseg, rev = pos[good], mseg[good], rev[good]
+    new_seg = np.ones(len(pos), dtype=bool)
+    new_seg[1:] = mseg[1:] != mseg[:-1]
+    dr = np.zeros(len(rev), np.int64)
+    dr[1:] = (rev[1:] - rev[:-1]) % _WRAP
+    dr[new_seg] = 0
+    lost_marks = int(np.sum(dr[dr > 1] - 1))
+    first = np.flatnonzero(new_seg)
+    cum = np.cumsum(dr)
+    segi = np.cumsum(new_seg) - 1
+    m_rev = rev[first][segi] + cum - cum[first][segi]
+    return pos, mseg.astype(np.int32), m_rev, lost_marks, warn
+
+
+def _rebuild_node(
+    node: int, dec: Decoded, t_s: NDArray[np.float64], t0: float, strict_status: bool
+) -> tuple[NodeStream, list[Diagnostic]]:
+    """One node's stream from the decoded frames: STATUS, restarts and lost frames, the
+    samples' index, the scale runs, the reference edges (each a step of its own above)."""
+    s_sel = dec.samples.node == node
+    st_sel = dec.status.node == node
+    m_sel = dec.marks.node == node
+    s_frame = dec.samples.frame[s_sel]
+    st_frame = dec.status.frame[st_sel]
+    m_frame = dec.marks.frame[m_sel]
+    all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)))
+    first_t, last_t = float(t_s[all_frames[0]]), float(t_s[all_frames[-1]])
+    st_t = t_s[st_frame]
+    rate, scale, warn = _status(node, dec, st_sel, st_t, all_frames, first_t, t0, strict_status)
+
+    seq = dec.samples.seq[s_sel].astype(np.int64)
+    restart_at = _restarts(seq, s_frame, st_frame, t_s, all_frames, rate)
+    del all_frames  # a long run's node: free as soon as done
     keep, F, seg, lost = (
         _unwrap_samples(seq, restart_at)
         if len(seq)
@@ -413,26 +544,9 @@ def _rebuild_node(
     duplicates = int(len(seq) - len(seq_k))
     del seq, s_frame, restart_at, keep
     n_seg = int(seg[-1]) + 1 if len(seg) else 0
-    if n_seg > 1:
-        warn.append(
-            Diagnostic(
-                "node_restart",
-                f"node {node}: restarted {n_seg - 1} time(s); each part is timed on its own",
-                float(n_seg - 1),
-            )
-        )
-    if lost:
-        warn.append(
-            Diagnostic(
-                "lost_frames",
-                f"node {node}: {lost} SAMPLES frames lost "
-                f"({100 * lost / (lost + len(seq_k)):.2g} %): their samples are "
-                "missing, the others keep their index",
-                float(lost),
-            )
-        )
+    warn += _frame_warnings(node, n_seg, lost, len(seq_k))
 
-    # --- samples
+    # --- samples: each kept frame's three, by their index in the node's sample clock
     index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
     F *= SAMPLES_PER_FRAME  # F as the index of each frame's first sample, for a moment
     np.add(F[:, None], np.arange(SAMPLES_PER_FRAME), out=index.reshape(-1, SAMPLES_PER_FRAME))
@@ -447,71 +561,11 @@ def _rebuild_node(
         else np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
     )
     seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
-    segment_start = frame_start[seg_first].astype(np.int64)
-    scale_start = scale_m_s2 = None
-    if len(st_frame):
-        # each STATUS scales the frames from the first one after it (the first STATUS also
-        # those before it): runs of one scale, found per STATUS, not per frame
-        begins = np.searchsorted(s_frame_k, st_frame)
-        begins[0] = 0
-        runs = np.concatenate((begins[1:] > begins[:-1], [True]))  # the STATUS that got frames
-        runs[0] = True
-        begins, values = begins[runs], scale[runs] * 1e-6
-        new = np.concatenate(([True], values[1:] != values[:-1]))  # merge equal neighbours
-        scale_start = frame_start[begins[new]].astype(np.int64)
-        scale_m_s2 = values[new]
-
-    # --- marks: unwrap seq against the nearest SAMPLES frame of the node (by arrival)
-    m_pos = np.zeros(0)
-    m_seg = np.zeros(0, np.int32)
-    m_rev = np.zeros(0, np.int64)
-    lost_marks = 0
-    if len(m_frame) and len(s_frame_k):
-        j = np.searchsorted(s_frame_k, m_frame)
-        prev = np.maximum(j - 1, 0)
-        nxt = np.minimum(j, len(s_frame_k) - 1)
-        mseq = dec.marks.seq[m_sel].astype(np.int64)
-
-        def signed(ref: NDArray[np.int64]) -> NDArray[np.int64]:
-            d: NDArray[np.int64] = (mseq - seq_k[ref] + _WRAP // 2) % _WRAP - _WRAP // 2
-            return d
-
-        dp, dn = signed(prev), signed(nxt)
-        use_next = np.abs(dn) < np.abs(dp)
-        ref = np.where(use_next, nxt, prev)
-        Fm = F[ref] + np.where(use_next, dn, dp)
-        pos = SAMPLES_PER_FRAME * Fm + dec.marks.slot[m_sel] + dec.marks.frac[m_sel] / FRAC_SCALE
-        mseg = seg[ref]
-        rev = dec.marks.rev[m_sel].astype(np.int64)
-        order = np.lexsort((pos, mseg))
-        pos, mseg, rev = pos[order], mseg[order], rev[order]
-        uniq = np.ones(len(pos), dtype=bool)
-        uniq[1:] = (pos[1:] != pos[:-1]) | (mseg[1:] != mseg[:-1])
-        pos, mseg, rev = pos[uniq], mseg[uniq], rev[uniq]
-        good = consistent_edges(pos, mseg, rev)
-        if not good.all():
-            dropped = int(np.count_nonzero(~good))
-            warn.append(
-                Diagnostic(
-                    "edges_dropped",
-                    f"node {node}: {dropped} reference edge(s) dropped: their position or "
-                    "revolution counter disagrees with their neighbours (a corrupt MARK frame)",
-                    float(dropped),
-                )
-            )
-            pos, mseg, rev = pos[good], mseg[good], rev[good]
-        new_seg = np.ones(len(pos), dtype=bool)
-        new_seg[1:] = mseg[1:] != mseg[:-1]
-        dr = np.zeros(len(rev), np.int64)
-        dr[1:] = (rev[1:] - rev[:-1]) % _WRAP
-        dr[new_seg] = 0
-        lost_marks = int(np.sum(dr[dr > 1] - 1))
-        first = np.flatnonzero(new_seg)
-        cum = np.cumsum(dr)
-        segi = np.cumsum(new_seg) - 1
-        m_rev = rev[first][segi] + cum - cum[first][segi]
-        m_pos, m_seg = pos, mseg.astype(np.int32)
-
+    scale_start, scale_m_s2 = _scale_runs(st_frame, s_frame_k, scale, frame_start)
+    m_pos, m_seg, m_rev, lost_marks, mark_warn = _marks(
+        node, dec, m_sel, m_frame, s_frame_k, seq_k, F, seg
+    )
+    warn += mark_warn
     flag_warn, flag_names = _node_warnings(node, st_t, dec.status.flags[st_sel], t0)
     warn.extend(flag_warn)
     stream = NodeStream(
@@ -520,7 +574,7 @@ def _rebuild_node(
         scale_um_s2=float(scale[-1]) if len(scale) else None,
         index=index if all_valid else index[valid],
         counts=flat if all_valid else flat[valid],
-        segment_start=segment_start,
+        segment_start=frame_start[seg_first].astype(np.int64),
         scale_start=scale_start,
         scale_m_s2=scale_m_s2,
         mark_position=m_pos,

@@ -144,7 +144,14 @@ def print_corrections(out: dict[str, Any]) -> None:
     for p in t["planes"]:
         verdict = "pass" if p["pass"] else "FAIL"
         how = "margin" if p["pass"] else "over by"
-        limit = " (limited by the calibration)" if p.get("limited_by") == "calibration" else ""
+        cal = out["planes"][p["plane"] - 1].get("calibration_interval_g_mm")
+        limit = ""
+        if (
+            p.get("limited_by") == "calibration"
+            and cal is not None
+            and abs(p["margin_g_mm"]) <= cal
+        ):
+            limit = f"; the calibration's own +-{u.number(cal)} could turn it"
         print(
             f"  plane {p['plane']}: {u.unbalance(p['residual_g_mm'])} against "
             f"{u.number(p['permissible_g_mm'])} permissible: {verdict} "
