@@ -107,7 +107,7 @@ class LiveSession:
     # -- context -------------------------------------------------------------------------
     def __enter__(self) -> LiveSession:
         from stand.drivers.bus import BusReader, open_bus, play
-        from stand.drivers.recording import RunWriter
+        from stand.drivers.run_writer import RunWriter
 
         self.writer = RunWriter(
             self.run_path,

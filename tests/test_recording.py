@@ -18,14 +18,8 @@ from synth import sine_run
 from stand.core import Diagnostic
 from stand.drivers.logs import read_candump, read_log, write_log
 from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
-from stand.drivers.recording import (
-    FLUSH_INTERVAL_S,
-    Recording,
-    RunWriter,
-    read_recording,
-    read_run,
-    write_recording,
-)
+from stand.drivers.recording import Recording, read_recording, read_run, write_recording
+from stand.drivers.run_writer import FLUSH_INTERVAL_S, RunWriter
 from stand.drivers.seal import MAGIC, USERBLOCK_BYTES, read_in_child, seal_state
 from stand.drivers.streams import rebuild
 from stand.errors import RecordingError, WriteError

@@ -7,7 +7,7 @@
    .blf and an .asc (best of 5, cold imports excluded).
 2. The live path on python-can's virtual bus: the frames played in real time
    from one thread, received by :class:`drivers.bus.BusReader` and recorded
-   by :class:`drivers.recording.RunWriter` in the main loop, with the speed
+   by :class:`drivers.run_writer.RunWriter` in the main loop, with the speed
    read from the last 2 s every second, as ``stand record`` does.  The CPU
    time of the receiving thread and of the main loop (not of the player) is
    read from their thread CPU clocks.
@@ -36,7 +36,8 @@ from stand.cli.record import speed_line
 from stand.drivers.bus import BusReader, play
 from stand.drivers.logs import read_log, write_log
 from stand.drivers.protocol import Frames
-from stand.drivers.recording import Recording, RunWriter, read_run, write_recording
+from stand.drivers.recording import Recording, read_run, write_recording
+from stand.drivers.run_writer import RunWriter
 from stand.drivers.streams import rebuild
 from stand.errors import BusError
 
