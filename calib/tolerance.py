@@ -88,7 +88,8 @@ def parameter_uncertainty(
     draws: int = 1000,
     seed: int = 0,
 ) -> ParameterUncertainty:
-    """The spread of the unbalance that the parameter tolerances cause, for fixed readings A."""
+    """The spread of the unbalance that the parameter tolerances cause, for fixed readings A
+    (``draws = 0``: linearised only)."""
     params = _names(tol)
     scale = {
         k: (h * (getattr(p, k) if not k.startswith("gain") else 1.0) if rel else h)
@@ -111,12 +112,14 @@ def parameter_uncertainty(
             total = float(np.sum(contrib[2 * i : 2 * i + 2]))
             per_plane.append(float(np.sum(contrib[2 * i : 2 * i + 2, j])) / total if total else 0.0)
         shares[k] = (per_plane[0], per_plane[1])
-    rng = np.random.default_rng(seed)
-    samples = np.empty((draws, 4))
-    for n in range(draws):
-        change = {k: float(rng.uniform(-scale[k], scale[k])) for k, _, _ in params}
-        samples[n] = _solve(p, omega_rad_s, A, change)
-    cov_mc = np.cov(samples.T)
+    cov_mc = cov_lin  # draws = 0: the linearised answer only
+    if draws > 0:
+        rng = np.random.default_rng(seed)
+        samples = np.empty((draws, 4))
+        for n in range(draws):
+            change = {k: float(rng.uniform(-scale[k], scale[k])) for k, _, _ in params}
+            samples[n] = _solve(p, omega_rad_s, A, change)
+        cov_mc = np.cov(samples.T)
     return ParameterUncertainty(
         U_kg_m=np.array([complex(base[0], base[1]), complex(base[2], base[3])]),
         cov_linear=cov_lin,
