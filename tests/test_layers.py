@@ -54,7 +54,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/tables.py": {"pydantic"},
     "stand/config_correction.py": NUMERIC | CORE | {"pydantic", "stand.tables"},
     "stand/config.py": NUMERIC | CORE | {"pydantic", "tomlkit", "stand.tables",
-                                         "stand.config_correction"},
+                                         "stand.config_correction", "stand.config_rotor"},
+    "stand/config_rotor.py": NUMERIC | CORE | {"pydantic", "stand.tables"},
     # the measuring path: streams in, unbalance out
     "stand/measure.py": NUMERIC | CORE | {"stand.drivers.streams", "stand.passes"},
     "stand/passes.py": NUMERIC | CORE | {"stand.drivers.streams"},
