@@ -10,7 +10,7 @@ rules (``spec/can-protocol.md``):
   concatenation).  A repeated ``seq`` is a duplicate and is dropped.
 * A node restart starts a new *segment*, with its own sample clock: ``seq``
   jumps back, or a STATUS arrives after the node was silent for
-  :data:`SILENCE_S` and ``seq`` does not run on as the time that passed
+  :data:`stand.drivers.node_build.SILENCE_S` and ``seq`` does not run on as the time that passed
   predicts (if it does, the silence was a bus dropout: lost frames).
   Segment ``k``'s indices only compare with segment ``k``'s.
 * The count -32768 is an invalid sample: counted, never a value.
@@ -18,28 +18,30 @@ rules (``spec/can-protocol.md``):
   ``seq`` is unwrapped against the nearest SAMPLES frame of the same node.
 * Samples are scaled by the node's latest STATUS (the first one for frames
   that came before it).  No STATUS within the node's first
-  :data:`STATUS_WITHIN_S` of frames is an error in strict mode, a warning
+  :data:`stand.drivers.node_build.STATUS_WITHIN_S` of frames is an error in strict mode, a warning
   otherwise.
 * STATUS flags become warnings, with the time they were seen.
 
-Everything is vectorised per node; nodes are few (1..15).
+Everything is vectorised per node; nodes are few (1..15).  This module holds
+the streams (:class:`NodeStream`, :class:`RunStreams`) and their rebuilding
+from frames, whole or as they come (:class:`StreamBuilder`); one node's
+stream is built by :mod:`stand.drivers.node_build`, where the rules above
+are carried out step by step.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.protocol import (
-    FRAC_SCALE,
-    INVALID_COUNT,
-    SAMPLES_PER_FRAME,
-    STATUS_FLAG_NAMES,
+    SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
+)
+from stand.drivers.protocol import (
     BadFrame,
     Decoded,
     Frames,
@@ -48,20 +50,6 @@ from stand.drivers.protocol import (
     node_records,
     shift_decoded,
 )
-from stand.drivers.protocol import (
-    SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
-)
-from stand.errors import NoStatusError
-
-STATUS_WITHIN_S = 1.5
-"""A node's first STATUS must come within this time of its first frame [s]."""
-SILENCE_S = 0.5
-"""A STATUS after this much silence from its node marks a restart [s] ..."""
-DROPOUT_TOLERANCE = 0.1
-"""... unless ``seq`` advanced as the host time that passed predicts (within 10 %
-and 20 frames): that is a bus dropout (lost frames), not a restart."""
-
-_WRAP = 65536
 
 
 @dataclass(frozen=True)
@@ -209,392 +197,6 @@ class RunStreams:
         return len(self.bad)
 
 
-EDGE_SLACK = 0.25
-"""An edge is where its neighbours put it to within a quarter revolution (speed from the
-median of the nearby revolutions), or its position or counter is corrupt."""
-
-
-def _local_period(dp: NDArray[np.float64], dr: NDArray[np.int64], ok: NDArray[np.bool_]) -> Any:
-    """Samples per revolution around each interval: the median of up to 9 nearby good ones."""
-    per = np.where(ok, dp / np.maximum(dr, 1), np.nan)
-    half = 4
-    padded = np.concatenate((np.full(half, np.nan), per, np.full(half, np.nan)))
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half + 1)
-    with np.errstate(all="ignore"):
-        counts = np.sum(np.isfinite(windows), axis=1)
-        T = np.full(len(per), np.nan)
-        has = counts > 0
-        if has.any():
-            import warnings
-
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows
-                T[has] = np.nanmedian(windows[has], axis=1)
-    return T
-
-
-def consistent_edges(
-    pos: NDArray[np.float64], seg: NDArray[np.int32], rev: NDArray[np.int64]
-) -> NDArray[np.bool_]:
-    """Which reference edges agree with their neighbours (sorted by segment and position).
-
-    An interval between two edges is *wrong* when its length, in revolutions
-    of the local speed, differs from what the counters say by more than
-    :data:`EDGE_SLACK`.  An edge is dropped when both its intervals are wrong
-    and the interval that skips it is right (a corrupt counter or position
-    moves one edge; it spoils both its intervals and nothing else), or, at the
-    end of a segment, when its one interval is wrong and the next is right.
-    """
-    keep = np.ones(len(pos), dtype=bool)
-    for _ in range(3):  # rounds: two bad edges side by side may need a second look
-        idx = np.flatnonzero(keep)
-        p, s, r = pos[idx], seg[idx], rev[idx]
-        if len(p) < 4:
-            break
-        same = s[1:] == s[:-1]
-        dp = np.diff(p)
-        dr = np.diff(r) % _WRAP
-        T = _local_period(dp, dr, same & (dr >= 1) & (dr <= 8) & (dp > 0))
-        with np.errstate(all="ignore"):
-            wrong = same & ~(np.abs(dp / T - dr) <= EDGE_SLACK)
-            skip_dr = (r[2:] - r[:-2]) % _WRAP
-            skip_ok = np.abs((p[2:] - p[:-2]) / T[:-1] - skip_dr) <= EDGE_SLACK
-        bad = np.zeros(len(p), dtype=bool)
-        bad[1:-1] = wrong[:-1] & wrong[1:] & skip_ok & same[:-1] & same[1:]
-        first = np.concatenate(([True], ~same))[:-1]  # edge k starts its segment
-        bad[:-2] |= first[:-1] & wrong[:-1] & ~wrong[1:] & same[1:]
-        last = np.concatenate((~same, [True]))  # edge k ends its segment
-        bad[2:] |= last[2:] & wrong[1:] & ~wrong[:-1] & same[:-1]
-        if not bad.any():
-            break
-        keep[idx[bad]] = False
-    return keep
-
-
-def _most_common(values: NDArray[np.float64]) -> float | None:
-    """The value most STATUS frames say (a corrupt first STATUS is outvoted); None if none."""
-    if not len(values):
-        return None
-    uniq, counts = np.unique(values, return_counts=True)
-    return float(uniq[np.argmax(counts)])
-
-
-class _Triple:
-    """``frame_start`` when every sample is valid: frame ``j`` starts at ``3 j``."""
-
-    def __getitem__(self, j: Any) -> Any:
-        return SAMPLES_PER_FRAME * np.asarray(j, dtype=np.int64)
-
-
-def _unwrap_samples(
-    seq: NDArray[np.int64], restart_at: NDArray[np.bool_]
-) -> tuple[NDArray[np.bool_], NDArray[np.int64], NDArray[np.int32], int]:
-    """Keep-mask (duplicates dropped), unwrapped frame numbers, segments, lost frames.
-
-    In place where it can: a node of a one-hour run has millions of frames.
-    """
-    n = len(seq)
-    d = np.empty(n, dtype=np.int64)
-    d[0] = 0
-    np.subtract(seq[1:], seq[:-1], out=d[1:])
-    d %= _WRAP
-    keep = np.ones(n, dtype=bool)
-    keep[1:] = (d[1:] != 0) | restart_at[1:]  # a repeated seq is a duplicate, unless a restart
-    all_kept = bool(keep.all())
-    if not all_kept:
-        seq, d, restart_at = seq[keep], d[keep], restart_at[keep]
-    start = restart_at | (d >= _WRAP // 2)
-    start[0] = True
-    d[start] = 0  # now the step from the frame before (0 at a segment's start)
-    lost = int(np.sum(d[d > 0] - 1))
-    seg = np.cumsum(start, dtype=np.int32)
-    seg -= 1
-    first = np.flatnonzero(start)
-    del start
-    F = np.cumsum(d)  # the running frame count, then moved to each segment's first seq
-    del d
-    offset = seq[first] - F[first]
-    F += offset[seg] if len(first) > 1 else offset[0]
-    return keep, F, seg, lost
-
-
-def _node_warnings(
-    node: int, st_t: NDArray[np.float64], flags: NDArray[np.uint8], t0: float
-) -> tuple[list[Diagnostic], tuple[str, ...]]:
-    out: list[Diagnostic] = []
-    seen: list[str] = []
-    for bit, name in STATUS_FLAG_NAMES.items():
-        on = ((flags >> bit) & 1).astype(bool)
-        if not on.any():
-            continue
-        seen.append(name)
-        starts = np.flatnonzero(on & ~np.concatenate(([False], on[:-1])))
-        ends = np.flatnonzero(on & ~np.concatenate((on[1:], [False])))
-        for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
-            when = f"at {st_t[a] - t0:.2f} s"
-            if b > a:
-                when += f" (in {b - a + 1} STATUS frames, until {st_t[b] - t0:.2f} s)"
-            out.append(
-                Diagnostic(
-                    f"status_{name}",
-                    f"node {node}: STATUS reports {name.replace('_', ' ')} {when}",
-                    float(b - a + 1),
-                    float(st_t[a] - t0),
-                )
-            )
-    return out, tuple(seen)
-
-
-def _status(
-    node: int,
-    dec: Decoded,
-    st_sel: NDArray[np.bool_],
-    st_t: NDArray[np.float64],
-    all_frames: NDArray[Any],
-    first_t: float,
-    t0: float,
-    strict_status: bool,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], list[Diagnostic]]:
-    """The node's STATUS: its rate and scale per STATUS frame, and whether one came in time
-    (a support node without one is refused when ``strict_status``) and stayed the same."""
-    warn: list[Diagnostic] = []
-    rate = dec.status.rate[st_sel].astype(np.float64)
-    scale = dec.status.scale[st_sel].astype(np.float64)
-    if len(st_t) == 0 or st_t[0] - first_t > STATUS_WITHIN_S:
-        came = "none came" if len(st_t) == 0 else f"the first came after {st_t[0] - first_t:.2f} s"
-        what = (
-            f"node {node}: no STATUS within {STATUS_WITHIN_S} s of its first frame "
-            f"(frame {int(all_frames[0])}, {came}): its samples cannot be scaled"
-        )
-        if strict_status and node in SUPPORT_NODES:
-            raise NoStatusError(what, node=node, frame=int(all_frames[0]))
-        if node not in SUPPORT_NODES:
-            what += f" (not a support node: {len(all_frames)} frames left aside)"
-        warn.append(Diagnostic("no_status", what, None, float(first_t - t0)))
-    for name, values, unit in (("rate", rate, "Hz"), ("scale", scale, "µm/s² per count")):
-        if len(np.unique(values)) > 1:
-            seen = sorted(set(values.tolist()))
-            message = f"node {node}: STATUS {name} changed during the run: {seen} {unit}"
-            warn.append(Diagnostic(f"{name}_changed", message, float(values[-1])))
-    return rate, scale, warn
-
-
-def _restarts(
-    seq: NDArray[np.int64],
-    s_frame: NDArray[Any],
-    st_frame: NDArray[Any],
-    t_s: NDArray[np.float64],
-    all_frames: NDArray[Any],
-    rate: NDArray[np.float64],
-) -> NDArray[np.bool_]:
-    """Where the node restarted: a STATUS after silence, unless seq runs on across it as the
-    time passed predicts (a bus dropout is silence too)."""
-    st_t = t_s[st_frame]
-    pos_in_node = np.searchsorted(all_frames, st_frame)
-    gap_before = np.where(
-        pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
-    )
-    after_silence = gap_before > SILENCE_S
-    restart_at = np.zeros(len(seq), dtype=bool)
-    hit = np.searchsorted(s_frame, st_frame[after_silence])
-    ok = (hit > 0) & (hit < len(seq))  # a SAMPLES frame on either side of the silence
-    hit, st_rate = hit[ok], rate[after_silence][ok]
-    elapsed = t_s[s_frame[hit]] - t_s[s_frame[hit - 1]]
-    expected = elapsed * st_rate / SAMPLES_PER_FRAME
-    advance = (seq[hit] - seq[hit - 1]) % _WRAP
-    continues = np.abs(advance - expected) <= DROPOUT_TOLERANCE * expected + 20
-    restart_at[hit[~continues]] = True
-    return restart_at
-
-
-def _frame_warnings(node: int, n_seg: int, lost: int, kept: int) -> list[Diagnostic]:
-    """Restarts and lost SAMPLES frames, in words."""
-    warn = []
-    if n_seg > 1:
-        warn.append(
-            Diagnostic(
-                "node_restart",
-                f"node {node}: restarted {n_seg - 1} time(s); each part is timed on its own",
-                float(n_seg - 1),
-            )
-        )
-    if lost:
-        warn.append(
-            Diagnostic(
-                "lost_frames",
-                f"node {node}: {lost} SAMPLES frames lost "
-                f"({100 * lost / (lost + kept):.2g} %): their samples are "
-                "missing, the others keep their index",
-                float(lost),
-            )
-        )
-    return warn
-
-
-def _scale_runs(
-    st_frame: NDArray[Any], s_frame_k: NDArray[Any], scale: NDArray[np.float64], frame_start: Any
-) -> tuple[Any, Any]:
-    """Each STATUS scales the frames from the first one after it (the first STATUS also
-    those before it): runs of one scale [m/s^2 per count], found per STATUS, not per frame;
-    ``(first valid sample of each run, its scale)``, or ``(None, None)`` without STATUS."""
-    if not len(st_frame):
-        return None, None
-    begins = np.searchsorted(s_frame_k, st_frame)
-    begins[0] = 0
-    runs = np.concatenate((begins[1:] > begins[:-1], [True]))  # the STATUS that got frames
-    runs[0] = True
-    begins, values = begins[runs], scale[runs] * 1e-6
-    new = np.concatenate(([True], values[1:] != values[:-1]))  # merge equal neighbours
-    return frame_start[begins[new]].astype(np.int64), values[new]
-
-
-def _marks(
-    node: int,
-    dec: Decoded,
-    m_sel: NDArray[np.bool_],
-    m_frame: NDArray[Any],
-    s_frame_k: NDArray[Any],
-    seq_k: NDArray[np.int64],
-    F: NDArray[np.int64],
-    seg: NDArray[np.int32],
-) -> tuple[NDArray[np.float64], NDArray[np.int32], NDArray[np.int64], int, list[Diagnostic]]:
-    """The node's reference edges: each MARK's seq unwrapped against the nearest SAMPLES
-    frame of the node (by arrival), duplicates and inconsistent edges dropped, the
-    revolution counter unwrapped per segment; ``(position, segment, revolution, lost
-    marks, warnings)``."""
-    if not (len(m_frame) and len(s_frame_k)):
-        return np.zeros(0), np.zeros(0, np.int32), np.zeros(0, np.int64), 0, []
-    warn = []
-    j = np.searchsorted(s_frame_k, m_frame)
-    prev = np.maximum(j - 1, 0)
-    nxt = np.minimum(j, len(s_frame_k) - 1)
-    mseq = dec.marks.seq[m_sel].astype(np.int64)
-
-    def signed(ref: NDArray[np.int64]) -> NDArray[np.int64]:
-        d: NDArray[np.int64] = (mseq - seq_k[ref] + _WRAP // 2) % _WRAP - _WRAP // 2
-        return d
-
-    dp, dn = signed(prev), signed(nxt)
-    use_next = np.abs(dn) < np.abs(dp)
-    ref = np.where(use_next, nxt, prev)
-    Fm = F[ref] + np.where(use_next, dn, dp)
-    pos = SAMPLES_PER_FRAME * Fm + dec.marks.slot[m_sel] + dec.marks.frac[m_sel] / FRAC_SCALE
-    mseg = seg[ref]
-    rev = dec.marks.rev[m_sel].astype(np.int64)
-    order = np.lexsort((pos, mseg))
-    pos, mseg, rev = pos[order], mseg[order], rev[order]
-    uniq = np.ones(len(pos), dtype=bool)
-    uniq[1:] = (pos[1:] != pos[:-1]) | (mseg[1:] != mseg[:-1])
-    pos, mseg, rev = pos[uniq], mseg[uniq], rev[uniq]
-    good = consistent_edges(pos, mseg, rev)
-    if not good.all():
-        dropped = int(np.count_nonzero(~good))
-        warn.append(
-            Diagnostic(
-                "edges_dropped",
-                f"node {node}: {dropped} reference edge(s) dropped: their position or "
-                "revolution counter disagrees with their neighbours (a corrupt MARK frame)",
-                float(dropped),
-            )
-        )
-        pos, mseg, rev = pos[good], mseg[good], rev[good]
-    new_seg = np.ones(len(pos), dtype=bool)
-    new_seg[1:] = mseg[1:] != mseg[:-1]
-    dr = np.zeros(len(rev), np.int64)
-    dr[1:] = (rev[1:] - rev[:-1]) % _WRAP
-    dr[new_seg] = 0
-    lost_marks = int(np.sum(dr[dr > 1] - 1))
-    first = np.flatnonzero(new_seg)
-    cum = np.cumsum(dr)
-    segi = np.cumsum(new_seg) - 1
-    m_rev = rev[first][segi] + cum - cum[first][segi]
-    return pos, mseg.astype(np.int32), m_rev, lost_marks, warn
-
-
-def _rebuild_node(
-    node: int, dec: Decoded, t_s: NDArray[np.float64], t0: float, strict_status: bool
-) -> tuple[NodeStream, list[Diagnostic]]:
-    """One node's stream from the decoded frames: STATUS, restarts and lost frames, the
-    samples' index, the scale runs, the reference edges (each a step of its own above)."""
-    s_sel = dec.samples.node == node
-    st_sel = dec.status.node == node
-    m_sel = dec.marks.node == node
-    s_frame = dec.samples.frame[s_sel]
-    st_frame = dec.status.frame[st_sel]
-    m_frame = dec.marks.frame[m_sel]
-    all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)))
-    first_t, last_t = float(t_s[all_frames[0]]), float(t_s[all_frames[-1]])
-    st_t = t_s[st_frame]
-    rate, scale, warn = _status(node, dec, st_sel, st_t, all_frames, first_t, t0, strict_status)
-
-    seq = dec.samples.seq[s_sel].astype(np.int64)
-    restart_at = _restarts(seq, s_frame, st_frame, t_s, all_frames, rate)
-    del all_frames  # a long run's node: free as soon as done
-    keep, F, seg, lost = (
-        _unwrap_samples(seq, restart_at)
-        if len(seq)
-        else (np.zeros(0, bool), np.zeros(0, np.int64), np.zeros(0, np.int32), 0)
-    )
-    kept_all = bool(keep.all())  # no duplicates: views, not copies
-    s_frame_k = s_frame if kept_all else s_frame[keep]
-    seq_k = seq if kept_all else seq[keep]
-    counts = dec.samples.counts
-    counts = counts if bool(s_sel.all()) else counts[s_sel]
-    counts = counts if kept_all else counts[keep]
-    duplicates = int(len(seq) - len(seq_k))
-    del seq, s_frame, restart_at, keep
-    n_seg = int(seg[-1]) + 1 if len(seg) else 0
-    warn += _frame_warnings(node, n_seg, lost, len(seq_k))
-
-    # --- samples: each kept frame's three, by their index in the node's sample clock
-    index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
-    F *= SAMPLES_PER_FRAME  # F as the index of each frame's first sample, for a moment
-    np.add(F[:, None], np.arange(SAMPLES_PER_FRAME), out=index.reshape(-1, SAMPLES_PER_FRAME))
-    F //= SAMPLES_PER_FRAME
-    flat = counts.reshape(-1)
-    valid = flat != INVALID_COUNT
-    all_valid = bool(valid.all())  # the common case: no copies
-    # where each kept frame's valid samples begin in the valid-sample arrays
-    frame_start: Any = (
-        _Triple()
-        if all_valid
-        else np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
-    )
-    seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
-    scale_start, scale_m_s2 = _scale_runs(st_frame, s_frame_k, scale, frame_start)
-    m_pos, m_seg, m_rev, lost_marks, mark_warn = _marks(
-        node, dec, m_sel, m_frame, s_frame_k, seq_k, F, seg
-    )
-    warn += mark_warn
-    flag_warn, flag_names = _node_warnings(node, st_t, dec.status.flags[st_sel], t0)
-    warn.extend(flag_warn)
-    stream = NodeStream(
-        node=node,
-        rate_hz=_most_common(rate),
-        scale_um_s2=float(scale[-1]) if len(scale) else None,
-        index=index if all_valid else index[valid],
-        counts=flat if all_valid else flat[valid],
-        segment_start=frame_start[seg_first].astype(np.int64),
-        scale_start=scale_start,
-        scale_m_s2=scale_m_s2,
-        mark_position=m_pos,
-        mark_segment=m_seg,
-        mark_rev=m_rev,
-        frames=len(seq_k),
-        samples=len(flat),
-        invalid_samples=int(np.count_nonzero(~valid)),
-        lost_frames=lost,
-        duplicate_frames=duplicates,
-        status_frames=len(st_frame),
-        lost_marks=lost_marks,
-        segments=n_seg,
-        flags=flag_names,
-        first_t_s=first_t,
-        last_t_s=last_t,
-    )
-    return stream, warn
-
-
 def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
     """Rebuild every node's stream from a run's frames (arrival order).
 
@@ -603,7 +205,7 @@ def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
     frames
         All frames of the run, in the order they arrived.
     strict_status
-        If True, a node without STATUS in its first :data:`STATUS_WITHIN_S`
+        If True, a node without STATUS in its first :data:`stand.drivers.node_build.STATUS_WITHIN_S`
         raises :class:`~stand.errors.NoStatusError`; if False it is a warning
         (and a node with no STATUS at all has ``accel_m_s2 = None``).
 
@@ -630,13 +232,15 @@ def rebuild_decoded(
         present = np.union1d(
             present, np.union1d(np.union1d(p.samples.node, p.status.node), p.marks.node)
         )
+    from stand.drivers.node_build import rebuild_node  # it builds the NodeStream defined here
+
     nodes: dict[int, NodeStream] = {}
     warnings: list[Diagnostic] = []
     for node in present.tolist():
         mine = (
             parts[0] if len(parts) == 1 else concat_decoded([node_records(p, node) for p in parts])
         )
-        stream, w = _rebuild_node(int(node), mine, t_s, t0, strict_status)
+        stream, w = rebuild_node(int(node), mine, t_s, t0, strict_status)
         del mine
         nodes[int(node)] = stream
         warnings.extend(w)

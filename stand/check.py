@@ -17,7 +17,8 @@ from stand.core import Diagnostic, StandParameters
 from stand.errors import UsageError
 from stand.matrix import SAME_SPEED
 from stand.measure import Measurement
-from stand.pipeline import SolveOptions, measure_streams, named_errors, stored_config
+from stand.pipeline import SolveOptions, measure_streams, stored_config
+from stand.recordings import named_errors
 from stand.result import Check, Result
 
 

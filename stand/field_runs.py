@@ -50,7 +50,7 @@ def _recorded_readings(
     """Each run's support phasors over its files (one per speed), their covariance, the
     speeds, and the first run's config."""
     from stand.matrix import SAME_SPEED
-    from stand.pipeline import measure_recording
+    from stand.recordings import measure_recording
 
     readings, covs, first_speeds, cfg = [], [], None, None
     for k, (files, *_) in enumerate(entries):

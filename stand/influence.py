@@ -2,7 +2,7 @@
 
 Trial runs are recorded as any run; :mod:`stand.calib.influence` turns their
 support phasors into the influence matrix, and the initial run is solved
-through it by the one pipeline (:func:`stand.pipeline.solve_recording`), so
+through it by the one pipeline (:func:`stand.recordings.solve_recording`), so
 corrections, tolerance and check are those of every other run.
 """
 
@@ -16,7 +16,8 @@ import numpy as np
 
 from stand.core import StandParameters
 from stand.measure import Measurement
-from stand.pipeline import SolveOptions, load_config_text, measure_recording, solve_recording
+from stand.pipeline import SolveOptions, load_config_text
+from stand.recordings import measure_recording, solve_recording
 from stand.result import Result
 
 

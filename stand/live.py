@@ -34,14 +34,8 @@ from stand.errors import (
     StandError,
     UsageError,
 )
-from stand.pipeline import (
-    SOFTWARE,
-    SolveOptions,
-    build_result,
-    check_matrix,
-    job_of,
-    measure_streams,
-)
+from stand.pipeline import SOFTWARE, SolveOptions, build_result, check_matrix, measure_streams
+from stand.recordings import job_of
 from stand.result import Job, LiveInfo, Provenance, Result
 
 FIRST_CHECK_S = 1.0

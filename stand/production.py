@@ -72,7 +72,7 @@ def simulate_series(
     from stand.archive import Archive, archive_result, file_digest
     from stand.config import config_toml
     from stand.health import datum_row
-    from stand.pipeline import correction_masses, solve_recording
+    from stand.recordings import correction_masses, solve_recording
     from stand.sim import Mass, load_scene, with_masses
 
     scene, params, _ = load_scene(scene_name)

@@ -97,7 +97,8 @@ class SpeedsResult:
 
 def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any, str]:
     """Each run's own result, in order of speed, and the config that solves them."""
-    from stand.pipeline import load_config_text, solve_recording, stored_config
+    from stand.pipeline import load_config_text, stored_config
+    from stand.recordings import solve_recording
 
     if len(paths) < 2:
         raise ConfigError("balancing across speeds takes runs at two speeds or more")

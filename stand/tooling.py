@@ -124,7 +124,7 @@ def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | No
     covariance, config)``.  The name is ``name`` or the config's ``[tooling] name``."""
     from stand.drivers.recording import config_digest
     from stand.matrix import SAME_SPEED
-    from stand.pipeline import measure_recording
+    from stand.recordings import measure_recording
 
     m0, cfg, _, text = measure_recording(run_0, config, compensate=False)
     m180, _, _, text180 = measure_recording(run_180, config, compensate=False)

@@ -25,6 +25,7 @@ DRIVERS = CORE | {"stand.drivers", "can", "h5py", "cantools"}
 APP = DRIVERS | {
     "stand.measure",
     "stand.pipeline",
+    "stand.recordings",
     "stand.result",
     "stand.calib",
     "stand",
@@ -65,6 +66,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/matrix.py": NUMERIC | CORE | {"pydantic", "stand.config", "stand.drivers.files",
                                          "stand.drivers.recording"},
     "stand/pipeline.py": NUMERIC | APP | {"stand.config", "stand.correct"},
+    # the recording path: a run file or a CAN log and a config to one Result
+    "stand/recordings.py": NUMERIC | APP | {"stand.config", "stand.correct"},
     # the tooling's unbalance (index runs), kept per tooling and subtracted from every run
     "stand/tooling.py": NUMERIC | APP,
     # the plant's systems: an OPC UA result server (asyncua), MQTT (paho)

@@ -28,7 +28,7 @@ def demo_result(tmp_path_factory: pytest.TempPathFactory) -> Any:
     folder = tmp_path_factory.mktemp("opcua")
     run = folder / "r.h5"
     assert main(["simulate", "demo", "--out", str(run), "--serial", "UA-7"]) == 0
-    from stand.pipeline import solve_recording
+    from stand.recordings import solve_recording
 
     return solve_recording(str(run))
 

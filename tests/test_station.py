@@ -125,7 +125,7 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
 
 def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run: Path) -> None:
     from stand.archive import archive_result
-    from stand.pipeline import solve_recording
+    from stand.recordings import solve_recording
 
     run_id = archive_result(solve_recording(str(demo_run)), station.archive_url)
     with pytest.raises(UsageError, match="outside"):
@@ -140,7 +140,8 @@ def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
     station: Station, demo_run: Path
 ) -> None:
     from stand.archive import archive_result
-    from stand.pipeline import SolveOptions, solve_recording
+    from stand.pipeline import SolveOptions
+    from stand.recordings import solve_recording
     from stand.report import render
 
     station.runs_dir.mkdir(parents=True)

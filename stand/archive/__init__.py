@@ -120,7 +120,7 @@ def archive_result(result: Result, url: str, *, config: str | None = None) -> in
             prev = result.check.previous_run
             checks = archive.run_id(file_digest(prev))
             if checks is None:
-                from stand.pipeline import solve_recording
+                from stand.recordings import solve_recording
 
                 before = solve_recording(prev, config)
                 checks = archive.add(*rows(before, file_digest(prev), None))
@@ -136,7 +136,7 @@ def result_of(row: Any) -> dict[str, Any]:
 def import_runs(paths: list[str], url: str, config: str | None = None) -> list[tuple[str, int]]:
     """Archive runs recorded before (solved with their stored config, or ``config``):
     ``(path, id)`` each; a run already archived keeps its id."""
-    from stand.pipeline import solve_recording
+    from stand.recordings import solve_recording
 
     done = []
     with Archive(url) as archive:

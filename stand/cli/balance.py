@@ -135,7 +135,7 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
     from stand.archive import Archive, file_digest
     from stand.cli.common import archive_url
     from stand.health import datum_row
-    from stand.pipeline import correction_masses, solve_recording
+    from stand.recordings import correction_masses, solve_recording
 
     if not (args.applied or args.applied_masses):
         print(

@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     from stand.config import load_config, read_toml, validate
     from stand.drivers.files import check_output
     from stand.errors import ModelError, UsageError
-    from stand.pipeline import measure_recording
+    from stand.recordings import measure_recording
 
     check_output(args.out, force=args.force, inputs=[args.config, args.runs])  # before the work
     cfg, params = load_config(args.config)

@@ -129,7 +129,7 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
     masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
     runs = getattr(args, "apply", None) or []
     if len(runs) == 1:
-        from stand.pipeline import correction_masses
+        from stand.recordings import correction_masses
 
         masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
     elif runs:

@@ -264,7 +264,7 @@ def print_summary(out: dict[str, Any]) -> None:
 def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
     """What a recording holds: one JSON object, or the table (and the warnings on stderr)."""
     from stand.cli.common import print_warnings
-    from stand.pipeline import recording_summary
+    from stand.recordings import recording_summary
 
     out = recording_summary(rec, streams)
     if as_json:

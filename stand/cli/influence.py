@@ -216,7 +216,8 @@ def _measured_matrix(
 def _recorded(args: argparse.Namespace, first: str, runs: list[Any], matrix: Any) -> int:
     """The initial run solved through the matrix: the same result as any run."""
     from stand.influence import solve_initial_run
-    from stand.pipeline import SolveOptions, solve_recording
+    from stand.pipeline import SolveOptions
+    from stand.recordings import solve_recording
     from stand.result import to_json
 
     if args.matrix:

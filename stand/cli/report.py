@@ -48,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
 
     from stand.drivers.files import check_output
     from stand.errors import UsageError
-    from stand.pipeline import load_config_text, solve_recording
+    from stand.pipeline import load_config_text
+    from stand.recordings import solve_recording
     from stand.report import render
 
     if not args.out and not args.pdf:

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     if len(args.runs) > 1 or args.summary:
         return run_batch(args, options)
     from stand.cli.format import show
-    from stand.pipeline import solve_recording
+    from stand.recordings import solve_recording
     from stand.result import to_json
 
     show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
@@ -112,7 +112,7 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
     from stand.cli.format import dump_json
-    from stand.pipeline import solve_many
+    from stand.recordings import solve_many
     from stand.result import json_text, to_json
 
     runs = list(args.runs)

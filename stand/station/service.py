@@ -3,7 +3,7 @@
 :class:`Station` runs the operator's loop on the application layer: a live
 run measured until precise (:func:`stand.live.measure_live`, in a thread),
 the report beside the run, the run archived; on a simulated stand the
-correction applied (:func:`stand.pipeline.correction_masses`, as
+correction applied (:func:`stand.recordings.correction_masses`, as
 ``--apply`` does) and the check run against the run before
 (:func:`stand.check.with_check`).  Screens read :meth:`Station.snapshot`, a
 frozen picture of the state; only one measurement runs at a time, whichever
@@ -223,7 +223,7 @@ class Station:
     def apply_correction(self) -> tuple[Any, ...]:
         """On a simulated stand: put the prescribed correction on the rotor, as an operator
         would (the masses ``--apply`` puts on); returns every mass applied so far."""
-        from stand.pipeline import correction_masses
+        from stand.recordings import correction_masses
         from stand.sim import Mass
 
         s = self._state
@@ -336,7 +336,7 @@ class Station:
         what was done, for the screen."""
         from stand.archive import Archive, file_digest
         from stand.health import datum_row
-        from stand.pipeline import correction_masses
+        from stand.recordings import correction_masses
 
         prev = before.provenance.run_file
         if self._state.confirmed_run != prev:
