@@ -337,6 +337,24 @@ def _marks(
     return pos, mseg.astype(np.int32), m_rev, lost_marks, warn
 
 
+def _samples(F: NDArray[np.int64], counts: NDArray[Any]) -> tuple[Any, Any, Any, Any]:
+    """Each kept frame's three samples by their index in the node's sample clock: the
+    index, the counts, which are valid, and where each frame's valid samples begin in the
+    valid-sample arrays (:class:`_Triple` when all are valid: the common case, no copies)."""
+    index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
+    np.add(
+        (SAMPLES_PER_FRAME * F)[:, None],
+        np.arange(SAMPLES_PER_FRAME),
+        out=index.reshape(-1, SAMPLES_PER_FRAME),
+    )
+    flat = counts.reshape(-1)
+    valid = flat != INVALID_COUNT
+    if bool(valid.all()):
+        return index, flat, valid, _Triple()
+    starts = np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
+    return index, flat, valid, starts
+
+
 def rebuild_node(
     node: int, dec: Decoded, t_s: NDArray[np.float64], t0: float, strict_status: bool
 ) -> tuple[NodeStream, list[Diagnostic]]:
@@ -372,20 +390,8 @@ def rebuild_node(
     n_seg = int(seg[-1]) + 1 if len(seg) else 0
     warn += _frame_warnings(node, n_seg, lost, len(seq_k))
 
-    # --- samples: each kept frame's three, by their index in the node's sample clock
-    index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
-    F *= SAMPLES_PER_FRAME  # F as the index of each frame's first sample, for a moment
-    np.add(F[:, None], np.arange(SAMPLES_PER_FRAME), out=index.reshape(-1, SAMPLES_PER_FRAME))
-    F //= SAMPLES_PER_FRAME
-    flat = counts.reshape(-1)
-    valid = flat != INVALID_COUNT
-    all_valid = bool(valid.all())  # the common case: no copies
-    # where each kept frame's valid samples begin in the valid-sample arrays
-    frame_start: Any = (
-        _Triple()
-        if all_valid
-        else np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
-    )
+    index, flat, valid, frame_start = _samples(F, counts)
+    all_valid = isinstance(frame_start, _Triple)
     seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
     scale_start, scale_m_s2 = _scale_runs(st_frame, s_frame_k, scale, frame_start)
     m_pos, m_seg, m_rev, lost_marks, mark_warn = _marks(

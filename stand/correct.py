@@ -96,3 +96,17 @@ def removed_masses(corr: Correction, R_m: float) -> list[tuple[float, float, flo
         return [(-s.mass_kg * 1e3, s.angle_deg, s.moment_kg_m / s.mass_kg)]
     sign = -1.0 if corr.remove else 1.0
     return [(sign * w.mass_kg * 1e3, w.angle_deg, R_m) for w in corr.weights]
+
+
+def weight_entries(corr: Any) -> list[dict[str, Any]]:
+    """A plane's weights as JSON entries (g, deg, the position 1-based or None), those of
+    mass only: the one form the N-plane answers give them in."""
+    return [
+        {
+            "mass_g": round(w.mass_kg * 1e3, 4),
+            "angle_deg": round(w.angle_deg, 2),
+            "position": None if w.position is None else w.position + 1,
+        }
+        for w in corr.weights
+        if w.mass_kg > 0
+    ]

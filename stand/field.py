@@ -132,54 +132,47 @@ def _polar(z: complex, typed: bool) -> list[float]:
     return [float(amp[0]), round(float(ph[0]), 2)]
 
 
-def field_json(result: FieldResult, cfg: Any = None) -> dict[str, Any]:
-    """The result as one strict-JSON object: per plane the weights to put on (or holes to
-    drill) as the config's ``[correction]`` says, and every reading before and after."""
+def _plane_json(result: FieldResult, j: int, cfg: Any) -> dict[str, Any]:
+    """Plane ``j``: the weights to put on as the config's ``[correction]`` says (else masses
+    to add at any angle), what it cancels, Darlow's factor, the cap."""
     from stand.core.balance import correction
     from stand.core.model import unbalance_to_polar
+    from stand.correct import weight_entries
 
-    sol = result.solution
+    sol, U, R = result.solution, result.U_kg_m[j], result.radius_m[j]
     c = None if cfg is None else cfg.correction
-    planes = []
-    for j, U in enumerate(result.U_kg_m):
-        R = result.radius_m[j]
-        corr = correction(
-            complex(U),
-            R,
-            remove=c is not None and c.mode == "remove",
-            positions=0 if c is None else c.positions,
-            position0_deg=0.0 if c is None else c.position0_deg,
-            steps_kg=[] if c is None else [w * 1e-3 for w in c.weights_g],
-            step_kg=0.0 if c is None else c.weight_step_g * 1e-3,
-        )
-        (q,), (phi,) = unbalance_to_polar([U])
-        planes.append(
-            {
-                "plane": j + 1,
-                "action": "remove" if corr.remove else "add",
-                "weights": [
-                    {
-                        "mass_g": round(w.mass_kg * 1e3, 4),
-                        "angle_deg": round(w.angle_deg, 2),
-                        "position": None if w.position is None else w.position + 1,
-                    }
-                    for w in corr.weights
-                    if w.mass_kg > 0
-                ],
-                "unbalance_mass_g": round(q / R * 1e3, 4),
-                "unbalance_angle_deg": round(float(phi), 2),
-                "radius_mm": round(R * 1e3, 3),
-                "significance": round(float(sol.significance[j]), 4),
-                "dependent": j in sol.dependent,
-                "at_limit": sol.at_cap[j],
-                "within_tolerance": None,
-            }
-        )
-    t = result.typed
+    corr = correction(
+        complex(U),
+        R,
+        remove=c is not None and c.mode == "remove",
+        positions=0 if c is None else c.positions,
+        position0_deg=0.0 if c is None else c.position0_deg,
+        steps_kg=[] if c is None else [w * 1e-3 for w in c.weights_g],
+        step_kg=0.0 if c is None else c.weight_step_g * 1e-3,
+    )
+    (q,), (phi,) = unbalance_to_polar([U])
+    return {
+        "plane": j + 1,
+        "action": "remove" if corr.remove else "add",
+        "weights": weight_entries(corr),
+        "unbalance_mass_g": round(q / R * 1e3, 4),
+        "unbalance_angle_deg": round(float(phi), 2),
+        "radius_mm": round(R * 1e3, 3),
+        "significance": round(float(sol.significance[j]), 4),
+        "dependent": j in sol.dependent,
+        "at_limit": sol.at_cap[j],
+        "within_tolerance": None,
+    }
+
+
+def field_json(result: FieldResult, cfg: Any = None) -> dict[str, Any]:
+    """The result as one strict-JSON object: per plane the weights to put on as the
+    config's ``[correction]`` says, and every reading before and after."""
+    sol, t = result.solution, result.typed
     return {
         "method": sol.method,
         "method_name": METHOD_NAMES[sol.method],
-        "planes": planes,
+        "planes": [_plane_json(result, j, cfg) for j in range(len(result.U_kg_m))],
         "radius": "each plane's correction radius"
         if cfg is not None or not t
         else "the trial radius",

@@ -120,28 +120,12 @@ def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any
     return [(paths[k], results[k]) for k in order], cfg, params, paths[0]
 
 
-def balance_speeds(
-    paths: Sequence[str],
-    config: str | None = None,
-    *,
-    method: str = "ls",
-    max_mass_g: float | None = None,
-) -> SpeedsResult:
-    """The N-plane correction for runs at several speeds (see the module docstring)."""
-    from stand.core.balance import correction
+def _readings(runs: list[Any], beam: Any, params: Any, at: list[float]) -> tuple[Any, ...]:
+    """Every speed's two-plane unbalance and the influence of each correction plane on it,
+    as shares of the permissible unbalance (rows of the solver's readings and matrix), each
+    reading's weight (one over its noise) and the permissible values per speed."""
     from stand.core.beam import receptance, receptance_at
 
-    runs, cfg, params, first = _runs(paths, config)
-    beam = cfg.rotor.beam()
-    planes = cfg.rotor.planes
-    if beam is None or not planes:
-        raise ConfigError(
-            "balancing across speeds needs the shaft ([rotor.shaft]) and the correction "
-            "planes ([[rotor.planes]]) in the config",
-            source=config or first,
-            key="rotor.planes",
-        )
-    at = [pl.position_m for pl in planes]
     rows_A, rows_alpha, weights, per = [], [], [], []
     for _, res in runs:
         w = res.omega_rad_s
@@ -152,34 +136,15 @@ def balance_speeds(
         rows_alpha.append((E @ receptance_at(beam, params, w, at)) / scale[:, None])
         cov = np.asarray(res.measurement.solution.cov_U).real
         weights.append(scale / np.sqrt((cov.diagonal()[0::2] + cov.diagonal()[1::2]) / 2))
-    A, alpha = np.concatenate(rows_A), np.vstack(rows_alpha)
-    radius = np.array([pl.radius_m for pl in planes])
-    caps = None if max_mass_g is None else max_mass_g * 1e-3 * radius
-    try:
-        sol = solve_multiplane(
-            A,
-            alpha,
-            method,
-            weights=np.concatenate(weights) if method == "wls" else None,
-            caps=caps,
-        )
-    except ModelError as exc:
-        raise ConfigError(str(exc), source=config or first) from None
-    speeds = []
-    for k, (path, res) in enumerate(runs):
-        scale = np.ones(2) if per[k] is None else np.asarray(per[k])
-        speeds.append(
-            SpeedReading(
-                run=path,
-                rpm=res.omega_rad_s * 30 / math.pi,
-                result=res,
-                U_kg_m=res.U_kg_m,
-                after_kg_m=sol.residual[2 * k : 2 * k + 2] * scale,
-                permissible_kg_m=per[k],
-            )
-        )
+    return np.concatenate(rows_A), np.vstack(rows_alpha), np.concatenate(weights), per
+
+
+def _plane_corrections(cfg: Any, sol: MultiPlaneSolution) -> tuple[PlaneCorrection, ...]:
+    """Each plane's correction as the config's ``[correction]`` makes it (weights, stock)."""
+    from stand.core.balance import correction
+
     c = cfg.correction
-    out = tuple(
+    return tuple(
         PlaneCorrection(
             plane=j + 1,
             position_m=pl.position_m,
@@ -197,14 +162,55 @@ def balance_speeds(
             dependent=j in sol.dependent,
             at_limit=sol.at_cap[j],
         )
-        for j, pl in enumerate(planes)
+        for j, pl in enumerate(cfg.rotor.planes)
+    )
+
+
+def balance_speeds(
+    paths: Sequence[str],
+    config: str | None = None,
+    *,
+    method: str = "ls",
+    max_mass_g: float | None = None,
+) -> SpeedsResult:
+    """The N-plane correction for runs at several speeds (see the module docstring)."""
+    runs, cfg, params, first = _runs(paths, config)
+    beam = cfg.rotor.beam()
+    planes = cfg.rotor.planes
+    if beam is None or not planes:
+        raise ConfigError(
+            "balancing across speeds needs the shaft ([rotor.shaft]) and the correction "
+            "planes ([[rotor.planes]]) in the config",
+            source=config or first,
+            key="rotor.planes",
+        )
+    A, alpha, weights, per = _readings(runs, beam, params, [pl.position_m for pl in planes])
+    caps = (
+        None if max_mass_g is None else max_mass_g * 1e-3 * np.array([pl.radius_m for pl in planes])
+    )
+    try:
+        sol = solve_multiplane(
+            A, alpha, method, weights=weights if method == "wls" else None, caps=caps
+        )
+    except ModelError as exc:
+        raise ConfigError(str(exc), source=config or first) from None
+    speeds = tuple(
+        SpeedReading(
+            run=path,
+            rpm=res.omega_rad_s * 30 / math.pi,
+            result=res,
+            U_kg_m=res.U_kg_m,
+            after_kg_m=sol.residual[2 * k : 2 * k + 2]
+            * (1.0 if per[k] is None else np.asarray(per[k])),
+            permissible_kg_m=per[k],
+        )
+        for k, (path, res) in enumerate(runs)
     )
     notes = tuple(sol.diagnostics) + tuple(
         w for _, res in runs for w in res.warnings if w.code != "near_bending_mode"
     )
-    return SpeedsResult(
-        tuple(speeds), out, method, sol, "remove" if c.mode == "remove" else "add", notes
-    )
+    mode = "remove" if cfg.correction.mode == "remove" else "add"
+    return SpeedsResult(speeds, _plane_corrections(cfg, sol), method, sol, mode, notes)
 
 
 def correction_masses_across_speeds(
@@ -239,6 +245,7 @@ def _pair(U: np.ndarray) -> list[dict[str, Any]]:
 def speeds_json(result: SpeedsResult) -> dict[str, Any]:
     """The result as one strict-JSON object (g, mm, deg, rpm at this edge)."""
     from stand.core.model import unbalance_to_polar
+    from stand.correct import weight_entries
 
     planes = []
     for p in result.planes:
@@ -249,15 +256,7 @@ def speeds_json(result: SpeedsResult) -> dict[str, Any]:
                 "position_mm": round(p.position_m * 1e3, 3),
                 "radius_mm": round(p.radius_m * 1e3, 3),
                 "action": result.correction_mode,
-                "weights": [
-                    {
-                        "mass_g": round(w.mass_kg * 1e3, 4),
-                        "angle_deg": round(w.angle_deg, 2),
-                        "position": None if w.position is None else w.position + 1,
-                    }
-                    for w in p.correction.weights
-                    if w.mass_kg > 0
-                ],
+                "weights": weight_entries(p.correction),
                 "unbalance_g_mm": round(float(q) * 1e6, 3),
                 "unbalance_angle_deg": round(float(phi), 2),
                 "dependent": p.dependent,

@@ -78,10 +78,10 @@ ALLOWED: dict[str, set[str]] = {
     "stand/live.py": NUMERIC | APP | {"stand.config", "stand.sim"},
     "stand/influence.py": NUMERIC | APP,
     # the field method in N planes from readings at several speeds
-    "stand/field.py": NUMERIC | APP | {"stand.config"},
+    "stand/field.py": NUMERIC | APP | {"stand.config", "stand.correct"},
     "stand/field_runs.py": NUMERIC | APP | {"stand.config"},
     # balancing across speeds: N planes through the beam model
-    "stand/speeds.py": NUMERIC | APP,
+    "stand/speeds.py": NUMERIC | APP | {"stand.correct"},
     # the stand judged from production: corrections as calibration data, drift, refits
     "stand/health.py": NUMERIC | APP | {"stand.config"},
     # a simulated production series (runs, corrections, checks) into the archive

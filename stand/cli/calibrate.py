@@ -253,12 +253,39 @@ def _write(
 FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
 
 
+def _refitted_config(cfg: Any, r: Any, original: str) -> tuple[list[str], str]:
+    """The config with the refitted values (stiffnesses, masses, gains; today's date), its
+    header of comments with the fits, and its text (the user's comments kept)."""
+    from stand.config import updated_toml
+
+    stand = cfg.stand.model_copy(
+        update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
+        | {"calibrated": dt.date.today().isoformat()}
+    )
+    gain = list(cfg.sensors.gain)
+    for f in r.fits:
+        if f.name.startswith("gain"):
+            gain[int(f.name[-1]) - 1] *= 1 + f.change
+    new = cfg.model_copy(
+        update={"stand": stand, "sensors": cfg.sensors.model_copy(update={"gain": gain})}
+    )
+    header = [
+        f"# recalibrated by stand calibrate --from-archive from {len(r.group.rows) - r.start} "
+        f"corrected rotors (from datum {r.start + 1} of {len(r.group.rows)}):",
+        *(
+            f"#   {f.name} {100 * f.change:+.3f} +- {100 * f.interval95:.3f} % (95 %)"
+            for f in r.fits
+        ),
+    ]
+    return header, "\n".join(header) + "\n" + updated_toml(original, new)
+
+
 def _from_archive(args: argparse.Namespace) -> int:
     """``--from-archive``: the stand re-identified from production data; the new config
     written beside the old (with a diff), the last rotors' answers old and new."""
     import difflib
 
-    from stand.config import load_config, read_toml, updated_toml
+    from stand.config import load_config, read_toml
     from stand.drivers.files import check_output
     from stand.errors import UsageError
     from stand.health import answers, refit
@@ -279,27 +306,8 @@ def _from_archive(args: argparse.Namespace) -> int:
             )
     cfg, params = load_config(args.config)
     r = refit(archive_url(args, cfg), params, names, stand=args.stand, rotor_type=args.rotor_type)
-    stand = cfg.stand.model_copy(
-        update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
-        | {"calibrated": dt.date.today().isoformat()}
-    )
-    gain = list(cfg.sensors.gain)
-    for f in r.fits:
-        if f.name.startswith("gain"):
-            gain[int(f.name[-1]) - 1] *= 1 + f.change
-    new = cfg.model_copy(
-        update={"stand": stand, "sensors": cfg.sensors.model_copy(update={"gain": gain})}
-    )
     original, _ = read_toml(args.config)
-    header = [
-        f"# recalibrated by stand calibrate --from-archive from {len(r.group.rows) - r.start} "
-        f"corrected rotors (from datum {r.start + 1} of {len(r.group.rows)}):",
-        *(
-            f"#   {f.name} {100 * f.change:+.3f} +- {100 * f.interval95:.3f} % (95 %)"
-            for f in r.fits
-        ),
-    ]
-    text = "\n".join(header) + "\n" + updated_toml(original, new)
+    header, text = _refitted_config(cfg, r, original)
     write_text_output(out_path, text, force=args.force, inputs=[args.config])
     diff = list(
         difflib.unified_diff(
