@@ -48,6 +48,9 @@ class StoredMatrix(BaseModel):
     """``dA / dU`` [reading per kg m], ``U = q R e^{-i phi}``."""
     cov_alpha: list[list[FiniteFloat]] | None = None
     rpm: FiniteFloat | None = None
+    speeds_rpm: list[FiniteFloat | None] | None = None
+    """Each row's speed, for a matrix of readings at several speeds (``stand influence`` in
+    N planes); None: one speed (``rpm``)."""
     rotor_type: str | None = None
     created: str
     config_sha256: str | None = None
@@ -89,8 +92,16 @@ class LoadedMatrix:
     text: str = field(repr=False, default="")
 
     def check(self, rotor_type: str | None, *, live: bool) -> None:
-        """Refuse it for another rotor type, or typed-in readings on the stand."""
+        """Refuse it for another rotor type, typed-in readings on the stand, or a matrix of
+        readings at several speeds (it serves the stand's answer at one)."""
         stored, path = self.stored, self.path
+        if stored.speeds_rpm and len(set(stored.speeds_rpm)) > 1:
+            raise ConfigError(
+                "a matrix of readings at several speeds: it serves stand influence's runs "
+                "file, not one run's two-plane answer",
+                source=path,
+                key="speeds_rpm",
+            )
         if live and stored.readings != "support acceleration":
             raise ConfigError(
                 "made from typed-in readings (another instrument's units): the stand's own "

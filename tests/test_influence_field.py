@@ -169,3 +169,20 @@ def test_recorded_runs_at_two_speeds_give_the_scene_s_unbalance_back(
     capsys.readouterr()
     assert main(["influence", str(tmp_path / "twice.toml")]) == 2
     assert "one run file per speed" in capsys.readouterr().err
+
+
+def test_a_matrix_of_several_speeds_is_stored_and_not_taken_for_one_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """--save stores the readings' speeds with the matrix; `stand solve --matrix` refuses it
+    in one line (it serves the runs file, not one run's two-plane answer)."""
+    saved = tmp_path / "m.json"
+    assert main(["influence", str(_speeds_runs(tmp_path)), "--save", str(saved)]) == 0
+    doc = json.loads(saved.read_text())
+    assert doc["speeds_rpm"] == [900.0, 900.0, 1500.0, 1500.0]
+    run = tmp_path / "r.h5"
+    assert main(["simulate", "demo", "--out", str(run)]) == 0
+    capsys.readouterr()
+    assert main(["solve", str(run), "--matrix", str(saved)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "[speeds_rpm]" in err, err
