@@ -334,3 +334,55 @@ def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
             entry[key] = [[round(float(q[i]) * 1e6, 1), round(float(phi[i]), 1)] for i in range(2)]
         out.append(entry)
     return out
+
+
+def drift_bands(url: str, result: Any) -> dict[str, float] | None:
+    """What the stand's health says of the stand a result comes from: when its data (this
+    stand, rotor type, calibration and speed) raised the alarm, each fitted part's change
+    and its interval, ``|change| + interval95`` (relative), to widen the calibration's
+    bands with until the stand is recalibrated; None when they did not (or there are none).
+    """
+    from stand.archive import Archive
+
+    prov = result.provenance
+    with Archive(url) as a:
+        rows = a.correction_rows(prov.stand_id or None, prov.rotor_type)
+    rpm = result.omega_rad_s * 30 / math.pi
+    mine = [
+        g
+        for g in groups(rows)
+        if g.config_sha256 == prov.config_sha256 and abs(g.rpm / rpm - 1) <= SAME_SPEED
+    ]
+    if not mine:
+        return None
+    judged = judge(mine[-1])
+    if judged.alarm_at is None:
+        return None
+    return {
+        f.name: abs(f.change) + f.interval95 for f in judged.fitted if f.name != "reference_angle"
+    }
+
+
+def with_drift(url: str, result: Any, cfg: Any, params: Any, options: Any) -> Any:
+    """``result`` with its calibration interval widened by what :func:`drift_bands` found,
+    and a warning saying so; ``result`` itself when the stand is as calibrated."""
+    import dataclasses
+
+    from stand.core import Diagnostic
+    from stand.pipeline import calibration_radius
+
+    bands = drift_bands(url, result)
+    if not bands:
+        return result
+    radius = calibration_radius(result.measurement, cfg, params, options, drifted=bands)
+    parts = ", ".join(f"{k} {100 * v:.1f} %" for k, v in bands.items())
+    note = Diagnostic(
+        "stand_drifted",
+        f"stand health: this stand no longer matches its calibration ({parts}): the "
+        "calibration's interval is widened to hold it; recalibrate (stand calibrate "
+        "--from-archive)",
+        max(bands.values()),
+    )
+    return dataclasses.replace(
+        result, calibration_radius_kg_m=radius, warnings=(*result.warnings, note)
+    )

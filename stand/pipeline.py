@@ -155,18 +155,29 @@ def _uncertainty(m: Measurement, params: StandParameters, options: SolveOptions)
 
 
 def calibration_radius(
-    m: Measurement, cfg: Any, params: StandParameters, options: SolveOptions
+    m: Measurement,
+    cfg: Any,
+    params: StandParameters,
+    options: SolveOptions,
+    drifted: dict[str, float] | None = None,
 ) -> tuple[float, float] | None:
     """Each plane's 95 % radius [kg m] from what the calibration is known to (the config's
     ``[calibration]`` bands, linearised, :mod:`stand.calib.tolerance`): what the stand's
-    knowledge allows, beside what the data allow.  None where the answer is not the rigid
+    knowledge allows, beside what the data allow.  ``drifted``: relative changes the
+    stand's health found (``{"C1": 0.2, ...}``, :func:`stand.health.drift_bands`); each
+    widens its class's band to at least that.  None where the answer is not the rigid
     model's (an influence matrix, a bending shaft)."""
     from stand.calib.tolerance import Tolerances, parameter_uncertainty
 
     if options.matrix is not None or cfg.rotor.shaft is not None:
         return None
-    c = cfg.calibration
-    tol = Tolerances(c.C_pct / 100, c.M_pct / 100, c.length_mm * 1e-3, c.gain_pct / 100)
+    c, d = cfg.calibration, drifted or {}
+    tol = Tolerances(
+        max(c.C_pct / 100, d.get("C1", 0.0), d.get("C2", 0.0)),
+        max(c.M_pct / 100, d.get("M1", 0.0), d.get("M2", 0.0)),
+        c.length_mm * 1e-3,
+        max(c.gain_pct / 100, d.get("gain1", 0.0), d.get("gain2", 0.0)),
+    )
     A = np.array([ph.A_m_s2 for ph in m.supports])
     r = parameter_uncertainty(params, m.omega_rad_s, A, tol, draws=0)
     return float(r.radius95_linear[0]), float(r.radius95_linear[1])

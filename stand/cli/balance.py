@@ -112,6 +112,15 @@ def run(args: argparse.Namespace) -> int:
         result = with_check(
             result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
         )
+    if not args.no_archive:  # a stand that drifted from its calibration says so, widened
+        from stand.cli.common import archive_url
+        from stand.errors import StandError
+        from stand.health import with_drift
+
+        try:
+            result = with_drift(archive_url(args, cfg), result, cfg, params, options)
+        except StandError as exc:  # the archive is checked again (and said) below
+            print(f"stand health not checked: {exc}", file=sys.stderr)
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)
     out["report"] = report

@@ -300,6 +300,12 @@ class Station:
 
             prev = before.provenance.run_file
             result = with_check(result, prev, src.cfg, src.params, strict=True)
+        from stand.health import with_drift
+
+        try:  # a stand that drifted from its calibration: the interval widened, and said
+            result = with_drift(self.archive_url, result, src.cfg, src.params, SolveOptions())
+        except StandError as exc:
+            log.warning("stand health not checked: %s", exc)
         return result
 
     def _file(self, result: Any, config: Path) -> tuple[int | None, tuple[str, ...]]:
