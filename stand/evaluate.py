@@ -30,7 +30,7 @@ from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
 from stand.drivers.streams import rebuild
 from stand.measure import Measurement, measure
 from stand.sim import Scene, simulate
-from stand.sim.scene import PlaneUnbalance, UnbalanceTable
+from stand.sim.tables import PlaneUnbalance, UnbalanceTable
 
 POSITIONS = 12
 SPREAD_LIMIT = 0.12

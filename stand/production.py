@@ -45,7 +45,7 @@ def _write(scene: Any, params: Any, path: Path, believed: str) -> None:
 
 def _rotor(scene: Any, rng: np.random.Generator, index: int) -> Any:
     """The scene with this rotor's random initial unbalance, its own noise seed."""
-    from stand.sim.scene import PlaneUnbalance
+    from stand.sim.tables import PlaneUnbalance
 
     u = scene.unbalance
     planes = {

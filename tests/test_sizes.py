@@ -30,7 +30,6 @@ EXCEPTIONS: dict[str, str] = {
     "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
     "stand/report.py": PENDING + "the certificate apart from the production and speeds pages",
     "stand/result.py": PENDING + "to_json and its helpers apart from the Result types",
-    "stand/sim/scene.py": PENDING + "the [effects] tables apart from the scene",
     "stand/station/pages.py": PENDING + "the History screen and its routes apart",
     "stand/station/service.py": PENDING + "the archive's side (history, reports, health) apart",
     # functions
