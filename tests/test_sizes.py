@@ -28,7 +28,6 @@ EXCEPTIONS: dict[str, str] = {
     "equations every function implements",
     "stand/live.py": PENDING + "the LiveSession apart from measure_until_precise",
     "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
-    "stand/report.py": PENDING + "the certificate apart from the production and speeds pages",
     "stand/result.py": PENDING + "to_json and its helpers apart from the Result types",
     "stand/station/pages.py": PENDING + "the History screen and its routes apart",
     "stand/station/service.py": PENDING + "the archive's side (history, reports, health) apart",

@@ -190,7 +190,7 @@ def _across_speeds(args: argparse.Namespace) -> int:
     from stand.cli.panel import measure_live_from_args
     from stand.errors import UsageError
     from stand.matrix import SAME_SPEED
-    from stand.report import render_speeds
+    from stand.report_pages import render_speeds
     from stand.speeds import balance_speeds, speeds_json
 
     if args.check or args.rpm:

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         if out:
             check_output(out, force=args.force, inputs=inputs)  # before the work
     if args.across_speeds:
-        from stand.report import render_speeds
+        from stand.report_pages import render_speeds
         from stand.speeds import balance_speeds, speeds_json
 
         if args.check:

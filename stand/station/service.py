@@ -404,9 +404,10 @@ class Station:
 
     def speeds_page(self, run_ids: list[int]) -> str:
         """The correction across speeds of archived runs (one rotor at several speeds) as
-        an HTML page (:func:`stand.speeds.balance_speeds`, :func:`stand.report.render_speeds`)."""
+        an HTML page (:func:`stand.speeds.balance_speeds`,
+        :func:`stand.report_pages.render_speeds`)."""
         from stand.archive.query import run_file
-        from stand.report import render_speeds
+        from stand.report_pages import render_speeds
         from stand.speeds import balance_speeds, speeds_json
 
         paths = []
