@@ -30,7 +30,6 @@ EXCEPTIONS: dict[str, str] = {
     "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
     "stand/result.py": PENDING + "to_json and its helpers apart from the Result types",
     "stand/station/pages.py": PENDING + "the History screen and its routes apart",
-    "stand/station/service.py": PENDING + "the archive's side (history, reports, health) apart",
     # functions
     "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
     "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",

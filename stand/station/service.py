@@ -23,6 +23,7 @@ from typing import Any
 
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.result import Job
+from stand.station.archive_side import ArchiveSide
 
 log = logging.getLogger(__name__)
 
@@ -80,7 +81,7 @@ def safe_name(text: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("._")[:60] or "rotor"
 
 
-class Station:
+class Station(ArchiveSide):
     """The operator's loop on one stand: start, measure, correct, check, next rotor.
 
     Parameters
@@ -336,105 +337,6 @@ class Station:
         if said and said.startswith("not"):
             notes.append(said)
         return run_id, tuple(notes)
-
-    def _datum(self, before: Any, result: Any, config: Path) -> str:
-        """A check after a confirmed correction into the archive as a calibration datum;
-        what was done, for the screen."""
-        from stand.archive import Archive, file_digest
-        from stand.health import datum_row
-        from stand.recordings import correction_masses
-
-        prev = before.provenance.run_file
-        if self._state.confirmed_run != prev:
-            return "not a calibration datum: the correction was not confirmed as put on as shown"
-        try:
-            row = datum_row(
-                before,
-                result,
-                correction_masses(prev, str(config)),
-                initial_sha256=file_digest(prev),
-                check_sha256=file_digest(result.provenance.run_file),
-                confirmed_by=self._state.job.operator,
-                applied="as shown",
-            )
-            with Archive(self.archive_url) as a:
-                a.add_correction(row)
-        except StandError as exc:
-            return f"not stored as a calibration datum ({exc})"
-        return "stored as a calibration datum (stand health)"
-
-    def health(self) -> dict[str, Any]:
-        """What the archive's calibration data say (:func:`stand.health.health_json`)."""
-        from stand.health import health, health_json
-
-        return health_json(health(self.archive_url))
-
-    # -- the archive ---------------------------------------------------------------------
-    def history(
-        self, serial: str | None = None, rotor_type: str | None = None, limit: int = 50
-    ) -> list[dict[str, Any]]:
-        """The archive's latest runs (newest first), by serial and rotor type."""
-        from stand.archive.query import Filters, history
-
-        rows = history(self.archive_url, Filters(serial=serial or None, rotor_type=rotor_type))
-        return rows[::-1][:limit]
-
-    def export_qdas(self, rotor_type: str) -> bytes:
-        """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
-        (:mod:`stand.archive.qdas`; UsageError when there is none)."""
-        from stand.archive.qdas import export_qdas
-        from stand.archive.query import Filters
-
-        data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None)
-        return data
-
-    def report_file(self, run_id: int) -> Path:
-        """The report of archived run ``run_id``, if it lies inside the runs folder."""
-        from stand.archive.query import run_file
-
-        found = run_file(self.archive_url, run_id)
-        if found is None:
-            raise UsageError(f"no run {run_id} in the archive")
-        report = Path(found).with_suffix(".html").resolve()
-        if not report.is_relative_to(self.runs_dir):
-            raise UsageError(f"run {run_id}'s report is outside {self.runs_dir}")
-        if not report.is_file():
-            raise UsageError(f"run {run_id} has no report in {self.runs_dir}")
-        return report
-
-    def speeds_page(self, run_ids: list[int]) -> str:
-        """The correction across speeds of archived runs (one rotor at several speeds) as
-        an HTML page (:func:`stand.speeds.balance_speeds`,
-        :func:`stand.report_pages.render_speeds`)."""
-        from stand.archive.query import run_file
-        from stand.report_pages import render_speeds
-        from stand.speeds import balance_speeds, speeds_json
-
-        paths = []
-        for run_id in run_ids:
-            found = run_file(self.archive_url, run_id)
-            if found is None:
-                raise UsageError(f"no run {run_id} in the archive")
-            path = Path(found).resolve()
-            if not path.is_relative_to(self.runs_dir):
-                raise UsageError(f"run {run_id} is outside {self.runs_dir}")
-            paths.append(str(path))
-        return render_speeds(speeds_json(balance_speeds(paths)))
-
-    def certificate_pdf(self, run_id: int) -> Path:
-        """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
-        the first time it is asked for, and again if the report changed since
-        (:func:`stand.printing.write_pdf`, written safely)."""
-        report = self.report_file(run_id)
-        pdf = report.with_suffix(".pdf")
-        with self._printing:
-            stale = pdf.is_file() and pdf.stat().st_mtime_ns < report.stat().st_mtime_ns
-            if stale or not pdf.is_file():
-                from stand.printing import write_pdf
-
-                text = report.read_text(encoding="utf-8")
-                write_pdf(text, pdf, force=stale, inputs=[str(report)])  # its own print only
-        return pdf
 
 
 def _bus(table: dict[str, Any] | None) -> dict[str, Any]:
