@@ -111,6 +111,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/station/views.py": NUMERIC | CORE | {"stand.units"},
     "stand/station/pages.py": {"nicegui", "fastapi", "stand.station", "stand.result",
                                "stand.units", "stand.errors"},
+    "stand/station/history.py": {"nicegui", "fastapi", "stand.station", "stand.units",
+                                 "stand.errors"},
     "stand/cli": NUMERIC | APP | {"stand.cli", "stand.config", "stand.sim", "stand.evaluate",
                                   "stand.live", "stand.report", "stand.report_pages",
                                   "stand.units", "stand.printing", "stand.station", "stand.opcua",

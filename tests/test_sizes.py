@@ -29,7 +29,6 @@ EXCEPTIONS: dict[str, str] = {
     "stand/live.py": PENDING + "the LiveSession apart from measure_until_precise",
     "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
     "stand/result.py": PENDING + "to_json and its helpers apart from the Result types",
-    "stand/station/pages.py": PENDING + "the History screen and its routes apart",
     # functions
     "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
     "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",

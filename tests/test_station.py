@@ -102,7 +102,7 @@ def test_rotor_types_and_files_stay_inside_their_folders(station: Station, tmp_p
 def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> None:
     """A rotor type whose configuration asks for ounces and inches has its archived
     unbalances shown so; a type no longer in the folder (or broken) in g mm."""
-    from stand.station.pages import _history_row
+    from stand.station.history import _history_row
     from stand.units import Display
 
     folder = tmp_path / "rotors"
@@ -251,7 +251,8 @@ async def _flow(station: Station) -> None:
     from nicegui import ui
     from nicegui.testing.user_simulation import user_simulation
 
-    from stand.station.pages import add_routes, frame
+    from stand.station.history import add_routes
+    from stand.station.pages import frame
 
     async def until(cond: Any, timeout_s: float = 30.0) -> None:
         end = time.monotonic() + timeout_s

@@ -14,9 +14,10 @@ from typing import Any
 
 from nicegui import app, ui
 
-from stand.errors import StandError, UsageError
+from stand.errors import StandError
 from stand.result import Job, to_json
 from stand.station.face import SEEN_FROM, face_svg
+from stand.station.history import add_routes, history_screen
 from stand.station.service import BUS, Station
 from stand.station.views import (
     ANGLE_NOTE,
@@ -298,167 +299,6 @@ def check_screen(station: Station) -> None:
             station.next_rotor()
 
         ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
-
-
-def _health_panel(station: Station) -> None:
-    """Is the stand still as calibrated? One line per rotor type and speed (stand health)."""
-    try:
-        out = station.health()
-    except StandError as exc:
-        ui.label(f"stand health: {exc}").classes("text-body1")
-        return
-    with ui.card().classes("w-full").mark("health"):
-        if not out["groups"]:
-            ui.label("Stand health: no calibration data yet (confirm corrections as applied)")
-        for g in out["groups"]:
-            where = f"{g['rotor_type'] or 'rotor'} at {g['rpm']:.0f} rpm, {g['data']} rotors"
-            if not g["alarm"]:
-                ui.label(f"Stand health ({where}): as calibrated").classes("text-h6 pass")
-                continue
-            m = g["moved"] or {}
-            what = f": {m.get('part', '')} {m.get('change', 0):+.1f} {m.get('unit', '')}"
-            ui.label(f"Stand health ({where}): RECALIBRATE{what}").classes("text-h6 fail")
-
-
-def history_screen(station: Station) -> None:
-    """History: the archive by serial and rotor type; each run opens its report; the stand's
-    health from its corrected rotors."""
-    ui.label("History").classes("big")
-    _health_panel(station)
-    with ui.row().classes("items-end gap-4"):
-        serial = ui.input("serial number").mark("history-serial")
-        rotor = ui.select(["", *station.rotor_types()], label="rotor type", value="")
-        rotor.classes("w-64").mark("history-type")
-        found = ui.button("Search").props("size=lg").mark("history-search")
-
-        def export() -> None:
-            if not rotor.value:
-                ui.notify("choose a rotor type to export", type="warning")
-                return
-            ui.navigate.to(f"/export/qdas/{rotor.value}", new_tab=True)
-
-        ui.button("Export Q-DAS (.dfq)", on_click=export).props("size=lg outline").mark(
-            "history-export"
-        )
-    columns = [{"name": k, "label": k, "field": k, "align": "left"}
-               for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
-                         "plane 2", "report")]  # fmt: skip
-    table = (
-        ui.table(columns=columns, rows=[], row_key="run", selection="multiple")
-        .classes("w-full")
-        .mark("history-table")
-    )
-
-    def across_speeds() -> None:
-        ids = sorted(r["run"] for r in table.selected)
-        if len(ids) < 2:
-            ui.notify("tick one rotor's runs at two speeds or more", type="warning")
-            return
-        ui.navigate.to(f"/speeds/{','.join(map(str, ids))}", new_tab=True)
-
-    ui.button("Correct across speeds", on_click=across_speeds).props("size=lg outline").mark(
-        "history-speeds"
-    )
-    table.add_slot(
-        "body-cell-report",
-        '<q-td :props="props"><a :href="props.value" target="_blank">report</a>'
-        ' &middot; <a :href="props.value + \'/pdf\'" target="_blank">PDF</a></q-td>',
-    )
-
-    def search() -> None:
-        try:
-            rows = station.history(serial.value or None, rotor.value or None)
-        except StandError as exc:
-            ui.notify(str(exc), type="negative")
-            return
-        units = {t: Display(*station.display_units(t)) for t in {r["rotor_type"] for r in rows}}
-        table.rows = [_history_row(r, units[r["rotor_type"]]) for r in rows]
-        table.update()
-
-    found.on_click(search)
-    search()
-
-
-def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
-    """One archived run as a row, its unbalances in its rotor type's units."""
-
-    def plane(p: dict[str, Any]) -> str:
-        urr = "" if p["urr"] is None else f", URR {100 * p['urr']:.1f} %"
-        return f"{units.unbalance(p['unbalance_g_mm'])} at {p['angle_deg']:.0f}°{urr}"
-
-    planes = {p["plane"]: plane(p) for p in r["planes"]}
-    return {
-        "run": r["id"],
-        "time": _local(r["start_time"]),
-        "serial": r["serial"] or "",
-        "rotor type": r["rotor_type"] or "",
-        "verdict": (r["verdict"] or "") + (" (check)" if r["checks_run"] else ""),
-        "plane 1": planes.get(1, ""),
-        "plane 2": planes.get(2, ""),
-        "report": f"/report/{r['id']}",
-    }
-
-
-def _local(iso: str) -> str:
-    """An archived start time (UTC) in the station's local time, to the second."""
-    import datetime as dt
-
-    try:
-        return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S")
-    except ValueError:
-        return iso
-
-
-def add_routes(station: Station) -> None:
-    """The routes beside the screens: a run's report, by its archive id."""
-    from fastapi.responses import FileResponse, PlainTextResponse
-
-    @app.get("/export/qdas/{rotor_type}")
-    def export_qdas(rotor_type: str) -> Any:
-        from fastapi.responses import Response
-
-        try:
-            data = station.export_qdas(rotor_type)
-        except StandError as exc:  # no run of that type
-            return PlainTextResponse(str(exc), status_code=404)
-        name = "".join(c if c.isalnum() or c in "-_." else "_" for c in rotor_type)
-        return Response(
-            data,
-            media_type="text/plain; charset=windows-1252",
-            headers={"Content-Disposition": f'attachment; filename="{name}.dfq"'},
-        )
-
-    @app.get("/report/{run_id}")
-    def report(run_id: int) -> Any:
-        try:
-            return FileResponse(station.report_file(run_id), media_type="text/html")
-        except StandError as exc:
-            return PlainTextResponse(str(exc), status_code=404)
-
-    @app.get("/speeds/{run_ids}")
-    def speeds(run_ids: str) -> Any:
-        from fastapi.responses import HTMLResponse
-
-        try:
-            ids = [int(x) for x in run_ids.split(",")]
-        except ValueError:
-            return PlainTextResponse("runs: archive ids separated by commas", status_code=400)
-        try:
-            return HTMLResponse(station.speeds_page(ids))
-        except UsageError as exc:  # no such run, or outside the folders
-            return PlainTextResponse(str(exc), status_code=404)
-        except StandError as exc:  # runs that do not make a correction across speeds
-            return PlainTextResponse(str(exc), status_code=422)
-
-    @app.get("/report/{run_id}/pdf")
-    def certificate_pdf(run_id: int) -> Any:
-        try:
-            pdf = station.certificate_pdf(run_id)
-        except UsageError as exc:  # no such run, or outside the folders
-            return PlainTextResponse(str(exc), status_code=404)
-        except StandError as exc:  # Chromium missing or failing, a full disk
-            return PlainTextResponse(str(exc), status_code=503)
-        return FileResponse(pdf, media_type="application/pdf", filename=pdf.name)
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:
