@@ -1,7 +1,7 @@
 """Each archived result published over MQTT (paho-mqtt), for the plant's line systems.
 
 ``[plant] mqtt_url = "mqtt://broker:1883"``: the result's own JSON form
-(:func:`stand.result.to_json`) on the topic ``stand/<stand id>/result``, QoS 1 (the
+(:func:`stand.result_json.to_json`) on the topic ``stand/<stand id>/result``, QoS 1 (the
 broker confirms it), retained (a system that subscribes later gets the latest).  A broker
 that does not answer costs at most :data:`TIMEOUT_S` and is said in a warning: the run and
 its archive row are kept whatever happens.
@@ -13,7 +13,8 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from stand.errors import ArchiveError
-from stand.result import Result, json_text, to_json
+from stand.result import Result, json_text
+from stand.result_json import to_json
 
 TIMEOUT_S = 5.0
 """How long to wait for the broker to take a result [s]."""

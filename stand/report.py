@@ -18,7 +18,8 @@ import html
 from typing import Any
 
 from stand.plots import polar, spectrum_and_speed
-from stand.result import Result, to_json
+from stand.result import Result
+from stand.result_json import to_json
 from stand.units import Display
 
 CSS = """

@@ -125,7 +125,8 @@ def test_3x_is_judged_only_against_a_1x_that_is_there(unbalanced: bool) -> None:
 def test_at_the_noise_floor_no_correction_is_prescribed(g_mm: float) -> None:
     """A plane whose unbalance is inside its own interval gets no weight and no angle."""
     from stand.pipeline import SolveOptions, build_result, measure_streams
-    from stand.result import Provenance, to_json
+    from stand.result import Provenance
+    from stand.result_json import to_json
 
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()

@@ -62,7 +62,7 @@ async def _client(endpoint: str, url: str, result: Any) -> None:
     from asyncua import Client, ua
 
     from stand.archive import archive_result
-    from stand.result import to_json
+    from stand.result_json import to_json
 
     result = type(result)(**{**result.__dict__, "provenance": type(result.provenance)(
         **{**result.provenance.__dict__, "stand_id": "stand-7"})})  # fmt: skip

@@ -28,7 +28,6 @@ EXCEPTIONS: dict[str, str] = {
     "equations every function implements",
     "stand/live.py": PENDING + "the LiveSession apart from measure_until_precise",
     "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
-    "stand/result.py": PENDING + "to_json and its helpers apart from the Result types",
     # functions
     "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
     "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",

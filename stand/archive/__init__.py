@@ -20,7 +20,8 @@ from typing import Any
 
 from stand.archive.store import Archive, default_url
 from stand.errors import StandError
-from stand.result import Result, json_text, to_json
+from stand.result import Result, json_text
+from stand.result_json import to_json
 
 __all__ = ["Archive", "archive_result", "default_url", "file_digest", "url_for"]
 

@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from stand.cli.format import show
     from stand.cli.panel import measure_live_from_args
-    from stand.result import to_json
+    from stand.result_json import to_json
 
     if args.speeds:
         return _across_speeds(args)
@@ -114,12 +114,14 @@ def run(args: argparse.Namespace) -> int:
         )
     if not args.no_archive:  # a stand that drifted from its calibration says so, widened
         from stand.cli.common import archive_url
-        from stand.errors import StandError
+        from stand.errors import ArchiveError, StandError
         from stand.health import with_drift
 
         try:
             result = with_drift(archive_url(args, cfg), result, cfg, params, options)
-        except StandError as exc:  # the archive is checked again (and said) below
+        except ArchiveError:  # an archive out of reach is said once, when the run goes in
+            pass
+        except StandError as exc:
             print(f"stand health not checked: {exc}", file=sys.stderr)
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)

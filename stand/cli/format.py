@@ -1,6 +1,6 @@
 """A result as text for the operator, and as strict JSON: formatting only.
 
-Everything printed here comes from :func:`stand.result.to_json`'s object,
+Everything printed here comes from :func:`stand.result_json.to_json`'s object,
 so the text and the JSON of one run agree to the last digit shown.
 """
 

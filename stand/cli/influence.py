@@ -218,7 +218,7 @@ def _recorded(args: argparse.Namespace, first: str, runs: list[Any], matrix: Any
     from stand.influence import solve_initial_run
     from stand.pipeline import SolveOptions
     from stand.recordings import solve_recording
-    from stand.result import to_json
+    from stand.result_json import to_json
 
     if args.matrix:
         result = solve_recording(first, args.config, SolveOptions(matrix=matrix))

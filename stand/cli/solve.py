@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         return run_batch(args, options)
     from stand.cli.format import show
     from stand.recordings import solve_recording
-    from stand.result import to_json
+    from stand.result_json import to_json
 
     show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
     return 0
@@ -113,7 +113,8 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
 
     from stand.cli.format import dump_json
     from stand.recordings import solve_many
-    from stand.result import json_text, to_json
+    from stand.result import json_text
+    from stand.result_json import to_json
 
     runs = list(args.runs)
     results: dict[str, dict[str, Any]] = {}

@@ -15,7 +15,8 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError
-from stand.result import Job, to_json
+from stand.result import Job
+from stand.result_json import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, history_screen
 from stand.station.service import BUS, Station
