@@ -23,7 +23,6 @@ EXCEPTIONS: dict[str, str] = {
     "drivers/protocol.py": PENDING + "the decoder apart from the frame layout and encoder",
     "drivers/node_build.py": "one node's stream in its steps, 421 lines: the rules hold "
     "together (seq, restarts, marks share the unwrapping)",
-    "stand/cli/common.py": PENDING + "the live options and the scene options apart",
     "stand/core/model.py": "the seed's model: one derivation, its docstring carries the "
     "equations every function implements",
     "stand/live.py": PENDING + "the LiveSession apart from measure_until_precise",

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from stand.cli.common import parse_rpm
 from stand.cli.format import dump_json
+from stand.cli.parse import parse_rpm
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -7,8 +7,9 @@ import math
 
 import numpy as np
 
-from stand.cli.common import parse_rpm, parse_unbalance, print_warnings
+from stand.cli.common import print_warnings
 from stand.cli.format import dump_json
+from stand.cli.parse import parse_rpm, parse_unbalance
 from stand.config import load_config
 from stand.core import (
     forward,
