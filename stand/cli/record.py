@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from stand.cli.format import print_recording
     from stand.drivers.protocol import Frames
     from stand.drivers.recording import Recording
-    from stand.live import LiveSession
+    from stand.live_session import LiveSession
     from stand.pipeline import load_config_text
 
     if args.seconds is not None and not args.seconds > 0:
