@@ -31,14 +31,8 @@ from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
-from stand.passes import (
-    BLOCK_REVS,
-    MIN_REVS,
-    Window,
-    block_scatter,
-    check_saturation,
-    node_phasor,
-)
+from stand.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
+from stand.passes import node_phasor
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 

@@ -25,7 +25,6 @@ EXCEPTIONS: dict[str, str] = {
     "together (seq, restarts, marks share the unwrapping)",
     "stand/core/model.py": "the seed's model: one derivation, its docstring carries the "
     "equations every function implements",
-    "stand/passes.py": PENDING + "the chunked passes apart from the node phasor",
     # functions
     "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
     "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",
