@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stand.drivers import logs
+from stand.drivers import candump, logs
 from stand.errors import RecordingError
 
 FIELDS = ("t_s", "can_id", "dlc", "data", "flags")
@@ -44,13 +44,13 @@ def test_fast_and_regular_expression_agree(
 ) -> None:
     path = tmp_path_factory.mktemp("c") / "x.log"
     path.write_text("\n".join(lines) + ("\n" if last_newline else ""))
-    fast = logs._fast_candump(np.fromfile(path, np.uint8))
-    slow = logs._read_candump_text(path)
+    fast = candump._fast_candump(np.fromfile(path, np.uint8))
+    slow = candump._read_candump_text(path)
     # a stamp whose digits, as one integer, are no exact double takes the slow path
     ticks = max(int(x[1 : x.index(")")].replace(".", "")) for x in lines)
     assert (fast is None) == (ticks >= 2**53), ticks
     assert fast is None or same(fast, slow)
-    assert same(logs.read_candump(path), slow)
+    assert same(candump.read_candump(path), slow)
 
 
 @settings(max_examples=200)
@@ -66,21 +66,21 @@ def test_an_unusual_line_takes_the_slow_path_with_the_same_answer(
     path = tmp_path_factory.mktemp("c") / "x.log"
     path.write_bytes(b"\n".join(raw) + b"\n")
     try:
-        slow = logs._read_candump_text(path)
+        slow = candump._read_candump_text(path)
     except RecordingError as exc:
         with pytest.raises(RecordingError) as got:
-            logs.read_candump(path)
+            candump.read_candump(path)
         assert str(got.value) == str(exc)  # the same file and line named
         return
-    assert same(logs.read_candump(path), slow)
+    assert same(candump.read_candump(path), slow)
 
 
 def test_blocks_split_at_line_ends(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     lines = [f"({k}.000100) can0 101#{k % 256:02X}00000000000000" for k in range(2000)]
     path = tmp_path / "x.log"
     path.write_text("\n".join(lines) + "\n")
-    monkeypatch.setattr(logs, "CANDUMP_BLOCK", 1000)  # many blocks, each cut mid-line
-    assert same(logs.read_candump(path), logs._read_candump_text(path))
+    monkeypatch.setattr(candump, "CANDUMP_BLOCK", 1000)  # many blocks, each cut mid-line
+    assert same(candump.read_candump(path), candump._read_candump_text(path))
 
 
 def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
@@ -97,7 +97,7 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
     logs.write_log(frames, path)
     with path.open("a") as f:
         f.write("(99.000000) can0 123#R\n")  # a remote frame: only the slow path reads it
-    monkeypatch.setattr(logs, "CANDUMP_BLOCK", 50_000)
+    monkeypatch.setattr(candump, "CANDUMP_BLOCK", 50_000)
     _, got = read_streams(path, strict_status=False)
     want = rebuild(logs.read_log(path), strict_status=False)
     assert got.frames == want.frames == len(frames) + 1
@@ -114,12 +114,12 @@ def test_epoch_stamps_take_the_fast_path_with_the_same_doubles(tmp_path: Path) -
     text = "".join(f"{s} can0 141#A00F6400000100{k % 100:02d} R\n" for k, s in enumerate(stamps))
     path = tmp_path / "epoch.log"
     path.write_text(text)
-    fast = list(logs.iter_candump_fast(path))  # raises UnusualLogError on a fallback
+    fast = list(candump.iter_candump_fast(path))  # raises UnusualLogError on a fallback
     t = np.concatenate([f.t_s for f in fast])
     assert np.array_equal(t, [float(s[1:-1]) for s in stamps])
-    assert same(logs._fast_candump(np.frombuffer(text.encode(), np.uint8)),
-                logs._read_candump_text(path))  # fmt: skip
+    assert same(candump._fast_candump(np.frombuffer(text.encode(), np.uint8)),
+                candump._read_candump_text(path))  # fmt: skip
     long = tmp_path / "long.log"
     long.write_text("(1763799999999.999999) can0 141#00\n")
-    assert logs._fast_candump(np.frombuffer(long.read_bytes(), np.uint8)) is None
-    assert logs.read_candump(long).t_s[0] == float("1763799999999.999999")
+    assert candump._fast_candump(np.frombuffer(long.read_bytes(), np.uint8)) is None
+    assert candump.read_candump(long).t_s[0] == float("1763799999999.999999")

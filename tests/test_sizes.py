@@ -19,7 +19,6 @@ FUNCTION_LINES = 60
 PENDING = "pending (issue 19): "
 EXCEPTIONS: dict[str, str] = {
     # modules
-    "drivers/logs.py": PENDING + "the candump fast path apart from the python-can readers",
     "drivers/protocol.py": PENDING + "the decoder apart from the frame layout and encoder",
     "drivers/node_build.py": "one node's stream in its steps, 421 lines: the rules hold "
     "together (seq, restarts, marks share the unwrapping)",
@@ -35,7 +34,7 @@ EXCEPTIONS: dict[str, str] = {
     "stand/cli/calibrate.py::run": PENDING + "the stand's fit apart from the runs file",
     "drivers/protocol.py::decode": PENDING + "one decoder per frame kind",
     "stand/passes.py::node_phasor": PENDING + "the passes as steps",
-    "drivers/logs.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
+    "drivers/candump.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
     "calib/advisor.py::advise": PENDING + "the speed grid apart from the reasons",
     "stand/cli/record.py::run": PENDING + "the bus loop apart from the options",
     "stand/archive/stats.py::production": PENDING + "the yield apart from the spread",
