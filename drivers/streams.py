@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
+from stand.drivers.codec import decode
 from stand.drivers.protocol import (
     SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
 )
@@ -46,7 +47,6 @@ from stand.drivers.protocol import (
     Decoded,
     Frames,
     concat_decoded,
-    decode,
     node_records,
     shift_decoded,
 )

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from stand.drivers.codec import decode, edge_fields, encode_marks, encode_samples, encode_status
 from stand.drivers.protocol import (
     DBC_PATH,
     FLAG_ERROR,
@@ -16,11 +17,6 @@ from stand.drivers.protocol import (
     FLAG_REMOTE,
     LAYOUT,
     Frames,
-    decode,
-    edge_fields,
-    encode_marks,
-    encode_samples,
-    encode_status,
 )
 
 DB = cantools.database.load_file(DBC_PATH, strict=True)

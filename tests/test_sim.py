@@ -22,7 +22,8 @@ from stand.core import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
-from stand.drivers.protocol import SAMPLES_BASE, decode
+from stand.drivers.codec import decode
+from stand.drivers.protocol import SAMPLES_BASE
 from stand.drivers.streams import rebuild
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate

@@ -19,7 +19,6 @@ FUNCTION_LINES = 60
 PENDING = "pending (issue 19): "
 EXCEPTIONS: dict[str, str] = {
     # modules
-    "drivers/protocol.py": PENDING + "the decoder apart from the frame layout and encoder",
     "drivers/node_build.py": "one node's stream in its steps, 421 lines: the rules hold "
     "together (seq, restarts, marks share the unwrapping)",
     "stand/core/model.py": "the seed's model: one derivation, its docstring carries the "
@@ -32,7 +31,7 @@ EXCEPTIONS: dict[str, str] = {
     "stand/live.py::measure_until_precise": PENDING + "the stop rules apart from the loop",
     "stand/cli/advise.py::run": PENDING + "the JSON apart from the text",
     "stand/cli/calibrate.py::run": PENDING + "the stand's fit apart from the runs file",
-    "drivers/protocol.py::decode": PENDING + "one decoder per frame kind",
+    "drivers/codec.py::decode": PENDING + "one decoder per frame kind",
     "stand/passes.py::node_phasor": PENDING + "the passes as steps",
     "drivers/candump.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
     "calib/advisor.py::advise": PENDING + "the speed grid apart from the reasons",

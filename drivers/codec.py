@@ -1,0 +1,221 @@
+"""The sensor nodes' frames decoded and encoded, by the layout of the protocol.
+
+:func:`decode` turns a block of frames into per-kind records (SAMPLES,
+STATUS, MARK) in one numpy pass, naming every frame it cannot decode and why
+(:class:`BadReason`); the encoders make frames (the simulated nodes, the
+tests).  The layout, the constants and the record types are
+:mod:`stand.drivers.protocol`'s.
+"""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from stand.drivers.protocol import (
+    FLAG_ERROR,
+    FLAG_EXTENDED,
+    FLAG_FD,
+    FLAG_REMOTE,
+    FRAC_SCALE,
+    FRAME_DLC,
+    LAYOUT,
+    MARK_BASE,
+    MAX_NODE,
+    PROTOCOL_VERSION,
+    SAMPLES_BASE,
+    SAMPLES_PER_FRAME,
+    STATUS_BASE,
+    BadFrame,
+    Decoded,
+    Frames,
+    MarkRecords,
+    SamplesRecords,
+    StatusRecords,
+)
+
+
+class BadReason(enum.IntEnum):
+    """Why a frame of a protocol id cannot be decoded (0: it can)."""
+
+    FINE = 0
+    REMOTE = 1
+    CAN_FD = 2
+    WRONG_LENGTH = 3
+    SLOT = 4
+    VERSION = 5
+
+    def describe(self, dlc: int, d8: NDArray[np.uint8]) -> str:
+        """The reason in words, with the figure from the frame (its DLC and 8 bytes)."""
+        if self is BadReason.WRONG_LENGTH:
+            return f"wrong length: DLC {dlc}, expected {FRAME_DLC}"
+        if self is BadReason.SLOT:
+            return f"MARK slot {_field(d8[None], None, 'MARK', 'slot')[0]}, expected 0..2"
+        if self is BadReason.VERSION:
+            got = _field(d8[None], None, "STATUS", "version")[0]
+            return f"STATUS protocol version {got}, expected {PROTOCOL_VERSION}"
+        return {
+            BadReason.REMOTE: "remote frame on a protocol id",
+            BadReason.CAN_FD: "CAN FD frame, expected classic CAN",
+        }.get(self, "")
+
+
+def _field(d8: NDArray[np.uint8], rows: NDArray[np.int64] | None, kind: str, name: str) -> NDArray:  # type: ignore[type-arg]
+    """Field ``name`` of message ``kind`` in the frames ``rows`` of ``d8`` (None: all), by
+    :data:`LAYOUT`: the decoder and the encoders read and write through it."""
+    offset, dtype = LAYOUT[kind][name]
+    size = np.dtype(dtype).itemsize
+    cols = d8[:, offset : offset + size] if rows is None else d8[rows, offset : offset + size]
+    return np.ascontiguousarray(cols).view(dtype).reshape(-1)
+
+
+def _put(data: NDArray[np.uint8], kind: str, name: str, values: ArrayLike) -> None:
+    """Write field ``name`` of message ``kind`` into every row of ``data`` (by :data:`LAYOUT`)."""
+    offset, dtype = LAYOUT[kind][name]
+    n = len(data)
+    size = np.dtype(dtype).itemsize
+    v = np.ascontiguousarray(np.broadcast_to(np.asarray(values), (n,)).astype(dtype))
+    data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
+
+
+def decode(frames: Frames) -> Decoded:
+    """Sort and decode a block of frames, all at once.
+
+    Parameters
+    ----------
+    frames
+        Any frames, in arrival order.
+
+    Returns
+    -------
+    Decoded
+        Records of each kind carry ``frame``, their index in ``frames``.
+    """
+    cid = frames.can_id.astype(np.int64)
+    error = (frames.flags & FLAG_ERROR) != 0
+    standard = (frames.flags & (FLAG_EXTENDED | FLAG_ERROR)) == 0
+    base = cid & ~0x3F
+    node = cid & 0x3F
+    protocol = standard & np.isin(base, (SAMPLES_BASE, STATUS_BASE, MARK_BASE))
+    protocol &= (node >= 1) & (node <= MAX_NODE)
+
+    reason = np.zeros(len(frames), dtype=np.int8)  # BadReason.FINE
+    remote = (frames.flags & FLAG_REMOTE) != 0
+    fd = (frames.flags & FLAG_FD) != 0
+    reason[protocol & (frames.dlc != FRAME_DLC)] = BadReason.WRONG_LENGTH
+    reason[protocol & fd] = BadReason.CAN_FD
+    reason[protocol & remote] = BadReason.REMOTE
+    d8 = frames.data[:, :FRAME_DLC]
+    is_mark = protocol & (base == MARK_BASE) & (reason == 0)
+    reason[is_mark & (_field(d8, None, "MARK", "slot") > SAMPLES_PER_FRAME - 1)] = BadReason.SLOT
+    is_status = protocol & (base == STATUS_BASE) & (reason == 0)
+    version = _field(d8, None, "STATUS", "version")
+    reason[is_status & (version != PROTOCOL_VERSION)] = BadReason.VERSION
+
+    good = protocol & (reason == 0)
+    rows = {
+        k: np.flatnonzero(good & (base == b))
+        for k, b in (("SAMPLES", SAMPLES_BASE), ("STATUS", STATUS_BASE), ("MARK", MARK_BASE))
+    }
+
+    r = rows["SAMPLES"]
+    samples = SamplesRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "SAMPLES", "seq"),
+        counts=np.stack([_field(d8, r, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(np.int16),
+    )
+    r = rows["STATUS"]
+    status = StatusRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        rate=_field(d8, r, "STATUS", "rate"),
+        scale=_field(d8, r, "STATUS", "scale"),
+        flags=_field(d8, r, "STATUS", "flags"),
+        version=_field(d8, r, "STATUS", "version"),
+    )
+    r = rows["MARK"]
+    marks = MarkRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "MARK", "seq"),
+        slot=_field(d8, r, "MARK", "slot"),
+        frac=_field(d8, r, "MARK", "frac"),
+        rev=_field(d8, r, "MARK", "rev"),
+    )
+    bad = [
+        BadFrame(
+            frame=i,
+            can_id=int(cid[i]),
+            reason=BadReason(int(reason[i])).describe(int(frames.dlc[i]), d8[i]),
+        )
+        for i in np.flatnonzero(reason).tolist()
+    ]
+    return Decoded(
+        samples=samples,
+        status=status,
+        marks=marks,
+        unknown_frames=int(np.count_nonzero(~protocol & ~error)),
+        error_frames=int(np.count_nonzero(error)),
+        bad=tuple(bad),
+    )
+
+
+# --- encoding: what a node sends (the simulator and the tests use it) ---
+
+
+def encode_samples(node: int, seq: ArrayLike, counts: ArrayLike, t_s: ArrayLike) -> Frames:
+    """SAMPLES frames of one node: ``seq`` (u16, wrapped here), ``counts`` (n, 3) int16."""
+    seq_a = np.asarray(seq, dtype=np.int64).reshape(-1)
+    c = np.asarray(counts, dtype=np.int16).reshape(len(seq_a), SAMPLES_PER_FRAME)
+    data = np.zeros((len(seq_a), FRAME_DLC), dtype=np.uint8)
+    _put(data, "SAMPLES", "seq", seq_a % 65536)
+    for k in range(SAMPLES_PER_FRAME):
+        _put(data, "SAMPLES", f"s{k}", c[:, k])
+    return Frames.build(t_s, SAMPLES_BASE + node, data)
+
+
+def encode_status(
+    node: int,
+    rate: ArrayLike,
+    scale: ArrayLike,
+    flags: ArrayLike,
+    t_s: ArrayLike,
+    version: int = PROTOCOL_VERSION,
+) -> Frames:
+    """STATUS frames of one node (``rate`` Hz, ``scale`` µm/s² per count, ``flags`` bits)."""
+    t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+    data = np.zeros((len(t), FRAME_DLC), dtype=np.uint8)
+    for name, values in (("rate", rate), ("scale", scale), ("flags", flags), ("version", version)):
+        _put(data, "STATUS", name, values)
+    return Frames.build(t, STATUS_BASE + node, data)
+
+
+def encode_marks(
+    node: int, seq: ArrayLike, slot: ArrayLike, frac: ArrayLike, rev: ArrayLike, t_s: ArrayLike
+) -> Frames:
+    """MARK frames of one node; ``seq`` and ``rev`` are wrapped to u16 here."""
+    t = np.asarray(t_s, dtype=np.float64).reshape(-1)
+    data = np.zeros((len(t), FRAME_DLC), dtype=np.uint8)
+    _put(data, "MARK", "seq", np.asarray(seq, dtype=np.int64) % 65536)
+    _put(data, "MARK", "slot", slot)
+    _put(data, "MARK", "frac", frac)
+    _put(data, "MARK", "rev", np.asarray(rev, dtype=np.int64) % 65536)
+    return Frames.build(t, MARK_BASE + node, data)
+
+
+def edge_fields(
+    position: ArrayLike,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """MARK ``(F, slot, frac)`` for edges at sample positions ``position`` (>= 0).
+
+    ``frac`` is rounded to the nearest 1/65536 sample; a round-up to a whole
+    sample moves the edge to the next sample, as a node would report it.
+    """
+    p = np.asarray(position, dtype=np.float64)
+    ticks = np.rint(p * FRAC_SCALE).astype(np.int64)
+    sample, frac = np.divmod(ticks, FRAC_SCALE)
+    frame, slot = np.divmod(sample, SAMPLES_PER_FRAME)
+    return frame, slot, frac
