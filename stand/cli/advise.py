@@ -32,6 +32,19 @@ def run(args: argparse.Namespace) -> int:
         from stand.core.flexible import rigid_limit_rpm
 
         limit = rigid_limit_rpm(cfg.rotor.bending_hz)
+    plan = None
+    if beam is not None and a.recommended_rpm and top:
+        from stand.calib.advisor import plan_across_speeds
+
+        plan = plan_across_speeds(params, beam, a.recommended_rpm[0], top)
+    if args.json:
+        dump_json(_json(a, cfg, limit, plan))
+        return 0
+    _print(a, cfg, limit, plan, beam)
+    return 0
+
+
+def _json(a: Any, cfg: Any, limit: float | None, plan: Any) -> dict[str, Any]:
     out: dict[str, Any] = {
         "natural_frequencies_hz": list(a.natural_frequencies_hz),
         "natural_frequencies_rpm": [f * 60 for f in a.natural_frequencies_hz],
@@ -51,20 +64,17 @@ def run(args: argparse.Namespace) -> int:
             for r in a.rows
         ],
     }
-    plan = None
-    if beam is not None and a.recommended_rpm and top:
-        from stand.calib.advisor import plan_across_speeds
-
-        plan = plan_across_speeds(params, beam, a.recommended_rpm[0], top)
+    if plan is not None:
         out["across_speeds"] = {
             "speeds_rpm": [round(s, 1) for s in plan.speeds_rpm],
             "planes_mm": [round(x * 1e3, 1) for x in plan.planes_m],
             "two_plane_left": round(plan.two_plane_left, 4),
             "reasons": list(plan.reasons),
         }
-    if args.json:
-        dump_json(out)
-        return 0
+    return out
+
+
+def _print(a: Any, cfg: Any, limit: float | None, plan: Any, beam: Any) -> None:
     rec = a.recommended_rpm
     print("balance between " + (f"{rec[0]:.0f} and {rec[1]:.0f} rpm" if rec else "- (none found)"))
     for reason in a.reasons:
@@ -103,4 +113,3 @@ def run(args: argparse.Namespace) -> int:
             f"  {r.rpm:6.0f} {r.ratio_to_top_mode:10.2f} {r.noise_gain_g_mm_per_m_s2:14.0f} "
             f"{100 * r.sensitivity_to_C:16.2f} %{flag}"
         )
-    return 0
