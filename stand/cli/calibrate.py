@@ -88,7 +88,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import numpy as np
 
     if args.from_archive:
         return _from_archive(args)
@@ -97,28 +96,14 @@ def run(args: argparse.Namespace) -> int:
 
         raise UsageError("stand calibrate: give RUNS.toml and --out (or --from-archive)")
 
-    from stand.calib.identify import NAMES, CalibrationRun, identify
-    from stand.config import load_config, read_toml, validate
+    from stand.calib.identify import NAMES, identify
+    from stand.config import load_config
     from stand.drivers.files import check_output
     from stand.errors import ModelError, UsageError
-    from stand.recordings import measure_recording
 
     check_output(args.out, force=args.force, inputs=[args.config, args.runs])  # before the work
     cfg, params = load_config(args.config)
-    _, data = read_toml(args.runs)
-    spec = validate(CalibFile, data, args.runs)
-    R = (params.R1, params.R2)
-    runs = []
-    for entry in spec.runs:
-        # raw readings: the configured reference angle, no sensor correction
-        m, _, _, _ = measure_recording(
-            str(Path(args.runs).parent / entry.file), args.config, raw_sensors=True
-        )
-        T = np.zeros(2, complex)
-        for mass in entry.masses:
-            i = mass.plane - 1
-            T[i] += mass.mass_g * 1e-3 * R[i] * np.exp(-1j * math.radians(mass.angle_deg))
-        runs.append(CalibrationRun(m.omega_rad_s, np.array([ph.A_m_s2 for ph in m.supports]), T))
+    runs = _calibration_runs(args, params)
     if args.rotor:
         if cfg.rotor.shaft is not None:
             raise UsageError(
@@ -131,23 +116,8 @@ def run(args: argparse.Namespace) -> int:
     except ModelError as exc:
         raise ConfigError(str(exc), source=args.runs) from None
     v, se = res.values, res.std_errors
-    stand = cfg.stand.model_copy(
-        update={
-            "M1": v["M1"],
-            "M2": v["M2"],
-            "C1": v["C1"],
-            "C2": v["C2"],
-            "H1": v["H1"],
-            "H2": v["H2"],
-            "reference_angle_deg": cfg.stand.reference_angle_deg
-            + math.degrees(v["reference_angle_error_rad"]),
-            "calibrated": dt.date.today().isoformat(),
-        }
-    )
-    sensors = cfg.sensors.model_copy(
-        update={"gain": [v["gain1"], v["gain2"]], "delay_s": [v["delay1_s"], v["delay2_s"]]}
-    )
-    new = cfg.model_copy(update={"stand": stand, "sensors": sensors})
+    new = _identified_config(cfg, v)
+    stand = new.stand
     header = _write(
         args,
         f"calibrated by stand calibrate from {len(runs)} runs ({args.runs})",
@@ -170,6 +140,48 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(line[2:] for line in header))
         print(f"wrote {args.out}")
     return 0
+
+
+def _identified_config(cfg: Any, v: dict[str, float]) -> Any:
+    """The config with the identified stand: masses, stiffnesses, damping, the reference
+    angle, the sensors' gains and delays, today's date."""
+    stand = cfg.stand.model_copy(
+        update={
+            **{k: v[k] for k in ("M1", "M2", "C1", "C2", "H1", "H2")},
+            "reference_angle_deg": cfg.stand.reference_angle_deg
+            + math.degrees(v["reference_angle_error_rad"]),
+            "calibrated": dt.date.today().isoformat(),
+        }
+    )
+    sensors = cfg.sensors.model_copy(
+        update={"gain": [v["gain1"], v["gain2"]], "delay_s": [v["delay1_s"], v["delay2_s"]]}
+    )
+    return cfg.model_copy(update={"stand": stand, "sensors": sensors})
+
+
+def _calibration_runs(args: argparse.Namespace, params: Any) -> list[Any]:
+    """The runs file's runs, measured raw (the configured reference angle, no sensor
+    correction), each with the test masses it carried as unbalance per plane [kg m]."""
+    import numpy as np
+
+    from stand.calib.identify import CalibrationRun
+    from stand.config import read_toml, validate
+    from stand.recordings import measure_recording
+
+    _, data = read_toml(args.runs)
+    spec = validate(CalibFile, data, args.runs)
+    R = (params.R1, params.R2)
+    runs = []
+    for entry in spec.runs:
+        m, _, _, _ = measure_recording(
+            str(Path(args.runs).parent / entry.file), args.config, raw_sensors=True
+        )
+        T = np.zeros(2, complex)
+        for mass in entry.masses:
+            i = mass.plane - 1
+            T[i] += mass.mass_g * 1e-3 * R[i] * np.exp(-1j * math.radians(mass.angle_deg))
+        runs.append(CalibrationRun(m.omega_rad_s, np.array([ph.A_m_s2 for ph in m.supports]), T))
+    return runs
 
 
 def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
