@@ -54,8 +54,29 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
     return BusError(message, channel=failure.channel, frames_received=frames)
 
 
-def run(args: argparse.Namespace) -> int:
+def _record(args: argparse.Namespace, session: Any) -> None:
+    """Read the bus until stopped (Ctrl-C, --seconds, a failure), a speed line every
+    :data:`STATUS_EVERY_S` on stderr."""
     import time
+
+    next_status = STATUS_EVERY_S
+    window: collections.deque[tuple[float, Any]] = collections.deque()
+    if not args.quiet:
+        print(f"recording {session.where} into {args.out} (Ctrl-C stops)", file=sys.stderr)
+    while not session.stopping and (args.seconds is None or session.elapsed_s < args.seconds):
+        before = session.builder.frames
+        session.read(0.1)
+        now = time.monotonic()
+        if session.builder.frames > before:
+            window.append((now, session.builder.last_block))
+        while window and window[0][0] < now - SPEED_WINDOW_S:
+            window.popleft()
+        if not args.quiet and session.elapsed_s >= next_status:
+            next_status += STATUS_EVERY_S
+            print(speed_line(window, session.elapsed_s, session.frames_received), file=sys.stderr)
+
+
+def run(args: argparse.Namespace) -> int:
 
     from stand.cli.format import print_recording
     from stand.drivers.protocol import Frames
@@ -73,24 +94,7 @@ def run(args: argparse.Namespace) -> int:
     with LiveSession(
         kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout
     ) as session:
-        next_status = STATUS_EVERY_S
-        window: collections.deque[tuple[float, Any]] = collections.deque()
-        if not args.quiet:
-            print(f"recording {session.where} into {args.out} (Ctrl-C stops)", file=sys.stderr)
-        while not session.stopping and (args.seconds is None or session.elapsed_s < args.seconds):
-            before = session.builder.frames
-            session.read(0.1)
-            now = time.monotonic()
-            if session.builder.frames > before:
-                window.append((now, session.builder.last_block))
-            while window and window[0][0] < now - SPEED_WINDOW_S:
-                window.popleft()
-            if not args.quiet and session.elapsed_s >= next_status:
-                next_status += STATUS_EVERY_S
-                print(
-                    speed_line(window, session.elapsed_s, session.frames_received),
-                    file=sys.stderr,
-                )
+        _record(args, session)
     streams = session.close()
     frames = session.builder.frames
     if session.stop_signal is not None and not args.quiet:
