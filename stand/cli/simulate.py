@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from stand import __version__
 from stand.cli.common import (
@@ -57,9 +58,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.config import config_toml
-    from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
-    from stand.drivers.streams import rebuild
     from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
     if args.series is not None:
@@ -70,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         from stand.drivers.files import check_output
 
         check_output(args.out, force=args.force)  # before the work, and again when written
-    job = job_from(args)
+    job_from(args)  # bad job fields are refused before the work
     stored, believed = None, None
     if args.config:
         from stand.pipeline import load_config_text
@@ -88,38 +86,61 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     if args.out:
-        rec = Recording(
-            path=source,
-            frames=sim.frames,
-            meta={
-                "source": f"simulated scene {label} (seed {scene.run.seed})",
-                "config_toml": stored or config_toml(scene.config()),
-                "software": f"stand {__version__}",
-                JOB_ATTR: job.to_text() if job else "",
-                STAND_ATTR: (believed or scene).stand.stand_id(),
-            },
-        )
-        write_recording(
-            rec,
-            args.out,
-            rebuild(sim.frames, strict_status=False),
-            force=args.force,
-            inputs=[source, *([args.config] if args.config else [])],
-        )
-        print(f"wrote {args.out}", file=sys.stderr)
+        _write(args, scene, sim, label, stored, believed, source)
     if args.bus:
-        from stand.drivers.bus import describe_bus, open_bus, play
-
-        table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
-        kwargs = bus_kwargs(args, table)
-        bus = open_bus(kwargs)
-        try:
-            print(f"playing on {describe_bus(kwargs)} in real time (Ctrl-C stops)", file=sys.stderr)
-            sent = play(bus, sim.frames)
-        finally:
-            bus.shutdown()
-        print(f"sent {sent} frames", file=sys.stderr)
+        _play(args, scene, sim)
     return 0
+
+
+def _write(
+    args: argparse.Namespace,
+    scene: Any,
+    sim: Any,
+    label: str,
+    stored: str | None,
+    believed: Any,
+    source: str,
+) -> None:
+    """The run written to --out (a run file, or a python-can log by its extension)."""
+    from stand.config import config_toml
+    from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
+    from stand.drivers.streams import rebuild
+
+    job = job_from(args)
+    rec = Recording(
+        path=source,
+        frames=sim.frames,
+        meta={
+            "source": f"simulated scene {label} (seed {scene.run.seed})",
+            "config_toml": stored or config_toml(scene.config()),
+            "software": f"stand {__version__}",
+            JOB_ATTR: job.to_text() if job else "",
+            STAND_ATTR: (believed or scene).stand.stand_id(),
+        },
+    )
+    write_recording(
+        rec,
+        args.out,
+        rebuild(sim.frames, strict_status=False),
+        force=args.force,
+        inputs=[source, *([args.config] if args.config else [])],
+    )
+    print(f"wrote {args.out}", file=sys.stderr)
+
+
+def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
+    """The run played on a python-can bus in real time."""
+    from stand.drivers.bus import describe_bus, open_bus, play
+
+    table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
+    kwargs = bus_kwargs(args, table)
+    bus = open_bus(kwargs)
+    try:
+        print(f"playing on {describe_bus(kwargs)} in real time (Ctrl-C stops)", file=sys.stderr)
+        sent = play(bus, sim.frames)
+    finally:
+        bus.shutdown()
+    print(f"sent {sent} frames", file=sys.stderr)
 
 
 def _series(args: argparse.Namespace) -> int:
