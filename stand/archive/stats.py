@@ -140,6 +140,28 @@ def _rotors(rows: list[Any]) -> list[Any]:
     return first
 
 
+def _first_pass(rows: list[Any], rotors: list[Any]) -> tuple[int, int, int]:
+    """Of the rotors: passed at their first run or first check, failed their first check,
+    not checked yet (a first run that failed, with no check run after it)."""
+    checks: dict[int, list[Any]] = {}
+    for r in rows:
+        if r.checks_run_id is not None:
+            checks.setdefault(r.checks_run_id, []).append(r)
+    passed = failed = open_ = 0
+    for r in rotors:
+        if r.verdict == "pass":
+            passed += 1
+        elif r.verdict == "fail":
+            after = checks.get(r.id)
+            if not after:
+                open_ += 1
+            elif after[0].verdict == "pass":
+                passed += 1
+            else:
+                failed += 1
+    return passed, failed, open_
+
+
 def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]:
     """The statistics of one rotor type's archived runs (JSON-ready, g mm and degrees)."""
     from stand.archive.query import Filters, plane_rows, select_runs
@@ -159,22 +181,7 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
             if p.permissible_kg_m is not None:
                 per[p.plane - 1].append(p.permissible_kg_m)
     rotors = _rotors(rows)
-    checks: dict[int, list[Any]] = {}
-    for r in rows:
-        if r.checks_run_id is not None:
-            checks.setdefault(r.checks_run_id, []).append(r)
-    passed = failed = open_ = 0
-    for r in rotors:
-        if r.verdict == "pass":
-            passed += 1
-        elif r.verdict == "fail":
-            after = checks.get(r.id)
-            if not after:
-                open_ += 1
-            elif after[0].verdict == "pass":
-                passed += 1
-            else:
-                failed += 1
+    passed, failed, open_ = _first_pass(rows, rotors)
     out: dict[str, Any] = {
         "rotor_type": rotor_type,
         "runs": len(rows),
