@@ -48,6 +48,29 @@ _COMPRESSED: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "sh
 _MAX_WIDTH = MAX_PAYLOAD
 
 
+def _empty_datasets(f: Any, h5py: Any) -> None:
+    """The run file's datasets, empty and growable: ``/frames`` (chunked, Fletcher32; the
+    payload widens to CAN FD's 64 bytes when one comes) and ``/warnings``."""
+    g = f.create_group("frames")
+    for name, dtype in _FRAME_FIELDS.items():
+        g.create_dataset(
+            name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(_CHUNK_ROWS,), fletcher32=True
+        )
+    g.create_dataset(
+        "data",
+        shape=(0, FRAME_DLC),
+        maxshape=(None, _MAX_WIDTH),
+        dtype=np.uint8,
+        chunks=(_CHUNK_ROWS, FRAME_DLC),
+        fletcher32=True,
+    )
+    w = f.create_group("warnings")
+    for name in ("code", "message"):
+        w.create_dataset(
+            name, shape=(0,), maxshape=(None,), dtype=h5py.string_dtype(), chunks=(256,)
+        )
+
+
 class RunWriter:
     """Append frames to an HDF5 run file as they arrive.
 
@@ -115,29 +138,7 @@ class RunWriter:
                     complete=False,
                 )
                 f.attrs.update(dict(attrs or {}))
-                g = f.create_group("frames")
-                for name, dtype in _FRAME_FIELDS.items():
-                    g.create_dataset(
-                        name,
-                        shape=(0,),
-                        maxshape=(None,),
-                        dtype=dtype,
-                        chunks=(_CHUNK_ROWS,),
-                        fletcher32=True,
-                    )
-                g.create_dataset(
-                    "data",
-                    shape=(0, FRAME_DLC),
-                    maxshape=(None, _MAX_WIDTH),
-                    dtype=np.uint8,
-                    chunks=(_CHUNK_ROWS, FRAME_DLC),
-                    fletcher32=True,
-                )
-                w = f.create_group("warnings")
-                for name in ("code", "message"):
-                    w.create_dataset(
-                        name, shape=(0,), maxshape=(None,), dtype=h5py.string_dtype(), chunks=(256,)
-                    )
+                _empty_datasets(f, h5py)
             publish(tmp, self.path, force=force)  # of two writers of one name, one wins
         except OSError as exc:
             if tmp is not None:

@@ -36,7 +36,6 @@ EXCEPTIONS: dict[str, str] = {
     "drivers/node_build.py::rebuild_node": "the steps' order, 65 lines: each step is a "
     "function above; what is left hands their arrays on and frees them early (memory)",
     "stand/station/pages.py::measure_screen": PENDING + "the live redraw apart from the layout",
-    "drivers/run_writer.py::__init__": PENDING + "the file's creation apart from the options",
 }
 
 
