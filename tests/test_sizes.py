@@ -35,7 +35,6 @@ EXCEPTIONS: dict[str, str] = {
     "calib/advisor.py::advise": PENDING + "the speed grid apart from the reasons",
     "drivers/node_build.py::rebuild_node": "the steps' order, 65 lines: each step is a "
     "function above; what is left hands their arrays on and frees them early (memory)",
-    "stand/station/pages.py::measure_screen": PENDING + "the live redraw apart from the layout",
 }
 
 

@@ -138,6 +138,30 @@ def start_screen(station: Station) -> None:
         ui.label(f"No rotor types: put a configuration (.toml) in {station.config_dir}")
 
 
+def _waiting(s: Any, head: str, sub: str) -> tuple[str, str]:
+    """The Measure screen's two lines before the first estimate."""
+    if s.phase == "idle":
+        return "Nothing measured yet", "start a rotor on the Start screen"
+    if s.phase == "failed":
+        return "The run failed", s.error
+    if s.phase == "measuring":
+        who = f"{s.kind} run of {s.job.serial or 'the rotor'}: starting"
+        return who, f"waiting: {s.waiting}" if s.waiting else "waiting for the stand"
+    return head, sub
+
+
+def _show_warnings(column: Any, s: Any) -> None:
+    """The run's warnings and the station's notes, each once, in words."""
+    column.clear()
+    with column:
+        msgs = [w.message for w in s.progress.measurement.warnings]
+        msgs += [w.message for w in (s.result.warnings if s.result else ())]
+        for msg in dict.fromkeys(msgs):
+            ui.label(f"⚠ {msg}").classes("text-h6 text-orange-10")
+        for msg in s.notes:
+            ui.label(msg).classes("text-h6 text-orange-10")
+
+
 def measure_screen(station: Station) -> None:
     """Measure: speed, per plane the live polar plot, the supports, the warnings."""
     head = ui.label().classes("big").mark("measure-head")
@@ -171,14 +195,8 @@ def measure_screen(station: Station) -> None:
         stop.set_visibility(s.phase == "measuring")
         onward.set_visibility(s.phase == "done")
         onward.text = "See the check" if s.kind == "check" else "Go to the correction"
-        if s.phase == "idle":
-            head.text, sub.text = "Nothing measured yet", "start a rotor on the Start screen"
-        elif s.phase == "failed":
-            head.text, sub.text = "The run failed", s.error
         if s.progress is None:
-            if s.phase == "measuring":
-                head.text = f"{s.kind} run of {s.job.serial or 'the rotor'}: starting"
-                sub.text = f"waiting: {s.waiting}" if s.waiting else "waiting for the stand"
+            head.text, sub.text = _waiting(s, head.text, sub.text)
             return
         n = live_numbers(s.progress)
         verb = {"measuring": "measuring", "done": "measured"}.get(s.phase, "stopped")
@@ -193,14 +211,7 @@ def measure_screen(station: Station) -> None:
             charts[i].options.update(polar_chart(i + 1, p, units))
             charts[i].update()
             texts[i].text = f"plane {i + 1}: {plane_status(p, units)}"
-        warn.clear()
-        with warn:
-            msgs = [w.message for w in s.progress.measurement.warnings]
-            msgs += [w.message for w in (s.result.warnings if s.result else ())]
-            for msg in dict.fromkeys(msgs):
-                ui.label(f"⚠ {msg}").classes("text-h6 text-orange-10")
-            for msg in s.notes:
-                ui.label(msg).classes("text-h6 text-orange-10")
+        _show_warnings(warn, s)
 
     note.set_visibility(True)
     redraw()
