@@ -111,6 +111,19 @@ def _sensitivity(stand: _Stand, w: float) -> float:
     return worst
 
 
+def _row(stand: _Stand, w: float, wn: NDArray[np.float64], top: float) -> SpeedRow:
+    """One speed of the grid [rad/s]: its noise gain, its sensitivity to C, whether it is
+    near a natural frequency (``wn``; ``top`` the highest on the supports)."""
+    near = bool(np.any((w / wn > 1 / RESONANCE_BAND) & (w / wn < RESONANCE_BAND)))
+    try:
+        sol = stand.solve(stand.p, w, np.zeros(2, complex))
+        gain = sol.noise_gain * 1e6
+        sens = _sensitivity(stand, w)
+    except (ValueError, ArithmeticError):  # exactly at an undamped mode
+        gain, sens = math.inf, math.inf
+    return SpeedRow(float(rad_s_to_rpm(w)), w / top, gain, sens, near)
+
+
 def advise(
     p: StandParameters, max_speed_rpm: float | None = None, points: int = 40, beam: Any = None
 ) -> Advice:
@@ -123,16 +136,7 @@ def advise(
     bend = None if beam is None else float(wn[2])
     hi = float(rpm_to_rad_s(max_speed_rpm)) if max_speed_rpm else 8 * top
     grid = np.geomspace(1.1 * float(np.min(rigid)), max(hi, 1.2 * top), points)
-    rows = []
-    for w in grid:
-        near = bool(np.any((w / wn > 1 / RESONANCE_BAND) & (w / wn < RESONANCE_BAND)))
-        try:
-            sol = stand.solve(p, float(w), np.zeros(2, complex))
-            gain = sol.noise_gain * 1e6
-            sens = _sensitivity(stand, float(w))
-        except (ValueError, ArithmeticError):  # exactly at an undamped mode
-            gain, sens = math.inf, math.inf
-        rows.append(SpeedRow(float(rad_s_to_rpm(w)), float(w) / top, gain, sens, near))
+    rows = [_row(stand, float(w), wn, top) for w in grid]
     below = math.inf if bend is None else float(rad_s_to_rpm(bend / RESONANCE_BAND))
     good = [
         r

@@ -32,7 +32,6 @@ EXCEPTIONS: dict[str, str] = {
     "drivers/codec.py::decode": PENDING + "one decoder per frame kind",
     "stand/passes.py::node_phasor": PENDING + "the passes as steps",
     "drivers/candump.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
-    "calib/advisor.py::advise": PENDING + "the speed grid apart from the reasons",
     "drivers/node_build.py::rebuild_node": "the steps' order, 65 lines: each step is a "
     "function above; what is left hands their arrays on and frees them early (memory)",
 }
