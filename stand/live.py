@@ -125,6 +125,20 @@ def measure_until_precise(
             stopped_by = "precision"
             break
         next_check = _next_check(elapsed, m, goal, MIN_REVS, max_interval_s)
+    return _final_result(session, cfg, params, options, targets, last, stopped_by)
+
+
+def _final_result(
+    session: LiveSession,
+    cfg: Any,
+    params: Any,
+    options: SolveOptions,
+    targets: Callable[[Any], tuple[float, float]],
+    last: Any,
+    stopped_by: str,
+) -> Result:
+    """The session closed and its whole run solved once more (or, when that fails, the last
+    estimate kept), as one Result saying what stopped it."""
     elapsed = session.elapsed_s
     streams = session.close()
     if streams is None:

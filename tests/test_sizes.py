@@ -28,7 +28,6 @@ EXCEPTIONS: dict[str, str] = {
     "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",
     "stand/core/dsp.py::fit_1x": "the 1x estimator's one least-squares pass (sums, solve, "
     "noise): split, its steps would pass ten arrays each",
-    "stand/live.py::measure_until_precise": PENDING + "the stop rules apart from the loop",
     "drivers/codec.py::decode": PENDING + "one decoder per frame kind",
     "stand/passes.py::node_phasor": PENDING + "the passes as steps",
     "drivers/candump.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
