@@ -177,6 +177,82 @@ def _with_edge_jitter(
     return out, cov, notes
 
 
+def _support(
+    node: int,
+    s: Any,
+    gamma: float,
+    taper: bool,
+    gate: bool,
+    sensor: tuple[float, float],
+    bad: str,
+) -> tuple[Phasor, Window, list[Diagnostic]]:
+    """One support's 1x phasor from its node's stream: gated and fitted
+    (:func:`stand.passes.node_phasor`), the sensor's gain and delay taken out, the blocks'
+    scatter and a strong 3x judged; its window and its warnings."""
+    warnings: list[Diagnostic] = []
+    try:
+        check_saturation(s)
+        ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
+    except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)
+        more = bad if "no samples" in str(exc) or "no reference edges" in str(exc) else ""
+        raise type(exc)(f"node {node}: {exc}{more}") from None
+    for note in notes:
+        warnings.append(Diagnostic("gate", f"node {node}: {note}"))
+    if window.revolutions < MIN_REVS:
+        warnings.append(
+            Diagnostic(
+                "short_window",
+                f"node {node}: only {window.revolutions} steady, settled revolutions "
+                f"(want {MIN_REVS} or more): measure longer",
+                float(window.revolutions),
+            )
+        )
+    gain, delay = sensor
+    if gain != 1.0 or delay != 0.0:
+        # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
+        turn = sensor_response(gain, delay, ph.omega_ref_rad_s)
+        R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
+        ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
+    ratio = block_scatter(blocks, ph.noise_m_s2)
+    if ratio > SCATTER_LIMIT:
+        warnings.append(
+            Diagnostic(
+                "unsteady_1x",
+                f"node {node}: the 1x reading wanders between blocks of {BLOCK_REVS} "
+                f"revolutions {math.sqrt(ratio):.1f} times more than the noise explains: a "
+                "vibration close to 1x (a neighbouring machine beating with it) or unsteady "
+                "conditions; the interval is widened to match; measure longer, or --taper",
+                ratio,
+            )
+        )
+        ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
+    odd = abs(ph.harmonics_m_s2.get(3, 0j)) / max(abs(ph.A_m_s2), 1e-300)
+    if odd > HARMONIC_WARN and abs(ph.A_m_s2) > ph.radius95_m_s2:  # against a real 1x only
+        warnings.append(
+            Diagnostic(
+                "strong_3x",
+                f"node {node}: 3x is {100 * odd:.0f} % of 1x: the supports may not be linear "
+                "(dry friction, a clearance) or the drive is misaligned; the model assumes "
+                "linear supports, so the result may be off",
+                odd,
+            )
+        )
+    return ph, window, warnings
+
+
+def _check_clocks(w1: float, w2: float, streams: RunStreams, clock_tolerance: float) -> None:
+    """Both nodes see one shaft: the speeds they measure [rad/s] agree within
+    ``clock_tolerance``, else a node's sample rate or clock is wrong (refused)."""
+    if abs(w1 / w2 - 1) > clock_tolerance:
+        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in SUPPORT_NODES)
+        raise SensorFaultError(
+            f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
+            f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
+            f"+-{100 * clock_tolerance:g} %): a node's sample rate (STATUS says {rates} Hz) "
+            "or its clock is wrong"
+        )
+
+
 def measure(
     streams: RunStreams,
     p: StandParameters,
@@ -218,64 +294,15 @@ def measure(
                 f"node {node} sent nothing: need nodes 1 and 2 (one per "
                 f"support), got {sorted(streams.nodes) or 'none'}{bad}"
             )
-        try:
-            check_saturation(s)
-            ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
-        except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)
-            more = bad if "no samples" in str(exc) or "no reference edges" in str(exc) else ""
-            raise type(exc)(f"node {node}: {exc}{more}") from None
-        for note in notes:
-            warnings.append(Diagnostic("gate", f"node {node}: {note}"))
-        if window.revolutions < MIN_REVS:
-            warnings.append(
-                Diagnostic(
-                    "short_window",
-                    f"node {node}: only {window.revolutions} steady, settled revolutions "
-                    f"(want {MIN_REVS} or more): measure longer",
-                    float(window.revolutions),
-                )
-            )
         k = node - 1
-        if sensor_gain[k] != 1.0 or sensor_delay_s[k] != 0.0:
-            # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
-            turn = sensor_response(sensor_gain[k], sensor_delay_s[k], ph.omega_ref_rad_s)
-            R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
-            ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
-        ratio = block_scatter(blocks, ph.noise_m_s2)
-        if ratio > SCATTER_LIMIT:
-            warnings.append(
-                Diagnostic(
-                    "unsteady_1x",
-                    f"node {node}: the 1x reading wanders between blocks of {BLOCK_REVS} "
-                    f"revolutions {math.sqrt(ratio):.1f} times more than the noise explains: a "
-                    "vibration close to 1x (a neighbouring machine beating with it) or unsteady "
-                    "conditions; the interval is widened to match; measure longer, or --taper",
-                    ratio,
-                )
-            )
-            ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
-        odd = abs(ph.harmonics_m_s2.get(3, 0j)) / max(abs(ph.A_m_s2), 1e-300)
-        if odd > HARMONIC_WARN and abs(ph.A_m_s2) > ph.radius95_m_s2:  # against a real 1x only
-            warnings.append(
-                Diagnostic(
-                    "strong_3x",
-                    f"node {node}: 3x is {100 * odd:.0f} % of 1x: the supports may not be linear "
-                    "(dry friction, a clearance) or the drive is misaligned; the model assumes "
-                    "linear supports, so the result may be off",
-                    odd,
-                )
-            )
+        ph, window, notes = _support(
+            node, s, gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad
+        )
+        warnings.extend(notes)
         supports.append(ph)
         windows.append(window)
     w1, w2 = supports[0].omega_ref_rad_s, supports[1].omega_ref_rad_s
-    if abs(w1 / w2 - 1) > clock_tolerance:
-        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in SUPPORT_NODES)
-        raise SensorFaultError(
-            f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
-            f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
-            f"+-{100 * clock_tolerance:g} %): a node's sample rate (STATUS says {rates} Hz) "
-            "or its clock is wrong"
-        )
+    _check_clocks(w1, w2, streams, clock_tolerance)
     omega = 0.5 * (w1 + w2)
     plain = supports  # their covariance is the noise's alone: the 3x test's weights
     supports, cov, jitter_notes = _with_edge_jitter(supports, windows)

@@ -25,7 +25,6 @@ EXCEPTIONS: dict[str, str] = {
     "equations every function implements",
     # functions
     "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
-    "stand/measure.py::measure": PENDING + "gate, fit and solve as steps",
     "stand/core/dsp.py::fit_1x": "the 1x estimator's one least-squares pass (sums, solve, "
     "noise): split, its steps would pass ten arrays each",
     "drivers/codec.py::decode": PENDING + "one decoder per frame kind",
