@@ -24,7 +24,6 @@ EXCEPTIONS: dict[str, str] = {
     "stand/core/model.py": "the seed's model: one derivation, its docstring carries the "
     "equations every function implements",
     # functions
-    "stand/sim/emit.py::simulate": PENDING + "the physics path apart from the frames' effects",
     "stand/core/dsp.py::fit_1x": "the 1x estimator's one least-squares pass (sums, solve, "
     "noise): split, its steps would pass ten arrays each",
     "drivers/codec.py::decode": PENDING + "one decoder per frame kind",

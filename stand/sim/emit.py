@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -129,6 +130,117 @@ def scene_budget(scene: Scene) -> None:
                   f"{scene.run.rpm:g} rpm)", "to simulate")  # fmt: skip
 
 
+def _support_force(scene: Scene, p: StandParameters, speed: Any, U: Any) -> Any:
+    """The supports' nonlinear force (dry friction, clearances), or None when linear; the
+    smoothing widths from the steady response when not given (seed 003)."""
+    e = scene.effects
+    if not e.nonlinear:
+        return None
+    w0 = speed.omega0_rad_s
+    v_ss = np.abs(forward(p, w0, U)) / w0
+    fr = per_node(e.friction.force_n) if e.friction else None
+    fb = None
+    if e.friction:
+        fb = (
+            [e.friction.beta_s_m] * 2
+            if e.friction.beta_s_m
+            else [100.0 / max(v, 1e-12) for v in v_ss]
+        )
+    gap = per_node(e.clearance.gap_m) if e.clearance else None
+    gb = None
+    if e.clearance and gap is not None:
+        gb = (
+            [e.clearance.beta_per_m] * 2
+            if e.clearance.beta_per_m
+            else [100.0 / max(g, 1e-12) for g in gap]
+        )
+    return support_force(p, fr, fb, gap, gb)
+
+
+def _physics(
+    scene: Scene, p: StandParameters, speed: Any, U: Any, seen: list[Any], beam: Any
+) -> tuple[list[Any], int]:
+    """Each support's acceleration at the times its sensor sees [m/s^2]: integrated in time
+    (a run-up, nonlinear supports) or in closed form; and the integrator's evaluations."""
+    if scene.needs_integration:
+        both = np.concatenate(seen)
+        a_both, nfev = integrated(
+            p,
+            speed,
+            U,
+            both,
+            force=_support_force(scene, p, speed, U),
+            rtol=scene.run.rtol,
+            from_steady=scene.effects.run_up is None,
+        )
+        return [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]], nfev
+    spread = node_unbalance(scene, beam)
+    return [closed_form(p, speed, U, s, beam, spread)[:, i] for i, s in enumerate(seen)], 0
+
+
+def _node_frames(
+    scene: Scene,
+    i: int,
+    a: Any,
+    times: Any,
+    edges: Any,
+    clock: tuple[float, float],
+) -> Frames:
+    """What node ``i + 1`` sends for the acceleration ``a`` its sensor reads [m/s^2]: noise,
+    clipping, counts, invalid samples, its STATUS flags, its frames and the frames lost."""
+    e, rate, node = scene.effects, scene.nodes.rate_hz, i + 1
+    ppm, offset = clock
+    if e.noise:
+        rms = (
+            e.noise.rms_m_s2
+            if e.noise.rms_m_s2 is not None
+            else e.noise.density_m_s2_rthz * math.sqrt(rate / 2)  # type: ignore[operator]
+        )
+        a = a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
+    clipped = np.zeros(len(a), bool)
+    if e.clipping:
+        r = e.clipping.range_m_s2
+        clipped = np.abs(a) > r
+        a = np.clip(a, -r, r)
+    counts = np.rint(a / (scene.nodes.scale_um_s2 * 1e-6))
+    clipped |= np.abs(counts) > FULL_SCALE
+    counts = np.clip(counts, -FULL_SCALE, FULL_SCALE).astype(np.int16)
+    invalid = np.zeros(len(a), bool)
+    if e.invalid:
+        invalid = _rng(scene, "invalid", node).random(len(a)) < e.invalid.probability
+        counts[invalid] = -32768
+    true_rate = rate * (1 + ppm * 1e-6)
+    positions = (edges - times[0]) * true_rate if len(times) else edges[:0]
+    flags = _status_flags(len(a), rate, clipped, invalid, positions)
+    frames = node_frames(
+        node,
+        counts,
+        rate_hz=rate,
+        scale_um_s2=scene.nodes.scale_um_s2,
+        edges=positions,
+        first_seq=scene.nodes.first_seq,
+        t0_s=offset,
+        status_flags=flags,
+        clock_ppm=ppm,
+    )
+    return _lost(scene, node, frames)
+
+
+def _on_the_bus(scene: Scene, blocks: list[Frames]) -> Frames:
+    """The nodes' frames merged as the bus carries them, host time from the first frame
+    (the start-up STATUS), a dropout taken out."""
+    frames = merge(blocks)
+    if len(frames):
+        frames = Frames(
+            frames.t_s - frames.t_s[0], frames.can_id, frames.dlc, frames.data, frames.flags
+        )
+    d = scene.effects.dropout
+    if d:
+        rel = frames.t_s
+        frames = frames.take(~((rel >= d.at_s) & (rel < d.at_s + d.seconds)))
+    return frames
+
+
 def simulate(scene: Scene, p: StandParameters) -> Simulation:
     """Simulate the scene: its frames, and the truth they were made from."""
     start = time.perf_counter()
@@ -137,8 +249,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     rate = scene.nodes.rate_hz
     speed, t_start = scene_speed(scene)
     t_end = t_start + scene.run.seconds
-    q_r, phi = unbalance_kg_m(scene)
-    U = unbalance_from_polar(q_r, phi)
+    U = unbalance_from_polar(*unbalance_kg_m(scene))
     beam = scene_beam(scene)  # a [rotor.shaft] table: the rotor bends
     if beam is not None and scene.needs_integration:
         from stand.errors import ConfigError
@@ -160,107 +271,23 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
         n = math.floor((scene.run.seconds - offset[i]) * true_rate)
         times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
     seen = [t - d for t, d in zip(times, delay, strict=True)]  # a group delay: earlier motion
-    nfev = 0
-    if scene.needs_integration:
-        force = None
-        if e.nonlinear:
-            w0 = speed.omega0_rad_s
-            v_ss = np.abs(forward(p, w0, U)) / w0
-            fr = per_node(e.friction.force_n) if e.friction else None
-            fb = None
-            if e.friction:
-                fb = (
-                    [e.friction.beta_s_m] * 2
-                    if e.friction.beta_s_m
-                    else [100.0 / max(v, 1e-12) for v in v_ss]
-                )
-            gap = per_node(e.clearance.gap_m) if e.clearance else None
-            gb = None
-            if e.clearance and gap is not None:
-                gb = (
-                    [e.clearance.beta_per_m] * 2
-                    if e.clearance.beta_per_m
-                    else [100.0 / max(g, 1e-12) for g in gap]
-                )
-            force = support_force(p, fr, fb, gap, gb)
-        both = np.concatenate(seen)
-        a_both, nfev = integrated(
-            p, speed, U, both, force=force, rtol=scene.run.rtol, from_steady=e.run_up is None
-        )
-        a_phys = [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]]
-    else:
-        spread = node_unbalance(scene, beam)
-        a_phys = [closed_form(p, speed, U, s, beam, spread)[:, i] for i, s in enumerate(seen)]
+    a_phys, nfev = _physics(scene, p, speed, U, seen, beam)
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:
         edges = edges + _rng(scene, "edge_jitter").normal(0.0, e.edge_jitter.rms_s, len(edges))
-
-    blocks: list[Frames] = []
     truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
     w0 = speed.omega0_rad_s
-    A_true = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
+    truth["A_m_s2"] = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
     )
-    truth["A_m_s2"] = A_true
-    scale = scene.nodes.scale_um_s2 * 1e-6
+    blocks: list[Frames] = []
     for i in range(2):
-        node = i + 1
         a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed.theta(seen[i]))
-        truth[f"node{node}"] = {"t_s": times[i], "accel_m_s2": a}
-        if e.noise:
-            rms = (
-                e.noise.rms_m_s2
-                if e.noise.rms_m_s2 is not None
-                else (
-                    e.noise.density_m_s2_rthz * math.sqrt(rate / 2)  # type: ignore[operator]
-                )
-            )
-            a = a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
-        clipped = np.zeros(len(a), bool)
-        if e.clipping:
-            r = e.clipping.range_m_s2
-            clipped = np.abs(a) > r
-            a = np.clip(a, -r, r)
-        counts = np.rint(a / scale)
-        clipped |= np.abs(counts) > FULL_SCALE
-        counts = np.clip(counts, -FULL_SCALE, FULL_SCALE).astype(np.int16)
-        invalid = np.zeros(len(a), bool)
-        if e.invalid:
-            invalid = _rng(scene, "invalid", node).random(len(a)) < e.invalid.probability
-            counts[invalid] = -32768
-        true_rate = rate * (1 + ppm[i] * 1e-6)
-        positions = (edges - times[i][0]) * true_rate if len(times[i]) else edges[:0]
-        flags = _status_flags(len(a), rate, clipped, invalid, positions)
-        blocks.append(
-            _lost(
-                scene,
-                node,
-                node_frames(
-                    node,
-                    counts,
-                    rate_hz=rate,
-                    scale_um_s2=scene.nodes.scale_um_s2,
-                    edges=positions,
-                    first_seq=scene.nodes.first_seq,
-                    t0_s=offset[i],
-                    status_flags=flags,
-                    clock_ppm=ppm[i],
-                ),
-            )
-        )
-    frames = merge(blocks)
-    if len(frames):  # host time starts at the first frame (the start-up STATUS)
-        frames = Frames(
-            frames.t_s - frames.t_s[0], frames.can_id, frames.dlc, frames.data, frames.flags
-        )
-    if e.dropout:
-        rel = frames.t_s
-        frames = frames.take(
-            ~((rel >= e.dropout.at_s) & (rel < e.dropout.at_s + e.dropout.seconds))
-        )
+        truth[f"node{i + 1}"] = {"t_s": times[i], "accel_m_s2": a}
+        blocks.append(_node_frames(scene, i, a, times[i], edges, (ppm[i], offset[i])))
     return Simulation(
-        frames=frames,
+        frames=_on_the_bus(scene, blocks),
         physics="integrate" if scene.needs_integration else "closed_form",
         nfev=nfev,
         wall_s=time.perf_counter() - start,
