@@ -203,6 +203,36 @@ def _tapered_normal_equations(
     return XtWX, XtWa, XtW2X
 
 
+def _steady(pos: np.ndarray, rev: np.ndarray, gate: bool) -> tuple[int, int, list[str]]:
+    """The edges the fit spans: the steady revolutions (gated), or all of them."""
+    if gate:
+        return steady_revolutions(pos, rev)
+    if len(pos) < 2:
+        raise MeasurementError(f"only {len(pos)} reference edges: need at least 2")
+    return 0, len(pos) - 1, []
+
+
+def _check_aliasing(w_ref: float, rate: float) -> None:
+    """The fit's 3x columns must stay below half the sample rate (``w_ref`` in radians per
+    sample), else they alias: refused, naming the speed and the rate."""
+    if w_ref > math.pi / 3:
+        raise SensorFaultError(
+            f"the shaft turns at {w_ref * rate * 30 / math.pi:.0f} rpm: its 3x "
+            f"({3 * w_ref * rate / (2 * math.pi):.0f} Hz) is beyond half the node's sample rate "
+            f"({rate / 2:g} Hz); it cannot be measured at this rate"
+        )
+
+
+def _harmonics(coef: np.ndarray, sloped: bool, w_ref: float, h5: complex) -> dict[int, complex]:
+    """The 2x and 3x phasors from the fit's coefficients, and the 5x (from the residual,
+    ``h5``) when it lies below half the sample rate."""
+    j = 5 if sloped else 3
+    out = {2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])}
+    if 5 * w_ref < math.pi:
+        out[5] = h5
+    return out
+
+
 def node_phasor(
     s: NodeStream, gamma: float, taper: bool, gate: bool
 ) -> tuple[Phasor, Window, np.ndarray, list[str]]:
@@ -213,12 +243,7 @@ def node_phasor(
     """
     run = _NodeRun(s, gamma)
     pos, rev = run.pos, run.rev
-    if gate:
-        a, b, notes = steady_revolutions(pos, rev)
-    else:
-        if len(pos) < 2:
-            raise MeasurementError(f"only {len(pos)} reference edges: need at least 2")
-        a, b, notes = 0, len(pos) - 1, []
+    a, b, notes = _steady(pos, rev, gate)
     n_full = (b - a) // BLOCK_REVS
     edges = pos[a + BLOCK_REVS * np.arange(n_full + 1)]
     starts = run.find(edges)  # the first sample of the n_full blocks and of the tail
@@ -242,13 +267,7 @@ def node_phasor(
     if sums.n < 8:
         raise MeasurementError(f"only {sums.n} samples in the steady window: measure longer")
     w_ref = sums.w_sum / sums.n
-    if w_ref > math.pi / 3:  # 3x beyond half the sample rate: the fit's columns alias
-        rate = float(s.rate_hz or 0.0)
-        raise SensorFaultError(
-            f"the shaft turns at {w_ref * rate * 30 / math.pi:.0f} rpm: its 3x "
-            f"({3 * w_ref * rate / (2 * math.pi):.0f} Hz) is beyond half the node's sample rate "
-            f"({rate / 2:g} Hz); it cannot be measured at this rate"
-        )
+    _check_aliasing(w_ref, float(s.rate_hz or 0.0))
     sloped = (sums.w_max - sums.w_min) / w_ref > SPEED_SPAN_SLOPE
     T = model_transform(w0, w_ref, sloped)
     th0, th1 = run.angle(i0), run.angle(end - 1)
@@ -265,10 +284,7 @@ def node_phasor(
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
     cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
-    j = 5 if sloped else 3
-    harmonics = {2: complex(coef[j], -coef[j + 1]), 3: complex(coef[j + 2], -coef[j + 3])}
-    if 5 * w_ref < math.pi:  # 5x below half the sample rate: its phasor from the residual
-        harmonics[5] = 2 * h5 / wt1
+    harmonics = _harmonics(coef, sloped, w_ref, 2 * h5 / wt1)
     ph = Phasor(
         A_m_s2=complex(coef[0], -coef[1]),
         cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
