@@ -80,6 +80,38 @@ def _put(data: NDArray[np.uint8], kind: str, name: str, values: ArrayLike) -> No
     data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
 
 
+def _records(
+    d8: NDArray[np.uint8], node: NDArray[np.int64], rows: dict[str, NDArray[np.int64]]
+) -> tuple[SamplesRecords, StatusRecords, MarkRecords]:
+    """The records of each kind from the good frames' 8 bytes, by :data:`LAYOUT`."""
+    r = rows["SAMPLES"]
+    samples = SamplesRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "SAMPLES", "seq"),
+        counts=np.stack([_field(d8, r, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(np.int16),
+    )
+    r = rows["STATUS"]
+    status = StatusRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        rate=_field(d8, r, "STATUS", "rate"),
+        scale=_field(d8, r, "STATUS", "scale"),
+        flags=_field(d8, r, "STATUS", "flags"),
+        version=_field(d8, r, "STATUS", "version"),
+    )
+    r = rows["MARK"]
+    marks = MarkRecords(
+        frame=r,
+        node=node[r].astype(np.uint8),
+        seq=_field(d8, r, "MARK", "seq"),
+        slot=_field(d8, r, "MARK", "slot"),
+        frac=_field(d8, r, "MARK", "frac"),
+        rev=_field(d8, r, "MARK", "rev"),
+    )
+    return samples, status, marks
+
+
 def decode(frames: Frames) -> Decoded:
     """Sort and decode a block of frames, all at once.
 
@@ -120,31 +152,7 @@ def decode(frames: Frames) -> Decoded:
         for k, b in (("SAMPLES", SAMPLES_BASE), ("STATUS", STATUS_BASE), ("MARK", MARK_BASE))
     }
 
-    r = rows["SAMPLES"]
-    samples = SamplesRecords(
-        frame=r,
-        node=node[r].astype(np.uint8),
-        seq=_field(d8, r, "SAMPLES", "seq"),
-        counts=np.stack([_field(d8, r, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(np.int16),
-    )
-    r = rows["STATUS"]
-    status = StatusRecords(
-        frame=r,
-        node=node[r].astype(np.uint8),
-        rate=_field(d8, r, "STATUS", "rate"),
-        scale=_field(d8, r, "STATUS", "scale"),
-        flags=_field(d8, r, "STATUS", "flags"),
-        version=_field(d8, r, "STATUS", "version"),
-    )
-    r = rows["MARK"]
-    marks = MarkRecords(
-        frame=r,
-        node=node[r].astype(np.uint8),
-        seq=_field(d8, r, "MARK", "seq"),
-        slot=_field(d8, r, "MARK", "slot"),
-        frac=_field(d8, r, "MARK", "frac"),
-        rev=_field(d8, r, "MARK", "rev"),
-    )
+    samples, status, marks = _records(d8, node, rows)
     bad = [
         BadFrame(
             frame=i,
