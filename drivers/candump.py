@@ -224,6 +224,51 @@ def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Fram
     return _read_candump_whole(path, warn)
 
 
+def _whole_lines(path: Path, text: bytes, warn: list[Diagnostic] | None) -> tuple[bytes, int]:
+    """The text without a last line cut short (no newline after it, as a killed candump
+    leaves it; said in ``warn``), and its count of non-empty lines."""
+    lines = sum(1 for line in text.split(b"\n") if line.strip())
+    cut = text.rfind(b"\n") + 1
+    last = text[cut:]
+    if last.strip() and text[:cut].strip():
+        match = _CANDUMP.match(last)
+        data = b"" if match is None else match.group(5)
+        if match is None or (data[:1] not in (b"R", b"r") and len(data) % 2):
+            if warn is not None:
+                where = f"{path}:{lines}"
+                warn.append(
+                    Diagnostic("partial_line", f"{where}: the last line is cut short: left out")
+                )
+            return text[:cut], lines - 1
+    return text, lines
+
+
+def _payloads(
+    path: Path, data_str: tuple[bytes, ...], remote: np.ndarray, lengths: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each frame's data bytes and length from its hex column: all 8-byte frames in one go
+    (the common case), else frame by frame (remote frames, short frames, CAN FD)."""
+    n = len(data_str)
+    if not remote.any() and (lengths == 2 * FRAME_DLC).all():
+        data = np.frombuffer(bytes.fromhex(b"".join(data_str).decode()), np.uint8).reshape(n, 8)
+        return data, np.full(n, FRAME_DLC, np.uint8)
+    width = max(FRAME_DLC, int(lengths.max()) // 2)
+    data = np.zeros((n, width), np.uint8)
+    dlc = np.zeros(n, np.uint8)
+    for i, s in enumerate(data_str):
+        if remote[i]:
+            dlc[i] = int(s[1:]) if len(s) > 1 else 0
+            continue
+        if len(s) % 2:
+            raise RecordingError(
+                f"odd number of hex digits in the data {s.decode()!r}", path=str(path)
+            )
+        b = bytes.fromhex(s.decode())
+        data[i, : len(b)] = np.frombuffer(b, np.uint8)
+        dlc[i] = len(b)
+    return data, dlc
+
+
 def _read_candump_whole(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read a candump ``.log`` (``candump -L`` format, as python-can writes it).
 
@@ -235,21 +280,7 @@ def _read_candump_whole(path: Path, warn: list[Diagnostic] | None = None) -> Fra
     RecordingError
         Naming the file and the first line that is not a frame.
     """
-    text = path.read_bytes()
-    lines = sum(1 for line in text.split(b"\n") if line.strip())
-    cut = text.rfind(b"\n") + 1
-    last = text[cut:]
-    # a last line without its newline (after others): was it cut short?
-    if last.strip() and text[:cut].strip():
-        match = _CANDUMP.match(last)
-        data = b"" if match is None else match.group(5)
-        if match is None or (data[:1] not in (b"R", b"r") and len(data) % 2):
-            if warn is not None:
-                where = f"{path}:{lines}"
-                warn.append(
-                    Diagnostic("partial_line", f"{where}: the last line is cut short: left out")
-                )
-            text, lines = text[:cut], lines - 1
+    text, lines = _whole_lines(path, path.read_bytes(), warn)
     rows = _CANDUMP.findall(text)
     if len(rows) != lines:
         raise _with_line(path, text)
@@ -275,24 +306,7 @@ def _read_candump_whole(path: Path, warn: list[Diagnostic] | None = None) -> Fra
             path=str(path),
             line=line,
         )
-    if not remote.any() and (lengths == 2 * FRAME_DLC).all():  # the common case, in one go
-        data = np.frombuffer(bytes.fromhex(b"".join(data_str).decode()), np.uint8).reshape(n, 8)
-        dlc = np.full(n, FRAME_DLC, np.uint8)
-    else:
-        width = max(FRAME_DLC, int(lengths.max()) // 2)
-        data = np.zeros((n, width), np.uint8)
-        dlc = np.zeros(n, np.uint8)
-        for i, s in enumerate(data_str):
-            if remote[i]:
-                dlc[i] = int(s[1:]) if len(s) > 1 else 0
-                continue
-            if len(s) % 2:
-                raise RecordingError(
-                    f"odd number of hex digits in the data {s.decode()!r}", path=str(path)
-                )
-            b = bytes.fromhex(s.decode())
-            data[i, : len(b)] = np.frombuffer(b, np.uint8)
-            dlc[i] = len(b)
+    data, dlc = _payloads(path, data_str, remote, lengths)
     flags = (
         np.where(extended, FLAG_EXTENDED, 0)
         | np.where(remote, FLAG_REMOTE, 0)

@@ -26,7 +26,6 @@ EXCEPTIONS: dict[str, str] = {
     # functions
     "stand/core/dsp.py::fit_1x": "the 1x estimator's one least-squares pass (sums, solve, "
     "noise): split, its steps would pass ten arrays each",
-    "drivers/candump.py::_read_candump_whole": PENDING + "the column parse apart from the checks",
     "drivers/node_build.py::rebuild_node": "the steps' order, 65 lines: each step is a "
     "function above; what is left hands their arrays on and frees them early (memory)",
 }
