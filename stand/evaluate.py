@@ -15,8 +15,8 @@ scene instead of a proving rotor:
   one measurement, or the residual the correction left if that is larger,
   rounded up to a 1-2-5 step.
 
-Every run goes through :func:`stand.measure.measure` (the same path as
-``stand balance``).
+Every run goes through the pipeline (:func:`stand.pipeline.measure_streams`, the same
+path as ``stand solve`` and ``stand balance``).
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ import numpy as np
 
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
 from stand.drivers.streams import rebuild
-from stand.measure import Measurement, measure
+from stand.measure import Measurement
+from stand.pipeline import SolveOptions, measure_streams
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable
 
@@ -58,9 +59,12 @@ def _with_unbalance(scene: Scene, U_kg_m: np.ndarray, seed: int) -> Scene:
 
 
 def _measure(scene: Scene, p: StandParameters) -> Measurement:
-    return measure(
-        rebuild(simulate(scene, p).frames), p, reference_angle_deg=scene.stand.reference_angle_deg
+    """One simulated run measured as every run is (:func:`stand.pipeline.measure_streams`,
+    with the scene's own configuration: its sensors, a bending shaft's beam model)."""
+    m: Measurement = measure_streams(
+        rebuild(simulate(scene, p).frames), scene.config(), p, SolveOptions()
     )
+    return m
 
 
 def _step_up(x: float) -> float:
