@@ -88,6 +88,8 @@ class SpeedsResult:
     solution: MultiPlaneSolution
     correction_mode: str
     warnings: tuple[Any, ...]
+    slow_roll: Any = None
+    """The slow-roll run subtracted (:class:`SlowRoll`), or None."""
 
     @property
     def passes(self) -> bool | None:
@@ -120,23 +122,70 @@ def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any
     return [(paths[k], results[k]) for k in order], cfg, params, paths[0]
 
 
-def _readings(runs: list[Any], beam: Any, params: Any, at: list[float]) -> tuple[Any, ...]:
-    """Every speed's two-plane unbalance and the influence of each correction plane on it,
-    as shares of the permissible unbalance (rows of the solver's readings and matrix), each
-    reading's weight (one over its noise) and the permissible values per speed."""
+@dataclass(frozen=True)
+class SlowRoll:
+    """A slow-roll run: its speed [rad/s] and its supports' 1x [m/s^2], which is the
+    journals' runout (the supports follow it) and not unbalance: at a speed ``w`` it reads
+    ``A_s (w / w_s)^2``, subtracted from that speed's reading before solving."""
+
+    run: str
+    omega_rad_s: float
+    A_m_s2: np.ndarray
+
+    def at(self, omega_rad_s: float) -> np.ndarray:
+        """The runout's 1x at another speed [m/s^2] (kinematic: as the speed squared)."""
+        out: np.ndarray = self.A_m_s2 * (omega_rad_s / self.omega_rad_s) ** 2
+        return out
+
+    @property
+    def runout_um(self) -> list[float]:
+        """Each journal's runout [µm]: ``|A_s| / w_s^2``."""
+        return [float(abs(a)) / self.omega_rad_s**2 * 1e6 for a in self.A_m_s2]
+
+
+SLOW_ROLL_BELOW = 3.0
+"""A slow-roll run is at least this many times slower than every balancing speed."""
+
+
+def slow_roll_of(path: str, config: str | None, runs: list[Any]) -> SlowRoll:
+    """The slow-roll run measured (refused unless well below every speed)."""
+    from stand.recordings import solve_recording
+
+    res = solve_recording(path, config)
+    w_s = res.omega_rad_s
+    slowest = min(r.omega_rad_s for _, r in runs)
+    if w_s * SLOW_ROLL_BELOW > slowest:
+        raise ConfigError(
+            f"the slow-roll run is at {w_s * 30 / math.pi:.0f} rpm: a slow roll is at least "
+            f"{SLOW_ROLL_BELOW:g} times slower than the slowest balancing speed "
+            f"({slowest * 30 / math.pi:.0f} rpm)",
+            source=path,
+        )
+    return SlowRoll(path, w_s, np.array([ph.A_m_s2 for ph in res.measurement.supports]))
+
+
+def _readings(
+    runs: list[Any], beam: Any, params: Any, at: list[float], slow: SlowRoll | None = None
+) -> tuple[Any, ...]:
+    """Every speed's two-plane unbalance (the slow roll's runout taken out first) and the
+    influence of each correction plane on it, as shares of the permissible unbalance (rows
+    of the solver's readings and matrix), each reading's weight (one over its noise), the
+    permissible values and the unbalances per speed."""
     from stand.core.beam import receptance, receptance_at
 
-    rows_A, rows_alpha, weights, per = [], [], [], []
+    rows_A, rows_alpha, weights, per, unbalances = [], [], [], [], []
     for _, res in runs:
         w = res.omega_rad_s
         E = np.linalg.inv(receptance(beam, params, w))
         scale = np.ones(2) if res.tolerance is None else np.asarray(res.tolerance.per_plane_kg_m)
         per.append(None if res.tolerance is None else res.tolerance.per_plane_kg_m)
-        rows_A.append(res.U_kg_m / scale)
+        U = res.U_kg_m if slow is None else res.U_kg_m - E @ slow.at(w)
+        unbalances.append(U)
+        rows_A.append(U / scale)
         rows_alpha.append((E @ receptance_at(beam, params, w, at)) / scale[:, None])
         cov = np.asarray(res.measurement.solution.cov_U).real
         weights.append(scale / np.sqrt((cov.diagonal()[0::2] + cov.diagonal()[1::2]) / 2))
-    return np.concatenate(rows_A), np.vstack(rows_alpha), np.concatenate(weights), per
+    return np.concatenate(rows_A), np.vstack(rows_alpha), np.concatenate(weights), per, unbalances
 
 
 def _plane_corrections(cfg: Any, sol: MultiPlaneSolution) -> tuple[PlaneCorrection, ...]:
@@ -172,9 +221,12 @@ def balance_speeds(
     *,
     method: str = "ls",
     max_mass_g: float | None = None,
+    slow_roll: str | None = None,
 ) -> SpeedsResult:
-    """The N-plane correction for runs at several speeds (see the module docstring)."""
+    """The N-plane correction for runs at several speeds (see the module docstring); with
+    ``slow_roll``, a slow-roll run's runout is taken out of every reading first."""
     runs, cfg, params, first = _runs(paths, config)
+    slow = None if slow_roll is None else slow_roll_of(slow_roll, config, runs)
     beam = cfg.rotor.beam()
     planes = cfg.rotor.planes
     if beam is None or not planes:
@@ -184,7 +236,9 @@ def balance_speeds(
             source=config or first,
             key="rotor.planes",
         )
-    A, alpha, weights, per = _readings(runs, beam, params, [pl.position_m for pl in planes])
+    A, alpha, weights, per, unbalances = _readings(
+        runs, beam, params, [pl.position_m for pl in planes], slow
+    )
     caps = (
         None if max_mass_g is None else max_mass_g * 1e-3 * np.array([pl.radius_m for pl in planes])
     )
@@ -199,7 +253,7 @@ def balance_speeds(
             run=path,
             rpm=res.omega_rad_s * 30 / math.pi,
             result=res,
-            U_kg_m=res.U_kg_m,
+            U_kg_m=unbalances[k],
             after_kg_m=sol.residual[2 * k : 2 * k + 2]
             * (1.0 if per[k] is None else np.asarray(per[k])),
             permissible_kg_m=per[k],
@@ -210,15 +264,15 @@ def balance_speeds(
         w for _, res in runs for w in res.warnings if w.code != "near_bending_mode"
     )
     mode = "remove" if cfg.correction.mode == "remove" else "add"
-    return SpeedsResult(speeds, _plane_corrections(cfg, sol), method, sol, mode, notes)
+    return SpeedsResult(speeds, _plane_corrections(cfg, sol), method, sol, mode, notes, slow)
 
 
 def correction_masses_across_speeds(
-    paths: Sequence[str], config: str | None = None
+    paths: Sequence[str], config: str | None = None, slow_roll: str | None = None
 ) -> list[tuple[int, float, float, float, float]]:
     """What an operator puts on (grams > 0) or takes off (< 0) for the N-plane correction of
     runs at several speeds: ``(plane, grams, angle_deg, radius_m, position_m)`` each."""
-    result = balance_speeds(paths, config)
+    result = balance_speeds(paths, config, slow_roll=slow_roll)
     sign = 1.0 if result.correction_mode == "add" else -1.0
     return [
         (p.plane, sign * w.mass_kg * 1e3, w.angle_deg, p.radius_m, p.position_m)
@@ -286,4 +340,11 @@ def speeds_json(result: SpeedsResult) -> dict[str, Any]:
         "pass": result.passes,
         "condition_number": round(result.solution.condition_number, 4),
         "warnings": [w.message for w in result.warnings],
+        "slow_roll": None
+        if result.slow_roll is None
+        else {
+            "run": result.slow_roll.run,
+            "rpm": round(result.slow_roll.omega_rad_s * 30 / math.pi, 3),
+            "runout_um": [round(x, 3) for x in result.slow_roll.runout_um],
+        },
     }

@@ -215,7 +215,13 @@ def _across_speeds(args: argparse.Namespace) -> int:
         archive_live(one, result, cfg)
         runs.append(one.out)
     out = speeds_json(
-        balance_speeds(runs, args.config, method=args.method, max_mass_g=args.max_mass_g)
+        balance_speeds(
+            runs,
+            args.config,
+            method=args.method,
+            max_mass_g=args.max_mass_g,
+            slow_roll=args.slow_roll,
+        )
     )
     out["report"] = report
     if args.json:

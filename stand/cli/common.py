@@ -54,6 +54,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
         "config's mode, positions and weights); several runs at different speeds: their "
         "correction across speeds in the config's [[rotor.planes]]",
     )
+    g.add_argument(
+        "--apply-slow-roll",
+        metavar="RUN",
+        help="with --apply of several runs: the slow-roll run taken out of them first",
+    )
     g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]")
     g.add_argument(
         "--index",
@@ -77,7 +82,11 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
     elif runs:
         from stand.speeds import correction_masses_across_speeds
 
-        masses += [Mass(p, g, a, r, x) for p, g, a, r, x in correction_masses_across_speeds(runs)]
+        slow = getattr(args, "apply_slow_roll", None)
+        masses += [
+            Mass(p, g, a, r, x)
+            for p, g, a, r, x in correction_masses_across_speeds(runs, slow_roll=slow)
+        ]
     return masses
 
 
@@ -105,6 +114,12 @@ def add_across_speeds_arguments(p: argparse.ArgumentParser, *, flag: bool = True
         type=positive_float,
         metavar="G",
         help="across speeds: the largest correction mass in any plane [g]",
+    )
+    g.add_argument(
+        "--slow-roll",
+        metavar="RUN",
+        help="across speeds: a run well below every speed (at least 3x slower): the journals' "
+        "runout it reads, scaled as the speed squared, is taken out of every run first",
     )
 
 

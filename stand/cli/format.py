@@ -286,6 +286,10 @@ def print_speeds(out: dict[str, Any]) -> None:
             f"at radius {p['radius_mm']:g} mm{extra}"
         )
     print(f"({ANGLE_NOTE})")
+    if out.get("slow_roll"):
+        sr = out["slow_roll"]
+        um = " and ".join(f"{x:.1f}" for x in sr["runout_um"])
+        print(f"slow roll at {sr['rpm']:.0f} rpm taken out first: the journals run out {um} um")
     print("speed [rpm]   plane 1 before -> after [g mm]   plane 2 before -> after   permissible")
     for s in out["speeds"]:
         (b1, b2), (a1, a2) = s["before"], s["after"]

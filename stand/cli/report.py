@@ -67,7 +67,11 @@ def run(args: argparse.Namespace) -> int:
         if args.check:
             raise UsageError("stand report: --check is for one run, not --across-speeds")
         speeds = balance_speeds(
-            args.run, args.config, method=args.method, max_mass_g=args.max_mass_g
+            args.run,
+            args.config,
+            method=args.method,
+            max_mass_g=args.max_mass_g,
+            slow_roll=args.slow_roll,
         )
         return _write(args, render_speeds(speeds_json(speeds)), inputs)
     options = solve_options(args, traces=True)

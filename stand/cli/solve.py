@@ -174,7 +174,13 @@ def run_across_speeds(args: argparse.Namespace) -> int:
     if args.summary or args.jobs != 1:
         raise UsageError("stand solve: --across-speeds gives one answer: no --summary or --jobs")
     out = speeds_json(
-        balance_speeds(args.runs, args.config, method=args.method, max_mass_g=args.max_mass_g)
+        balance_speeds(
+            args.runs,
+            args.config,
+            method=args.method,
+            max_mass_g=args.max_mass_g,
+            slow_roll=args.slow_roll,
+        )
     )
     if args.json:
         dump_json(out)

@@ -94,11 +94,17 @@ def scene_speed(scene: Scene) -> tuple[SceneSpeed, float]:
     return speed, t_start
 
 
-def _sensor_side(
-    scene: Scene, node: int, t: FloatArray, a: FloatArray, theta: FloatArray
-) -> FloatArray:
-    """Harmonics and a neighbour's vibration (they are at the support too)."""
+def _sensor_side(scene: Scene, node: int, t: FloatArray, a: FloatArray, speed: Any) -> FloatArray:
+    """Harmonics, a neighbour's vibration and the journal's runout (they are at the support
+    too)."""
     e = scene.effects
+    theta = speed.theta(t)
+    if e.runout:
+        # x = r cos(theta + phi) followed kinematically: x'' = -r (w^2 cos + alpha sin)
+        r = per_node(e.runout.um)[node] * 1e-6
+        phi = math.radians(per_node(e.runout.angle_deg)[node])
+        w, al = speed.omega(t), speed.alpha(t)
+        a = a - r * (w * w * np.cos(theta + phi) + al * np.sin(theta + phi))
     if e.harmonics:
         h = e.harmonics
         for k, amp, ph in ((2, h.x2_m_s2, h.x2_phase_deg), (3, h.x3_m_s2, h.x3_phase_deg)):
@@ -283,7 +289,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     )
     blocks: list[Frames] = []
     for i in range(2):
-        a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed.theta(seen[i]))
+        a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed)
         truth[f"node{i + 1}"] = {"t_s": times[i], "accel_m_s2": a}
         blocks.append(_node_frames(scene, i, a, times[i], edges, (ppm[i], offset[i])))
     return Simulation(

@@ -246,6 +246,15 @@ class PlacementEffect(_Table):
     angle_deg: NonNegative = 0.0
 
 
+class Runout(_Table):
+    """``[effects.runout]``: each journal runs out in its support by ``um`` at ``angle_deg``
+    (the support follows it: a kinematic 1x, ``-w^2`` times the runout, that is not
+    unbalance; a slow-roll run measures it, ``--slow-roll``)."""
+
+    um: PerNode
+    angle_deg: PerNode = 0.0
+
+
 class Dropout(_Table):
     """The bus carries nothing from ``at_s`` for ``seconds``."""
 
@@ -272,6 +281,7 @@ class Effects(_Table):
     dropout: Dropout | None = None
     tooling: ToolingEffect | None = None
     drift: DriftEffect | None = None
+    runout: Runout | None = None
     placement: PlacementEffect | None = None
 
     def named(self) -> list[str]:
