@@ -105,6 +105,13 @@ def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any
     if len(paths) < 2:
         raise ConfigError("balancing across speeds takes runs at two speeds or more")
     results = [solve_recording(p, config) for p in paths]
+    digests = {r.provenance.config_sha256 for r in results}
+    if not config and len(digests) > 1:
+        raise ConfigError(
+            "the runs carry different configurations (another rotor or stand, or another "
+            "calibration): one rotor's runs, or give --config",
+            source=paths[0],
+        )
     if config:
         cfg, params, _ = load_config_text(config)
     else:  # the first run's own (solve_recording read it)

@@ -73,6 +73,7 @@ def test_three_planes_across_speeds_pass_where_two_planes_at_one_speed_fail(
     [
         (["raw900", "raw900"], [], "both at about 900 rpm: give each speed once"),
         (["raw900"], [], "runs at two speeds or more"),
+        (["raw900", "demo"], [], "carry different configurations"),
         (["raw900", "raw1500"], ["--method", "wls", "--summary", "x.csv"], "no --summary"),
     ],
 )
@@ -83,6 +84,9 @@ def test_bad_runs_across_speeds_are_one_line(
     extra: list[str],
     says: str,
 ) -> None:
+    if "demo" in runs and "demo" not in bow_runs:
+        bow_runs["demo"] = bow_runs["raw900"].parent / "demo.h5"
+        assert main(["simulate", "demo", "--rpm", "700", "--out", str(bow_runs["demo"])]) == 0
     capsys.readouterr()
     assert main(["solve", *(str(bow_runs[r]) for r in runs), "--across-speeds", *extra]) == 2
     err = capsys.readouterr().err
