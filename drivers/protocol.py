@@ -2,16 +2,19 @@
 
 The wire contract is ``spec/can-protocol.md``; its machine-readable form is
 ``drivers/sensor_node_v1.dbc``, and ``tests/test_protocol.py`` shows that
-:func:`decode` agrees with cantools' decoding of that DBC for random frames
-and that :data:`LAYOUT` below is the DBC's signal layout.
+:func:`stand.drivers.codec.decode` agrees with cantools' decoding of that DBC
+for random frames and that :data:`LAYOUT` below is the DBC's signal layout.
+This module holds the layout, the constants and the record types; the
+decoder and the encoders are :mod:`stand.drivers.codec`.
 
 Nothing here loops over frames in Python: a block of frames is a few numpy
-arrays (:class:`Frames`), and :func:`decode` sorts it into SAMPLES, STATUS
-and MARK records with vectorised masks and byte views.  The live reader and
-the offline readers share it.
+arrays (:class:`Frames`), and the decoder sorts it into SAMPLES, STATUS and
+MARK records with vectorised masks and byte views.  The live reader and the
+offline readers share it.
 
 Examples
 --------
+>>> from stand.drivers.codec import decode, encode_samples
 >>> f = encode_samples(node=1, seq=[7], counts=[[10, -32768, -1]], t_s=[0.5])
 >>> d = decode(f)
 >>> d.samples.node.tolist(), d.samples.seq.tolist(), d.samples.counts.tolist()
