@@ -13,7 +13,7 @@ from stand.cli.parse import parse_angle, parse_mass, parse_rpm, positive_float
 from stand.errors import UsageError
 
 if TYPE_CHECKING:
-    from stand.core import Diagnostic
+    pass
 
 
 def add_force_argument(p: argparse.ArgumentParser, what: str) -> None:
@@ -121,12 +121,6 @@ def add_across_speeds_arguments(p: argparse.ArgumentParser, *, flag: bool = True
         help="across speeds: a run well below every speed (at least 3x slower): the journals' "
         "runout it reads, scaled as the speed squared, is taken out of every run first",
     )
-
-
-def print_warnings(warnings: Iterable[Diagnostic]) -> None:
-    """Warnings to stderr, one line each."""
-    for w in warnings:
-        print(f"warning: {w.message}", file=sys.stderr)
 
 
 BUS_KEYS = ("channel", "interface", "bitrate", "fd", "data_bitrate", "can_filters", "timing")

@@ -7,12 +7,19 @@ so the text and the JSON of one run agree to the last digit shown.
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterable
 from typing import Any, TextIO
 
 from stand.result import json_text
 from stand.units import Display
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
+
+
+def print_warnings(warnings: Iterable[Any]) -> None:
+    """Warnings (:class:`stand.core.Diagnostic`) to stderr, one line each."""
+    for w in warnings:
+        print(f"warning: {w.message}", file=sys.stderr)
 
 
 def dump_json(obj: Any, out: TextIO | None = None) -> None:
@@ -263,7 +270,6 @@ def print_summary(out: dict[str, Any]) -> None:
 
 def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
     """What a recording holds: one JSON object, or the table (and the warnings on stderr)."""
-    from stand.cli.common import print_warnings
     from stand.recordings import recording_summary
 
     out = recording_summary(rec, streams)

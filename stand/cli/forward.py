@@ -7,8 +7,7 @@ import math
 
 import numpy as np
 
-from stand.cli.common import print_warnings
-from stand.cli.format import dump_json
+from stand.cli.format import dump_json, print_warnings
 from stand.cli.parse import parse_rpm, parse_unbalance
 from stand.config import load_config
 from stand.core import (

@@ -9,8 +9,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
-from stand.cli.common import add_force_argument, print_warnings, write_text_output
-from stand.cli.format import dump_json, show
+from stand.cli.common import add_force_argument, write_text_output
+from stand.cli.format import dump_json, print_warnings, show
 from stand.cli.parse import positive_float
 from stand.config import STRICT
 from stand.errors import ConfigError, ModelError, UsageError
