@@ -286,7 +286,7 @@ async def _flow(station: Station) -> None:
         assert "stored as a calibration datum (stand health)" in station.snapshot().notes
         user.find(marker="nav-history").click()
         await user.should_see(marker="history-table", retries=20)
-        await user.should_see("Stand health (demo-auger at 900 rpm, 1 rotors): as calibrated")
+        await user.should_see("Stand health (demo-auger at 900 rpm, 1 rotor): as calibrated")
         user.find(marker="history-serial").type("S-42")
         user.find(marker="history-search").click()
         table = user.find(ui.table).elements.pop()

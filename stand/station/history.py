@@ -28,7 +28,8 @@ def _health_panel(station: Station) -> None:
         if not out["groups"]:
             ui.label("Stand health: no calibration data yet (confirm corrections as applied)")
         for g in out["groups"]:
-            where = f"{g['rotor_type'] or 'rotor'} at {g['rpm']:.0f} rpm, {g['data']} rotors"
+            n = g["data"]
+            where = f"{g['rotor_type'] or 'rotor'} at {g['rpm']:.0f} rpm, {n} rotor{'s' * (n != 1)}"
             if not g["alarm"]:
                 ui.label(f"Stand health ({where}): as calibrated").classes("text-h6 pass")
                 continue
