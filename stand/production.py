@@ -24,7 +24,7 @@ import numpy as np
 from stand import __version__
 
 
-def _write(scene: Any, params: Any, path: Path, believed: str) -> None:
+def _write(scene: Any, params: Any, path: Path, believed: str, force: bool) -> None:
     from stand.drivers.recording import STAND_ATTR, Recording, write_recording
     from stand.drivers.streams import rebuild
     from stand.sim import simulate
@@ -40,7 +40,7 @@ def _write(scene: Any, params: Any, path: Path, believed: str) -> None:
             STAND_ATTR: scene.stand.stand_id(),
         },
     )
-    write_recording(rec, path, rebuild(sim.frames, strict_status=False), force=True)
+    write_recording(rec, path, rebuild(sim.frames, strict_status=False), force=force)
 
 
 def _rotor(scene: Any, rng: np.random.Generator, index: int) -> Any:
@@ -66,11 +66,14 @@ def simulate_series(
     url: str,
     *,
     seed: int = 0,
+    force: bool = False,
     on_rotor: Callable[[int], None] | None = None,
 ) -> int:
-    """Simulate ``count`` rotors (see the module docstring); the data stored."""
+    """Simulate ``count`` rotors (see the module docstring); the data stored.  A run file
+    already in ``out_dir`` is refused before the first rotor (replaced with ``force``)."""
     from stand.archive import Archive, archive_result, file_digest
     from stand.config import config_toml
+    from stand.errors import UsageError
     from stand.health import datum_row
     from stand.recordings import correction_masses, solve_recording
     from stand.sim import Mass, load_scene, with_masses
@@ -80,6 +83,11 @@ def simulate_series(
     drift, place = scene.effects.drift, scene.effects.placement
     rng = np.random.default_rng(seed)
     folder = Path(out_dir)
+    there = [p for i in range(1, count + 1) for p in folder.glob(f"S-{i:05d}-?.h5")]
+    if there and not force:
+        raise UsageError(
+            f"{there[0]} exists already (a series there before): another --out-dir, or --force"
+        )
     stored = 0
     for i in range(1, count + 1):
         truth = params
@@ -90,7 +98,7 @@ def simulate_series(
             )
         rotor, serial = _rotor(scene, rng, i), f"S-{i:05d}"
         first, check = folder / f"{serial}-a.h5", folder / f"{serial}-b.h5"
-        _write(rotor, truth, first, believed)
+        _write(rotor, truth, first, believed, force)
         before = solve_recording(str(first))
         archive_result(before, url)
         masses = correction_masses(str(first))
@@ -100,7 +108,7 @@ def simulate_series(
             Mass(p, g * (1 + sm * float(rng.normal())), a + sa * float(rng.normal()), r)
             for p, g, a, r in masses
         ]
-        _write(with_masses(rotor, put), truth, check, believed)
+        _write(with_masses(rotor, put), truth, check, believed, force)
         after = solve_recording(str(check))
         archive_result(after, url)
         row = datum_row(

@@ -221,3 +221,17 @@ def test_after_the_alarm_every_answer_s_calibration_interval_covers_the_truth(
     assert off > 10 * p1["uncertainty_g_mm"]
     assert off <= p1["calibration_interval_g_mm"], p1
     assert any("no longer matches its calibration" in w for w in out["warnings"])
+
+
+def test_a_series_never_replaces_runs_without_force(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    (tmp_path / "runs").mkdir()
+    args = ["simulate", "production-drift", "--series", "2", "--out-dir", str(tmp_path / "runs")]
+    assert main([*args, "--archive", url]) == 0
+    capsys.readouterr()
+    assert main([*args, "--archive", url]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "exists already" in err and "--force" in err, err
+    assert main([*args, "--archive", url, "--force"]) == 0

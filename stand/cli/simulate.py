@@ -162,6 +162,7 @@ def _series(args: argparse.Namespace) -> int:
         str(folder),
         url,
         seed=args.seed or 0,
+        force=args.force,
         on_rotor=lambda i: (
             print(f"rotor {i} of {args.series}", file=sys.stderr)
             if i % 10 == 0 or i == args.series
