@@ -47,6 +47,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/core": NUMERIC | CORE,
     "stand/errors.py": set(),
     "stand/units.py": set(),
+    # values a user types, parsed or refused in one line (the CLI's argument types)
+    "stand/typed.py": CORE,
     "stand/__init__.py": set(),
     # drivers at the edge: the protocol, streams, bus, files; never the config or the CLI
     "drivers": NUMERIC | DRIVERS,
@@ -122,7 +124,7 @@ ALLOWED: dict[str, set[str]] = {
     "stand/station/history.py": {"nicegui", "fastapi", "stand.station", "stand.units",
                                  "stand.errors"},
     "stand/cli": NUMERIC | APP | {"stand.cli", "stand.config", "stand.sim", "stand.evaluate",
-                                  "stand.live", "stand.live_session", "stand.report",
+                                  "stand.live", "stand.live_session", "stand.typed", "stand.report",
                                   "stand.report_pages", "stand.units", "stand.printing",
                                   "stand.station", "stand.opcua", "stand.mqtt", "pydantic",
                                   "rich"},
@@ -170,7 +172,7 @@ def test_every_module_imports_only_what_its_layer_allows(path: Path) -> None:
     assert not bad, f"{path.relative_to(ROOT)} imports {bad}"
 
 
-CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel", "stand.cli.parse"}
+CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel"}
 """What a subcommand may import of the CLI: argument handling and formatting, nothing that
 measures (that is the application layer's)."""
 
@@ -184,7 +186,7 @@ def test_no_subcommand_imports_another_cli_module() -> None:
         others = {m for m in mods if m.startswith("stand.cli") and m not in CLI_SHARED}
         assert not others, f"stand/cli/{name}.py imports {sorted(others)}"
     helpers = {p.stem for p in (ROOT / "stand" / "cli").glob("*.py")} - set(SUBCOMMANDS)
-    assert helpers == {"__init__", "__main__", "common", "format", "panel", "parse"}, helpers
+    assert helpers == {"__init__", "__main__", "common", "format", "panel"}, helpers
 
 
 def _from_package_imports(path: Path) -> set[str]:

@@ -6,7 +6,7 @@ import argparse
 from typing import Any
 
 from stand.cli.format import dump_json
-from stand.cli.parse import parse_rpm
+from stand.typed import parse_rpm
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -13,12 +13,12 @@ from stand.cli.common import (
     add_across_speeds_arguments,
     add_live_measure_arguments,
 )
-from stand.cli.parse import parse_rpm
+from stand.typed import parse_rpm
 
 
 def parse_masses(text: str) -> list[tuple[int, float, float, float | None]]:
     """``1:55.5@30,2:-12@200:80``: the masses put on, as ``--add`` takes each."""
-    from stand.cli.parse import parse_mass
+    from stand.typed import parse_mass
 
     return [parse_mass(x) for x in text.split(",")]
 

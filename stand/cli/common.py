@@ -9,8 +9,8 @@ import sys
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from stand.cli.parse import parse_angle, parse_mass, parse_rpm, positive_float
 from stand.errors import UsageError
+from stand.typed import parse_angle, parse_mass, parse_rpm, positive_float
 
 if TYPE_CHECKING:
     pass

@@ -8,7 +8,6 @@ import math
 import numpy as np
 
 from stand.cli.format import dump_json, print_warnings
-from stand.cli.parse import parse_rpm, parse_unbalance
 from stand.config import load_config
 from stand.core import (
     forward,
@@ -19,6 +18,7 @@ from stand.core import (
 )
 from stand.core.inverse import speed_diagnostics
 from stand.errors import UsageError
+from stand.typed import parse_rpm, parse_unbalance
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

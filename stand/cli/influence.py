@@ -11,10 +11,10 @@ from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
-from stand.cli.parse import positive_float
 from stand.config import STRICT
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.result import json_text
+from stand.typed import positive_float
 
 PLANES = 2
 """The planes of the stand's own answer (a run solved through the matrix)."""

@@ -1,7 +1,8 @@
-"""Values typed on the command line: speeds, masses, angles, unbalances, positive numbers.
+"""Values a user types: speeds, masses, angles, unbalances, positive numbers.
 
-Each parser gives one line naming what is wrong (argparse's ``type=``), or the value in
-the units it names; shared by the subcommands as :mod:`stand.cli.common` is.
+Each parser gives the value in the units it names, or one line naming what is wrong
+(raised as argparse's ``ArgumentTypeError``, so a parser is an argument's ``type=``).
+Not part of the CLI's modules: the subcommands parse with them, as a screen could.
 """
 
 from __future__ import annotations
