@@ -11,7 +11,7 @@ Alembic migration, applied when an archive is opened.
 from __future__ import annotations
 
 import datetime as dt
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -124,48 +124,58 @@ class Archive:
         except SQLAlchemyError as exc:
             raise ArchiveError(_reason(exc), url=self.shown) from exc
 
-    def add(self, row: dict[str, Any], plane_rows: list[dict[str, Any]]) -> int:
-        """Write one run and its planes in one transaction; the run's id.  A run already
-        archived (the same file digest) is not written again: its id is returned."""
+    def _insert_once(
+        self,
+        table: Any,
+        key: str,
+        row: dict[str, Any],
+        what: str,
+        then: Callable[[Any, int], None] | None = None,
+    ) -> int:
+        """Insert ``row`` into ``table`` in one transaction (``then(conn, id)`` in it too),
+        unless a row with the same ``key`` is there already (also when another writer put it
+        there meanwhile: the unique key's violation); the row's id."""
         import sqlalchemy as sa
         from sqlalchemy.exc import IntegrityError
 
+        def existing(conn: Any) -> Any:
+            return conn.execute(sa.select(table.c.id).where(table.c[key] == row[key])).scalar()
+
         try:
             with self.engine.begin() as conn:
-                found = conn.execute(
-                    sa.select(runs.c.id).where(runs.c.file_sha256 == row["file_sha256"])
-                ).scalar()
+                found = existing(conn)
                 if found is not None:
                     return int(found)
                 stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-                new = conn.execute(runs.insert().values(**row, archived_at=stamp))
-                run_id = new.inserted_primary_key[0]  # type: ignore[index]
-                conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
-                return int(run_id)
-        except IntegrityError:  # another stand archived the same run file meanwhile
-            found = self.run_id(row["file_sha256"])
+                new = conn.execute(table.insert().values(**row, archived_at=stamp))
+                new_id = int(new.inserted_primary_key[0])  # type: ignore[index]
+                if then is not None:
+                    then(conn, new_id)
+                return new_id
+        except IntegrityError:  # another stand wrote the same one meanwhile
+            with self.transaction() as conn:
+                found = existing(conn)
             if found is None:
-                raise ArchiveError("the run could not be written", url=self.shown) from None
-            return found
+                raise ArchiveError(f"the {what} could not be written", url=self.shown) from None
+            return int(found)
         except sa.exc.SQLAlchemyError as exc:
             raise ArchiveError(_reason(exc), url=self.shown) from exc
+
+    def add(self, row: dict[str, Any], plane_rows: list[dict[str, Any]]) -> int:
+        """Write one run and its planes in one transaction; the run's id.  A run already
+        archived (the same file digest) is not written again: its id is returned."""
+
+        def with_planes(conn: Any, run_id: int) -> None:
+            conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
+
+        return self._insert_once(runs, "file_sha256", row, "run", with_planes)
 
     def add_correction(self, row: dict[str, Any]) -> int:
         """Write one correction datum (:mod:`stand.health`); a check already stored (the
         same digest) is not written again: its id is returned."""
-        import sqlalchemy as sa
-
         from stand.archive.schema import corrections
 
-        with self.transaction() as conn:
-            found = conn.execute(
-                sa.select(corrections.c.id).where(corrections.c.check_sha256 == row["check_sha256"])
-            ).scalar()
-            if found is not None:
-                return int(found)
-            stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-            new = conn.execute(corrections.insert().values(**row, archived_at=stamp))
-            return int(new.inserted_primary_key[0])
+        return self._insert_once(corrections, "check_sha256", row, "calibration datum")
 
     def correction_rows(self, stand: str | None = None, rotor_type: str | None = None) -> list[Any]:
         """The correction data, oldest first, of a stand and a rotor type (None: any)."""
