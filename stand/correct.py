@@ -3,7 +3,8 @@
 From the measured unbalance and the config's ``[correction]`` table
 (:mod:`stand.config_correction`) to one :class:`stand.core.balance.Correction` per
 plane; the arithmetic is the core's (:mod:`stand.core.balance`,
-:mod:`stand.core.holes`).  Used by :func:`stand.pipeline.build_result` alone.
+:mod:`stand.core.holes`).  Used by :func:`stand.pipeline.build_result`, and for the
+weights of the N-plane answers (:mod:`stand.field`, :mod:`stand.speeds`).
 """
 
 from __future__ import annotations
@@ -55,6 +56,15 @@ def plane_correction(
             density_kg_m3=c.density_kg_m3,
         )
         return Correction((), True, left, slot=slot)
+    return weights_correction(U_kg_m, R_m, c)
+
+
+def weights_correction(U_kg_m: complex, R_m: float, c: Any | None) -> Correction:
+    """The correction of ``U_kg_m`` [kg m] at ``R_m`` [m] in weights, as the
+    ``[correction]`` table ``c`` says (remove or add, positions, stock weights); without a
+    table (None), masses to add at any angle."""
+    if c is None:
+        return correction(U_kg_m, R_m, remove=False)
     return correction(
         U_kg_m,
         R_m,

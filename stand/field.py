@@ -135,21 +135,11 @@ def _polar(z: complex, typed: bool) -> list[float]:
 def _plane_json(result: FieldResult, j: int, cfg: Any) -> dict[str, Any]:
     """Plane ``j``: the weights to put on as the config's ``[correction]`` says (else masses
     to add at any angle), what it cancels, Darlow's factor, the cap."""
-    from stand.core.balance import correction
     from stand.core.model import unbalance_to_polar
-    from stand.correct import weight_entries
+    from stand.correct import weight_entries, weights_correction
 
     sol, U, R = result.solution, result.U_kg_m[j], result.radius_m[j]
-    c = None if cfg is None else cfg.correction
-    corr = correction(
-        complex(U),
-        R,
-        remove=c is not None and c.mode == "remove",
-        positions=0 if c is None else c.positions,
-        position0_deg=0.0 if c is None else c.position0_deg,
-        steps_kg=[] if c is None else [w * 1e-3 for w in c.weights_g],
-        step_kg=0.0 if c is None else c.weight_step_g * 1e-3,
-    )
+    corr = weights_correction(complex(U), R, None if cfg is None else cfg.correction)
     (q,), (phi,) = unbalance_to_polar([U])
     return {
         "plane": j + 1,

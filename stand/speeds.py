@@ -197,24 +197,15 @@ def _readings(
 
 def _plane_corrections(cfg: Any, sol: MultiPlaneSolution) -> tuple[PlaneCorrection, ...]:
     """Each plane's correction as the config's ``[correction]`` makes it (weights, stock)."""
-    from stand.core.balance import correction
+    from stand.correct import weights_correction
 
-    c = cfg.correction
     return tuple(
         PlaneCorrection(
             plane=j + 1,
             position_m=pl.position_m,
             radius_m=pl.radius_m,
             W_kg_m=complex(sol.W[j]),
-            correction=correction(
-                -complex(sol.W[j]),
-                pl.radius_m,
-                remove=c.mode == "remove",
-                positions=c.positions,
-                position0_deg=c.position0_deg,
-                steps_kg=[m * 1e-3 for m in c.weights_g],
-                step_kg=c.weight_step_g * 1e-3,
-            ),
+            correction=weights_correction(-complex(sol.W[j]), pl.radius_m, cfg.correction),
             dependent=j in sol.dependent,
             at_limit=sol.at_cap[j],
         )
