@@ -71,11 +71,11 @@ def simulate_series(
 ) -> int:
     """Simulate ``count`` rotors (see the module docstring); the data stored.  A run file
     already in ``out_dir`` is refused before the first rotor (replaced with ``force``)."""
-    from stand.archive import Archive, archive_result, file_digest
+    from stand.archive import Archive, add_result, file_digest
     from stand.config import config_toml
     from stand.errors import UsageError
     from stand.health import datum_row
-    from stand.recordings import correction_masses, solve_recording
+    from stand.recordings import result_masses, solve_recording
     from stand.sim import Mass, load_scene, with_masses
 
     scene, params, _ = load_scene(scene_name)
@@ -89,40 +89,40 @@ def simulate_series(
             f"{there[0]} exists already (a series there before): another --out-dir, or --force"
         )
     stored = 0
-    for i in range(1, count + 1):
-        truth = params
-        if drift is not None:
-            truth = dataclasses.replace(
-                params,
-                **{n: getattr(params, n) * drift.factor(n, i) for n in ("C1", "C2", "M1", "M2")},
+    with Archive(url) as archive:  # one archive opened for the whole series
+        for i in range(1, count + 1):
+            truth = params
+            if drift is not None:
+                factors = {
+                    n: getattr(params, n) * drift.factor(n, i) for n in ("C1", "C2", "M1", "M2")
+                }
+                truth = dataclasses.replace(params, **factors)
+            rotor, serial = _rotor(scene, rng, i), f"S-{i:05d}"
+            first, check = folder / f"{serial}-a.h5", folder / f"{serial}-b.h5"
+            _write(rotor, truth, first, believed, force)
+            before = solve_recording(str(first))
+            add_result(archive, before)
+            masses = result_masses(before)
+            sm = 0.0 if place is None else place.mass_pct / 100
+            sa = 0.0 if place is None else place.angle_deg
+            put = [
+                Mass(p, g * (1 + sm * float(rng.normal())), a + sa * float(rng.normal()), r)
+                for p, g, a, r in masses
+            ]
+            _write(with_masses(rotor, put), truth, check, believed, force)
+            after = solve_recording(str(check))
+            add_result(archive, after)
+            row = datum_row(
+                before,
+                after,
+                masses,
+                initial_sha256=file_digest(first),
+                check_sha256=file_digest(check),
+                confirmed_by="simulated operator",
+                applied="as shown",
             )
-        rotor, serial = _rotor(scene, rng, i), f"S-{i:05d}"
-        first, check = folder / f"{serial}-a.h5", folder / f"{serial}-b.h5"
-        _write(rotor, truth, first, believed, force)
-        before = solve_recording(str(first))
-        archive_result(before, url)
-        masses = correction_masses(str(first))
-        sm = 0.0 if place is None else place.mass_pct / 100
-        sa = 0.0 if place is None else place.angle_deg
-        put = [
-            Mass(p, g * (1 + sm * float(rng.normal())), a + sa * float(rng.normal()), r)
-            for p, g, a, r in masses
-        ]
-        _write(with_masses(rotor, put), truth, check, believed, force)
-        after = solve_recording(str(check))
-        archive_result(after, url)
-        row = datum_row(
-            before,
-            after,
-            masses,
-            initial_sha256=file_digest(first),
-            check_sha256=file_digest(check),
-            confirmed_by="simulated operator",
-            applied="as shown",
-        )
-        with Archive(url) as a:
-            a.add_correction(row)
-        stored += 1
-        if on_rotor is not None:
-            on_rotor(i)
+            archive.add_correction(row)
+            stored += 1
+            if on_rotor is not None:
+                on_rotor(i)
     return stored

@@ -186,7 +186,11 @@ def correction_masses(run: str, config: str | None = None) -> list[tuple[int, fl
     against the direction of rotation; a drilled hole or a slot as the metal it removes
     at its centre of mass's radius (not at the radius the drill enters).
     """
-    result = solve_recording(run, config)
+    return result_masses(solve_recording(run, config))
+
+
+def result_masses(result: Result) -> list[tuple[int, float, float, float]]:
+    """:func:`correction_masses` of a result already solved."""
     return [
         (i + 1, grams, angle, radius)
         for i, corr in enumerate(result.corrections)

@@ -112,20 +112,25 @@ def rows(
 
 def archive_result(result: Result, url: str, *, config: str | None = None) -> int:
     """Archive one run's result (and the run it checks, if not archived yet); its id."""
+    with Archive(url) as archive:
+        return add_result(archive, result, config=config)
+
+
+def add_result(archive: Archive, result: Result, *, config: str | None = None) -> int:
+    """:func:`archive_result` into an archive already open (a series of many runs)."""
     run_file = result.provenance.run_file
     if not run_file:
         raise ValueError("only a recorded run is archived")
-    with Archive(url) as archive:
-        checks = None
-        if result.check is not None:
-            prev = result.check.previous_run
-            checks = archive.run_id(file_digest(prev))
-            if checks is None:
-                from stand.recordings import solve_recording
+    checks = None
+    if result.check is not None:
+        prev = result.check.previous_run
+        checks = archive.run_id(file_digest(prev))
+        if checks is None:
+            from stand.recordings import solve_recording
 
-                before = solve_recording(prev, config)
-                checks = archive.add(*rows(before, file_digest(prev), None))
-        return archive.add(*rows(result, file_digest(run_file), checks))
+            before = solve_recording(prev, config)
+            checks = archive.add(*rows(before, file_digest(prev), None))
+    return archive.add(*rows(result, file_digest(run_file), checks))
 
 
 def result_of(row: Any) -> dict[str, Any]:

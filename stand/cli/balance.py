@@ -146,7 +146,7 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
     from stand.archive import Archive, file_digest
     from stand.cli.common import archive_url
     from stand.health import datum_row
-    from stand.recordings import correction_masses, solve_recording
+    from stand.recordings import result_masses, solve_recording
 
     if not (args.applied or args.applied_masses):
         print(
@@ -166,7 +166,7 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
             (p, g, a, R[p - 1] if r is None else r * 1e-3) for p, g, a, r in args.applied_masses
         ]
     else:
-        masses = correction_masses(args.check)
+        masses = result_masses(before)
     row = datum_row(
         before,
         result,

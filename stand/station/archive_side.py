@@ -29,12 +29,12 @@ class ArchiveSide:
     _printing: threading.Lock
     _state: Snapshot
 
-    def _datum(self, before: Any, result: Any, config: Path) -> str:
+    def _datum(self, before: Any, result: Any) -> str:
         """A check after a confirmed correction into the archive as a calibration datum;
         what was done, for the screen."""
         from stand.archive import Archive, file_digest
         from stand.health import datum_row
-        from stand.recordings import correction_masses
+        from stand.recordings import result_masses
 
         prev = before.provenance.run_file
         if self._state.confirmed_run != prev:
@@ -43,7 +43,7 @@ class ArchiveSide:
             row = datum_row(
                 before,
                 result,
-                correction_masses(prev, str(config)),
+                result_masses(before),
                 initial_sha256=file_digest(prev),
                 check_sha256=file_digest(result.provenance.run_file),
                 confirmed_by=self._state.job.operator,

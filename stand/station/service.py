@@ -266,7 +266,7 @@ class Station(ArchiveSide):
         self._set(waiting="writing the report and archiving the run")
         run_id, notes = self._file(result, config)
         if kind == "check" and run_id is not None:
-            notes = (*notes, self._datum(before, result, config))
+            notes = (*notes, self._datum(before, result))
         self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
