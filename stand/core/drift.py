@@ -112,14 +112,8 @@ def response(
 
 
 def jacobian(p: StandParameters, d: Datum, names: Sequence[str] = PARAMETERS) -> FloatArray:
-    """``d [Re, Im] (F dU) / d theta`` (4 x len(names)), central differences (1e-6)."""
-    h = 1e-6
-    cols = []
-    for name in names:
-        up = response(p, d.omega_rad_s, d.dU_kg_m, {name: h})
-        down = response(p, d.omega_rad_s, d.dU_kg_m, {name: -h})
-        cols.append(_real((up - down) / (2 * h)))
-    return np.column_stack(cols)
+    """``d [Re, Im] (F dU) / d theta`` (4 x len(names)) at the calibration itself."""
+    return _columns(p, d, names, dict.fromkeys(names, 0.0))
 
 
 def covariance(p: StandParameters, d: Datum, scatter_rel: float, scatter_rad: float) -> FloatArray:
@@ -280,7 +274,8 @@ def fit_many(
 def _columns(
     p: StandParameters, d: Datum, names: Sequence[str], at: dict[str, float]
 ) -> FloatArray:
-    """The response's derivative with respect to each of ``names`` at ``at``: 4 x n."""
+    """The response's derivative with respect to each of ``names`` at ``at``: 4 x n, by
+    central differences (1e-6)."""
     h = 1e-6
     cols = []
     for n in names:
