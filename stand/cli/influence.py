@@ -13,6 +13,7 @@ from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
 from stand.config import STRICT
 from stand.errors import ConfigError, ModelError, UsageError
+from stand.matrix import Pair
 from stand.result import json_text
 from stand.typed import positive_float
 
@@ -34,14 +35,11 @@ class RunEntry(BaseModel):
     """One run: readings typed in (``sensors``) or a recorded run (``file``)."""
 
     model_config = STRICT
-    sensors: list[Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]] | None = None
+    sensors: list[Pair] | None = None
     file: str | Annotated[list[str], Field(min_length=1)] | None = None
     speeds_rpm: list[PositiveFloat] | None = None
     trial: TrialTable | None = None
     trial_left_on: bool = False
-
-
-Pair = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
 
 
 class RunsFile(BaseModel):
