@@ -193,32 +193,44 @@ def angle_at(
     knots: tuple[FloatArray, FloatArray, FloatArray], s: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
     """Shaft angle [rad, from the first edge] and speed [rad per sample] at positions ``s``
-    (increasing) between the first and the last knot (cubic Hermite, :func:`shaft_angle`)."""
+    (increasing) between the first and the last knot (cubic Hermite, :func:`shaft_angle`).
+
+    Only the knots around ``s`` are touched, and each interval's cubic is
+    spread over its samples by :func:`numpy.repeat`: the cost is that of ``s``,
+    whatever the length of the run the knots cover.
+    """
     x, y, m = knots
-    # the interval of each sample: s increases, so count the inner knots passed
-    passed = np.bincount(np.searchsorted(s, x[1:-1], side="right"), minlength=len(s) + 1)
-    k = np.minimum(np.cumsum(passed[: len(s)]), len(x) - 2)
-    h = np.diff(x)
-    hm0, hm1 = h * m[:-1], h * m[1:]
-    dy = np.diff(y)
+    n = len(s)
+    if n == 0:
+        return np.zeros(0), np.zeros(0)
+    inner = x[1:-1]
+    # interval k (between knots k and k + 1) holds the samples past k inner knots
+    k0, k1 = np.minimum(np.searchsorted(inner, [s[0], s[-1]], side="left"), len(x) - 2)
+    cuts = np.searchsorted(s, x[k0 + 1 : k1 + 1], side="right")
+    counts = np.diff(cuts, prepend=0, append=n)
+    xk, yk, mk = x[k0 : k1 + 2], y[k0 : k1 + 2], m[k0 : k1 + 2]
+    h = np.diff(xk)
+    hm0, hm1 = h * mk[:-1], h * mk[1:]
+    dy = np.diff(yk)
     c2 = 3 * dy - 2 * hm0 - hm1  # the cubic per interval: y + hm0 t + c2 t^2 + c3 t^3
     c3 = hm0 + hm1 - 2 * dy
-    hk = h[k]
-    t = s - x[k]
+    hk = np.repeat(h, counts)
+    t = s - np.repeat(xk[:-1], counts)
     t /= hk
-    a1, a2, a3 = hm0[k], c2[k], c3[k]
+    a1, a2, a3 = np.repeat(hm0, counts), np.repeat(c2, counts), np.repeat(c3, counts)
     theta = a3 * t
     theta += a2
     theta *= t
     theta += a1
-    dtheta = a3 * (3 * t)
-    dtheta += 2 * a2
-    dtheta *= t
-    dtheta += a1
-    dtheta /= hk
+    a3 *= 3 * t  # the derivative, in place of the coefficients it no longer needs
+    a2 *= 2
+    a3 += a2
+    a3 *= t
+    a3 += a1
+    a3 /= hk
     theta *= t
-    theta += y[k]
-    return theta, dtheta
+    theta += np.repeat(yk[:-1], counts)
+    return theta, a3
 
 
 @dataclass(frozen=True)
