@@ -19,6 +19,7 @@ from stand.drivers.protocol import (
     SAMPLES_PER_FRAME,
     STATUS_FLAG_NAMES,
     SUPPORT_NODES,
+    WRAP,
     Decoded,
 )
 from stand.drivers.streams import NodeStream
@@ -32,7 +33,7 @@ DROPOUT_TOLERANCE = 0.1
 """... unless ``seq`` advanced as the host time that passed predicts (within 10 %
 and 20 frames): that is a bus dropout (lost frames), not a restart."""
 
-_WRAP = 65536
+_WRAP = WRAP
 
 
 EDGE_SLACK = 0.25

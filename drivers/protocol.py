@@ -47,6 +47,8 @@ INVALID_COUNT = -32768
 """The count that marks an invalid sample (sensor fault, overrange): missing data."""
 FRAC_SCALE = 65536
 """MARK ``frac`` is in 1/65536 of a sample period."""
+WRAP = 65536
+"""``seq`` and ``rev`` are u16 counters: they wrap here."""
 
 # Frame flags (our own bit set, kept per frame in recordings).
 FLAG_EXTENDED = 1

@@ -32,7 +32,8 @@ are carried out step by step.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -310,3 +311,34 @@ class StreamBuilder:
         """The node streams of every frame added so far (the blocks are not joined whole)."""
         t_s = np.concatenate(self._times) if self._times else np.zeros(0)
         return rebuild_decoded(self._parts, t_s, strict_status=strict_status)
+
+    def tail(self, from_frame: int) -> RunStreams:
+        """The node streams of the frames from ``from_frame`` (arrival order) on.
+
+        Costs what the tail holds, not the run: each part is cut by a binary
+        search.  A tail is its own run: its sample indices count from its first
+        frame's ``seq``, and a node whose STATUS is older than the tail has no
+        scale in it (never an error here).
+        """
+        from_frame = max(int(from_frame), 0)
+        parts, times, at = [], [], 0
+        for part, t in zip(self._parts, self._times, strict=True):
+            if at + len(t) > from_frame:
+                parts.append(shift_decoded(_records_from(part, from_frame), -from_frame))
+                times.append(t[max(from_frame - at, 0) :])
+            at += len(t)
+        t_s = np.concatenate(times) if times else np.zeros(0)
+        return rebuild_decoded(parts, t_s, strict_status=False)
+
+
+def _records_from(dec: Decoded, frame: int) -> Decoded:
+    """The records of ``dec`` from arrival ``frame`` on (``frame`` indices ascend in a part)."""
+
+    def cut(records: Any) -> Any:
+        k = int(np.searchsorted(records.frame, frame))
+        if k == 0:
+            return records
+        return type(records)(**{f.name: getattr(records, f.name)[k:] for f in fields(records)})
+
+    bad = tuple(b for b in dec.bad if b.frame >= frame)
+    return Decoded(cut(dec.samples), cut(dec.status), cut(dec.marks), 0, 0, bad)

@@ -32,7 +32,7 @@ from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
-from stand.passes import node_phasor
+from stand.passes import NodeFit, node_phasor
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 
@@ -81,6 +81,9 @@ class Measurement:
     tooling: Any = None
     """The tooling compensation subtracted from the unbalance, if any
     (:class:`stand.tooling.Tooling`)."""
+    fits: tuple[NodeFit, ...] | None = field(default=None, repr=False, compare=False)
+    """What a live update extends, node 1 then node 2 (:mod:`stand.live_fit`); None when
+    the fit was tapered."""
 
 
 NONLINEAR_WIDEN = 1.5
@@ -185,19 +188,30 @@ def _support(
     gate: bool,
     sensor: tuple[float, float],
     bad: str,
-) -> tuple[Phasor, Window, list[Diagnostic]]:
+) -> tuple[Phasor, Window, list[Diagnostic], NodeFit | None]:
     """One support's 1x phasor from its node's stream: gated and fitted
-    (:func:`stand.passes.node_phasor`), the sensor's gain and delay taken out, the blocks'
-    scatter and a strong 3x judged; its window and its warnings."""
-    warnings: list[Diagnostic] = []
+    (:func:`stand.passes.node_phasor`), then judged (:func:`judge_support`); its window, its
+    warnings and what a live update extends."""
     try:
         check_saturation(s)
-        ph, window, blocks, notes = node_phasor(s, gamma, taper, gate)
+        ph, window, blocks, notes, fit = node_phasor(s, gamma, taper, gate)
     except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)
         more = bad if "no samples" in str(exc) or "no reference edges" in str(exc) else ""
         raise type(exc)(f"node {node}: {exc}{more}") from None
-    for note in notes:
-        warnings.append(Diagnostic("gate", f"node {node}: {note}"))
+    ratio = block_scatter(blocks, ph.noise_m_s2)
+    ph, warnings = judge_support(node, ph, window, ratio, sensor)
+    if fit is not None:
+        fit = replace(fit, scatter=ratio)
+    return ph, window, [Diagnostic("gate", f"node {node}: {n}") for n in notes] + warnings, fit
+
+
+def judge_support(
+    node: int, ph: Phasor, window: Window, ratio: float, sensor: tuple[float, float]
+) -> tuple[Phasor, list[Diagnostic]]:
+    """A support's raw phasor with the sensor's gain and delay taken out, widened by the
+    blocks' scatter ``ratio`` (over the noise's), and the warnings of a short window or a
+    strong 3x."""
+    warnings: list[Diagnostic] = []
     if window.revolutions < MIN_REVS:
         warnings.append(
             Diagnostic(
@@ -213,7 +227,6 @@ def _support(
         turn = sensor_response(gain, delay, ph.omega_ref_rad_s)
         R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
         ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
-    ratio = block_scatter(blocks, ph.noise_m_s2)
     if ratio > SCATTER_LIMIT:
         warnings.append(
             Diagnostic(
@@ -237,14 +250,16 @@ def _support(
                 odd,
             )
         )
-    return ph, window, warnings
+    return ph, warnings
 
 
-def _check_clocks(w1: float, w2: float, streams: RunStreams, clock_tolerance: float) -> None:
+def _check_clocks(
+    w1: float, w2: float, rates_hz: tuple[float, ...], clock_tolerance: float
+) -> None:
     """Both nodes see one shaft: the speeds they measure [rad/s] agree within
     ``clock_tolerance``, else a node's sample rate or clock is wrong (refused)."""
     if abs(w1 / w2 - 1) > clock_tolerance:
-        rates = " and ".join(f"{streams.nodes[n].rate_hz:g}" for n in SUPPORT_NODES)
+        rates = " and ".join(f"{r:g}" for r in rates_hz)
         raise SensorFaultError(
             f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
             f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
@@ -284,6 +299,7 @@ def measure(
     warnings: list[Diagnostic] = []
     supports: list[Phasor] = []
     windows: list[Window] = []
+    fits: list[NodeFit | None] = []
     gamma = math.radians(reference_angle_deg)
     # frames left out as malformed explain a node with nothing usable: say so beside it
     bad = next((f" ({w.message})" for w in streams.warnings if w.code == "bad_frames"), "")
@@ -295,14 +311,35 @@ def measure(
                 f"support), got {sorted(streams.nodes) or 'none'}{bad}"
             )
         k = node - 1
-        ph, window, notes = _support(
+        ph, window, notes, fit = _support(
             node, s, gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad
         )
         warnings.extend(notes)
         supports.append(ph)
         windows.append(window)
+        fits.append(fit)
+    rates = tuple(float(streams.nodes[n].rate_hz or 0.0) for n in SUPPORT_NODES)
+    m = combine(supports, windows, warnings, p, rates, clock_tolerance, influence, beam)
+    done = [f for f in fits if f is not None]
+    return replace(m, fits=tuple(done) if len(done) == len(fits) else None)
+
+
+def combine(
+    supports: list[Phasor],
+    windows: list[Window],
+    warnings: list[Diagnostic],
+    p: StandParameters,
+    rates_hz: tuple[float, ...],
+    clock_tolerance: float = CLOCK_TOLERANCE,
+    influence: InfluenceMap | None = None,
+    beam: BeamRotor | None = None,
+) -> Measurement:
+    """Both supports' judged phasors (node 1, node 2) to the measurement: their clocks
+    compared, the edges' jitter added, inverted (:func:`measure` says how), each plane's
+    95 % radius, and the supports' linearity judged from their 3x and 5x."""
+    warnings = list(warnings)
     w1, w2 = supports[0].omega_ref_rad_s, supports[1].omega_ref_rad_s
-    _check_clocks(w1, w2, streams, clock_tolerance)
+    _check_clocks(w1, w2, rates_hz, clock_tolerance)
     omega = 0.5 * (w1 + w2)
     plain = supports  # their covariance is the noise's alone: the 3x test's weights
     supports, cov, jitter_notes = _with_edge_jitter(supports, windows)

@@ -30,7 +30,7 @@ from stand.core.dsp import (
 )
 from stand.core.fitsums import (
     WindowSums,
-    base_columns,
+    base_rows,
     block_sums,
     model_transform,
     model_values,
@@ -48,6 +48,33 @@ from stand.gate import (
 
 CHUNK = 1 << 16
 """Samples per chunk (about): a chunk holds whole blocks of revolutions."""
+
+
+@dataclass(frozen=True)
+class NodeFit:
+    """What a live update needs to extend one node's untapered fit (:mod:`stand.live_fit`).
+
+    ``sums`` are the fit's normal equations over the window, which ends at the
+    edge whose revolution counter reads ``last_rev``; ``period`` is the
+    window's median revolution [samples] (the new revolutions must keep to it);
+    the noise (``sigma2``, per sample), the 5x and the residual's rms carry
+    over from the last full pass, as does ``scatter`` (the blocks' scatter
+    ratio, set by :func:`stand.measure.measure`).
+    """
+
+    gamma: float
+    w0: float
+    sums: WindowSums
+    last_rev: int
+    period: float
+    window: Window
+    span_rad: float
+    sigma2: float
+    h5: complex
+    residual_m_s2: float
+    rate_hz: float
+    scale_m_s2: float
+    scatter: float = 0.0
 
 
 class _NodeRun:
@@ -130,7 +157,7 @@ def _first_pass(
                 c[:upto], s[:upto], a[:upto], starts[j0:full] - i0, full - j0
             )
         sums = WindowSums.zero()
-        sums.add(base_columns(c, s, w, w0), a, w)
+        sums.add(base_rows(c, s, w, w0), a, w)
         chunks.append((j0, j1, sums))
         j0 = j1
     return blocks, chunks, kept
@@ -148,7 +175,7 @@ def _window_sums(
         elif j1 > first:  # the window starts inside this chunk: redo its part
             i1 = int(starts[j1]) if j1 < len(starts) else end
             _, w, a, c, s = run.chunk(int(starts[first]), i1)
-            total.add(base_columns(c, s, w, w0), a, w)
+            total.add(base_rows(c, s, w, w0), a, w)
     return total
 
 
@@ -194,7 +221,7 @@ def _tapered_normal_equations(
     for k0 in range(i0, i1, CHUNK):
         k1 = min(k0 + CHUNK, i1)
         th, w, a, c, s = run.chunk(k0, k1)
-        X = base_columns(c, s, w, w0) @ T
+        X = (T.T @ base_rows(c, s, w, w0)).T
         wt = np.sin(math.pi * (th - th0) / span) ** 2
         Xw = X * wt[:, None]
         XtWX += X.T @ Xw
@@ -233,13 +260,50 @@ def _harmonics(coef: np.ndarray, sloped: bool, w_ref: float, h5: complex) -> dic
     return out
 
 
+def _phasor(
+    coef: np.ndarray, cov_coef: np.ndarray, sloped: bool, w_ref: float, rate_hz: float,
+    n: int, span: float, sigma2: float, residual: float, h5: complex, noise_cost: float,
+) -> Phasor:  # fmt: skip
+    """The phasor of a fit's coefficients and their covariance (``w_ref`` in radians per
+    sample, ``span`` the window's shaft angle [rad], ``sigma2`` the noise per sample)."""
+    cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
+    return Phasor(
+        A_m_s2=complex(coef[0], -coef[1]),
+        cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
+        harmonics_m_s2=_harmonics(coef, sloped, w_ref, h5),
+        omega_ref_rad_s=w_ref * rate_hz,
+        samples=n,
+        revolutions=span / (2 * math.pi),
+        noise_m_s2=math.sqrt(sigma2),
+        residual_m_s2=residual,
+        noise_cost=noise_cost,
+        noise_dof=4.0 * SIDE_BANDS,
+    )
+
+
+def sums_phasor(fit: NodeFit) -> Phasor:
+    """The untapered phasor of a :class:`NodeFit`'s sums (its noise carried over)."""
+    sums = fit.sums
+    w_ref = sums.w_sum / sums.n
+    sloped = (sums.w_max - sums.w_min) / w_ref > SPEED_SPAN_SLOPE
+    T = model_transform(fit.w0, w_ref, sloped)
+    XtWX = T.T @ sums.G @ T
+    coef = np.linalg.solve(XtWX, T.T @ sums.Ba)
+    cov_coef = fit.sigma2 * np.linalg.inv(XtWX)
+    return _phasor(
+        coef, cov_coef, sloped, w_ref, fit.rate_hz, sums.n, fit.span_rad, fit.sigma2,
+        fit.residual_m_s2, fit.h5, 1.0,
+    )  # fmt: skip
+
+
 def node_phasor(
     s: NodeStream, gamma: float, taper: bool, gate: bool
-) -> tuple[Phasor, Window, np.ndarray, list[str]]:
+) -> tuple[Phasor, Window, np.ndarray, list[str], NodeFit | None]:
     """One node's 1x phasor over its steady, settled window (in chunks).
 
     Returns the phasor, the window, the block sums over the window (for the
-    block check) and the gate's notes.
+    block check), the gate's notes, and what a live update extends (None when
+    tapered: a taper's weights change with the window's length).
     """
     run = _NodeRun(s, gamma)
     pos, rev = run.pos, run.rev
@@ -283,18 +347,17 @@ def node_phasor(
     sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
-    cc, cs, ss = cov_coef[0, 0], cov_coef[0, 1], cov_coef[1, 1]
-    harmonics = _harmonics(coef, sloped, w_ref, 2 * h5 / wt1)
-    ph = Phasor(
-        A_m_s2=complex(coef[0], -coef[1]),
-        cov_m2_s4=np.array([[cc, -cs], [-cs, ss]]),
-        harmonics_m_s2=harmonics,
-        omega_ref_rad_s=w_ref * float(s.rate_hz or 0.0),
-        samples=sums.n,
-        revolutions=span / (2 * math.pi),
-        noise_m_s2=math.sqrt(sigma2),
-        residual_m_s2=math.sqrt(max(rr, 0.0) / sums.n),
-        noise_cost=wt2 * sums.n / wt1**2 if tapered else 1.0,
-        noise_dof=4.0 * SIDE_BANDS,
-    )
-    return ph, window, blocks[first:], notes
+    rate = float(s.rate_hz or 0.0)
+    residual = math.sqrt(max(rr, 0.0) / sums.n)
+    ph = _phasor(
+        coef, cov_coef, sloped, w_ref, rate, sums.n, span, sigma2, residual, 2 * h5 / wt1,
+        wt2 * sums.n / wt1**2 if tapered else 1.0,
+    )  # fmt: skip
+    fit = None
+    if not tapered:
+        scale = float(s.scale_m_s2[-1]) if s.scale_m_s2 is not None else 0.0
+        fit = NodeFit(
+            gamma, w0, sums.copy(), int(rev[b]), float(np.median(per_rev)), window, span,
+            sigma2, 2 * h5 / wt1, residual, rate, scale,
+        )  # fmt: skip
+    return ph, window, blocks[first:], notes, fit

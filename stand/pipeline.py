@@ -288,6 +288,27 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
         influence=None if options.matrix is None else options.matrix.imap,
         beam=cfg.rotor.beam(),
     )  # fmt: skip
+    return _finish(m, cfg, params, options)
+
+
+def remeasure_streams(
+    prev: Any, tails: Any, cfg: Any, params: StandParameters, options: SolveOptions
+) -> Any:
+    """:func:`measure_streams` of a live run from its last measurement ``prev`` and the
+    streams of its last frames (:func:`stand.live_fit.remeasure`); None when a full pass
+    is due."""
+    from stand.live_fit import remeasure
+
+    m = remeasure(
+        prev, tails, params, **cfg.measure_options(),
+        influence=None if options.matrix is None else options.matrix.imap,
+        beam=cfg.rotor.beam(),
+    )  # fmt: skip
+    return None if m is None else _finish(m, cfg, params, options)
+
+
+def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) -> Any:
+    """The config's notes on a measurement, and its tooling taken out."""
     flexible = cfg.rotor.shaft is not None and options.matrix is None
     notes = [None if flexible else rigid_note(cfg, params, m.omega_rad_s)]
     if options.matrix is not None:

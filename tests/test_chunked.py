@@ -62,7 +62,7 @@ def test_chunked_equals_all_at_once(
 @pytest.mark.parametrize("first", [0, 1, 3, 7, 12])
 def test_a_window_starting_inside_a_chunk_sums_exactly_its_samples(first: int) -> None:
     """Chunks of about 5,000 samples hold two blocks: block ``first`` may start inside one."""
-    from stand.core.fitsums import WindowSums, base_columns
+    from stand.core.fitsums import WindowSums, base_rows
 
     streams, _ = _streams("demo")
     run = passes._NodeRun(streams.nodes[1], 0.0)  # type: ignore[attr-defined]
@@ -81,7 +81,7 @@ def test_a_window_starting_inside_a_chunk_sums_exactly_its_samples(first: int) -
     got = passes._window_sums(run, chunks, starts, end, first, w0)
     want = WindowSums.zero()
     _, w, a, c, s = run.chunk(int(starts[first]), end)
-    want.add(base_columns(c, s, w, w0), a, w)
+    want.add(base_rows(c, s, w, w0), a, w)
     assert got.n == want.n and got.w_min == want.w_min and got.w_max == want.w_max
     # sums of oscillating terms cancel to far below their parts: compare on the matrix's scale
     assert np.allclose(got.G, want.G, rtol=0, atol=1e-12 * np.abs(want.G).max())

@@ -12,7 +12,8 @@ a chunk of temporaries:
   (``c, s = cos, sin theta``; ``c2 ... s3`` the 2x and 3x): with
   ``k = w0 / w_ref``, ``g c = k^2 P c`` and ``g delta c = k^3 (P + Q) c -
   k^2 P c``.  So the normal equations of any window are ``T' (B'B) T`` and
-  ``T' B'a`` (:func:`model_transform`), whatever ``w_ref`` the window has.
+  ``T' B'a`` (:func:`model_transform`; :func:`base_rows` gives ``B'``), whatever
+  ``w_ref`` the window has.
 * **Block sums** of ``cos, sin, 1`` per block of whole revolutions give the
   gate's and the block check's fits (:func:`block_sums`).
 * **Side bands** need the fitted coefficients, so they take a second pass
@@ -39,24 +40,33 @@ N_BASE = 9
 """Base columns: P c, P s, 1, Q c, Q s, c2, s2, c3, s3."""
 
 
-def base_columns(c: FloatArray, s: FloatArray, w: FloatArray, w0: float) -> FloatArray:
-    """The base columns of samples with ``cos, sin theta = c, s`` and speed ``w`` (n, 9)."""
+def base_rows(c: FloatArray, s: FloatArray, w: FloatArray, w0: float) -> FloatArray:
+    """The base columns of samples with ``cos, sin theta = c, s`` and speed ``w``, one row
+    each (9, n): ``B'`` (rows are written and multiplied contiguously)."""
     n = len(c)
-    u = w / w0 - 1.0
-    P = (1.0 + u) ** 2
-    Q = P * u
-    B = np.empty((n, N_BASE))
-    B[:, 0] = P * c
-    B[:, 1] = P * s
-    B[:, 2] = 1.0
-    B[:, 3] = Q * c
-    B[:, 4] = Q * s
-    c2 = c * c - s * s
-    s2 = 2.0 * s * c
-    B[:, 5] = c2
-    B[:, 6] = s2
-    B[:, 7] = c2 * c - s2 * s
-    B[:, 8] = s2 * c + c2 * s
+    B = np.empty((N_BASE, n))
+    P, Q = B[3], B[4]  # P and Q live where Q c and Q s go, until those are written
+    np.divide(w, w0, out=Q)
+    Q -= 1.0  # u
+    np.multiply(Q, Q, out=P)
+    P += Q
+    P += Q
+    P += 1.0  # (1 + u)^2
+    Q *= P  # P u
+    np.multiply(P, c, out=B[0])
+    np.multiply(P, s, out=B[1])
+    B[2] = 1.0
+    np.multiply(Q, c, out=B[3])  # over P: no longer needed
+    np.multiply(Q, s, out=B[4])  # Q s last: B[4] is Q itself
+    c2, s2 = B[5], B[6]
+    np.multiply(c, c, out=c2)
+    c2 -= s * s
+    np.multiply(s, c, out=s2)
+    s2 *= 2.0
+    np.multiply(c2, c, out=B[7])
+    B[7] -= s2 * s
+    np.multiply(s2, c, out=B[8])
+    B[8] += c2 * s
     return B
 
 
@@ -117,12 +127,16 @@ class WindowSums:
     def zero(cls) -> WindowSums:
         return cls(np.zeros((N_BASE, N_BASE)), np.zeros(N_BASE))
 
+    def copy(self) -> WindowSums:
+        """An independent copy (:meth:`add` changes the arrays in place)."""
+        return WindowSums(self.G.copy(), self.Ba.copy(), self.n, self.w_sum, self.w_min, self.w_max)
+
     def add(self, B: FloatArray, a: FloatArray, w: FloatArray) -> None:
-        """Add samples (their base columns, accelerations and speeds)."""
+        """Add samples (their base rows :func:`base_rows`, accelerations and speeds)."""
         if not len(a):
             return
-        self.G += B.T @ B
-        self.Ba += B.T @ a
+        self.G += B @ B.T
+        self.Ba += B @ a
         self.n += len(a)
         self.w_sum += float(np.sum(w))
         self.w_min = min(self.w_min, float(np.min(w)))
