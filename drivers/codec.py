@@ -83,31 +83,37 @@ def _put(data: NDArray[np.uint8], kind: str, name: str, values: ArrayLike) -> No
 def _records(
     d8: NDArray[np.uint8], node: NDArray[np.int64], rows: dict[str, NDArray[np.int64]]
 ) -> tuple[SamplesRecords, StatusRecords, MarkRecords]:
-    """The records of each kind from the good frames' 8 bytes, by :data:`LAYOUT`."""
+    """The records of each kind from the good frames' 8 bytes, by :data:`LAYOUT` (each
+    kind's rows gathered once, its fields then cut from them)."""
     r = rows["SAMPLES"]
+    b = d8[r]
     samples = SamplesRecords(
         frame=r,
         node=node[r].astype(np.uint8),
-        seq=_field(d8, r, "SAMPLES", "seq"),
-        counts=np.stack([_field(d8, r, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(np.int16),
+        seq=_field(b, None, "SAMPLES", "seq"),
+        counts=np.stack([_field(b, None, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(
+            np.int16, copy=False
+        ),
     )
     r = rows["STATUS"]
+    b = d8[r]
     status = StatusRecords(
         frame=r,
         node=node[r].astype(np.uint8),
-        rate=_field(d8, r, "STATUS", "rate"),
-        scale=_field(d8, r, "STATUS", "scale"),
-        flags=_field(d8, r, "STATUS", "flags"),
-        version=_field(d8, r, "STATUS", "version"),
+        rate=_field(b, None, "STATUS", "rate"),
+        scale=_field(b, None, "STATUS", "scale"),
+        flags=_field(b, None, "STATUS", "flags"),
+        version=_field(b, None, "STATUS", "version"),
     )
     r = rows["MARK"]
+    b = d8[r]
     marks = MarkRecords(
         frame=r,
         node=node[r].astype(np.uint8),
-        seq=_field(d8, r, "MARK", "seq"),
-        slot=_field(d8, r, "MARK", "slot"),
-        frac=_field(d8, r, "MARK", "frac"),
-        rev=_field(d8, r, "MARK", "rev"),
+        seq=_field(b, None, "MARK", "seq"),
+        slot=_field(b, None, "MARK", "slot"),
+        frac=_field(b, None, "MARK", "frac"),
+        rev=_field(b, None, "MARK", "rev"),
     )
     return samples, status, marks
 
