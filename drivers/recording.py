@@ -318,7 +318,7 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
     from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder
 
-    builder = StreamBuilder()
+    builder = StreamBuilder(merge=False)  # a few blocks of READ_ROWS: rebuilt once
     if is_run_file(path):
         meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
         rec = Recording(str(path), Frames.empty(), meta, warnings)
@@ -333,7 +333,7 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
             for block in iter_log(path, fast=True, warn=warn):
                 builder.add(block)
         except UnusualLogError:
-            builder = StreamBuilder()
+            builder = StreamBuilder(merge=False)
             for block in iter_log(path, warn=warn):
                 builder.add(block)
         rec = Recording(str(path), Frames.empty(), warnings=tuple(warn))

@@ -280,9 +280,12 @@ class StreamBuilder:
     nothing else); :meth:`streams` rebuilds the nodes from everything
     decoded so far without decoding again.  ``rebuild(frames)`` and a
     builder fed the same frames in any blocks give the same streams.
+    ``merge=False`` keeps every block's records apart: a file read once in
+    a few large blocks needs no merging (each merge copies the records).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, merge: bool = True) -> None:
+        self._merge = merge
         self._parts: list[Decoded] = []
         self._times: list[NDArray[np.float64]] = []
         self._sizes: list[int] = []
@@ -302,7 +305,7 @@ class StreamBuilder:
         # merge the newest blocks while they are as large as the one before them: like a
         # binary counter, a run of n frames is held in about log2(n) parts, and each frame
         # is copied about log2(n) times in all
-        while len(self._sizes) > 1 and self._sizes[-1] >= self._sizes[-2]:
+        while self._merge and len(self._sizes) > 1 and self._sizes[-1] >= self._sizes[-2]:
             self._parts[-2:] = [concat_decoded(self._parts[-2:])]
             self._times[-2:] = [np.concatenate(self._times[-2:])]
             self._sizes[-2:] = [self._sizes[-2] + self._sizes[-1]]
