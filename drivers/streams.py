@@ -145,6 +145,9 @@ class NodeStream:
         assert self.scale_start is not None and self.scale_m_s2 is not None, "no STATUS"
         starts = np.clip(self.scale_start, lo, hi) - lo
         sizes = np.diff(np.append(starts, hi - lo))
+        if np.count_nonzero(sizes) == 1:  # one scale over the samples: the common case
+            one: NDArray[np.float64] = self.counts[lo:hi] * self.scale_m_s2[int(np.argmax(sizes))]
+            return one
         scale = np.repeat(self.scale_m_s2, sizes)
         return self.counts[lo:hi] * scale
 

@@ -166,8 +166,18 @@ def block_sums(
     sizes = np.diff(np.append(starts, len(a)))
     has = sizes > 0
     at = starts[has]
-    for j, x in enumerate((c * c, c * s, c, s, np.ones(len(a)), a * a, a * c, a * s, a)):
-        out[has, j] = np.add.reduceat(x, at)
+    rows = np.empty((8, len(a)))
+    np.multiply(c, c, out=rows[0])
+    np.multiply(c, s, out=rows[1])
+    rows[2], rows[3] = c, s
+    np.multiply(a, a, out=rows[4])
+    np.multiply(a, c, out=rows[5])
+    np.multiply(a, s, out=rows[6])
+    rows[7] = a
+    sums = np.add.reduceat(rows, at, axis=1).T
+    out[has, :4] = sums[:, :4]
+    out[has, 4] = sizes[has]
+    out[has, 5:] = sums[:, 4:]
     return out
 
 
