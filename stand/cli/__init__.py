@@ -115,7 +115,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             import traceback
 
             traceback.print_exc()
-        print(f"stand: error: {exc}", file=sys.stderr)
+        message = str(exc)  # "stand balance: ..." reads "stand: error: balance: ..."
+        print(f"stand: error: {message.removeprefix('stand ')}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # `stand inspect RUN | head -1`: the reader left; end quietly
         devnull = os.open(os.devnull, os.O_WRONLY)
