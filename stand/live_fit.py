@@ -11,7 +11,9 @@ reads only the frames of the last few revolutions
 
 What carries over from the last full pass: the gate's start of the window,
 the noise per sample (so the interval still narrows as ``1 / sqrt(n)``), the
-blocks' scatter ratio, the 5x, the residual's rms.  What an update refuses
+blocks' scatter ratio, the 5x, the residual's rms, and the checks of the
+whole run (saturation, settling): the next full pass judges the new samples
+too, and a run's final answer is always a full pass.  What an update refuses
 to extend, leaving it to a full pass (:func:`extend` returns None): a node
 restart, a lost edge at the join, a revolution off the window's speed by
 more than :data:`stand.gate.SPEED_TOLERANCE`, a STATUS with a new scale or
