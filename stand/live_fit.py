@@ -11,13 +11,13 @@ reads only the frames of the last few revolutions
 
 What carries over from the last full pass: the gate's start of the window,
 the noise per sample (so the interval still narrows as ``1 / sqrt(n)``), the
-blocks' scatter ratio, the 5x, the residual's rms, and the checks of the
-whole run (saturation, settling): the next full pass judges the new samples
-too, and a run's final answer is always a full pass.  What an update refuses
-to extend, leaving it to a full pass (:func:`extend` returns None): a node
-restart, a lost edge at the join, a revolution off the window's speed by
-more than :data:`stand.gate.SPEED_TOLERANCE`, a STATUS with a new scale or
-any flag, a tapered fit.
+blocks' scatter ratio, the 5x, the residual's rms, and the settling judged
+at the window's start; a run's final answer is always a full pass.  What an
+update refuses to extend, leaving it to a full pass (:func:`extend` returns
+None): a node restart, a lost edge at the join, a revolution off the
+window's speed by more than :data:`stand.gate.SPEED_TOLERANCE`, a STATUS
+with a new scale or any flag, a new sample at the sensor's full scale (the
+full pass judges whether the sensor saturates), a tapered fit.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from stand.core.fitsums import base_rows
 from stand.core.influence import InfluenceMap
 from stand.drivers.protocol import WRAP
 from stand.drivers.streams import SUPPORT_NODES, NodeStream, RunStreams
-from stand.gate import SPEED_TOLERANCE
+from stand.gate import FULL_SCALE_COUNT, SPEED_TOLERANCE
 from stand.measure import CLOCK_TOLERANCE, Measurement, combine, judge_support
 from stand.passes import NodeFit, sums_phasor
 
@@ -81,10 +81,13 @@ def extend(fit: NodeFit, s: NodeStream) -> NodeFit | None:
     if np.any(steps[1:] != 1) or np.any(np.abs(fit.period / period[1:] - 1) >= SPEED_TOLERANCE):
         return None  # a lost edge or an unsteady revolution: the gate must judge it
     lo, hi = np.searchsorted(s.index, np.floor(pos[[1, last]]).astype(np.int64), side="right")
+    counts = s.counts[lo:hi]
+    if len(counts) and max(int(counts.max()), -int(counts.min())) >= FULL_SCALE_COUNT:
+        return None  # at the sensor's limit: whether it saturates is the full pass's to say
     knots = angle_knots(pos[: last + 2], rev[: last + 2])
     th, w = angle_at(knots, s.index[lo:hi].astype(np.float64))
     th += fit.gamma
-    a = s.counts[lo:hi] * np.float64(fit.scale_m_s2)
+    a = counts * np.float64(fit.scale_m_s2)
     sums = fit.sums.copy()
     c, sn = np.cos(th), np.sin(th)
     sums.add(base_rows(c, sn, w, fit.w0), a, w)

@@ -13,7 +13,8 @@ sums and reads only the frames of the last few revolutions.  What is checked:
   side-band noise estimate with 24 degrees of freedom scatters that much
   between passes), checked within 0.7 to 1.4;
 * an update refuses (a full pass is then due) what the gate must judge: a
-  node restart, a lost edge at the join, an unsteady revolution, a new scale;
+  node restart, a lost edge at the join, an unsteady revolution, a new scale,
+  a STATUS flag, a new sample at the sensor's full scale;
 * an update reads as many frames at 60 s as at 10 s (within 20 %), and a
   small share of the run: its cost does not grow with the run.  Time itself
   is not asserted (machines differ): `tests/bench/bench_live.py` measures it.
@@ -115,6 +116,7 @@ def test_an_update_joins_where_the_full_pass_ended() -> None:
         "new_scale",
         "node_restart",
         "status_flag",
+        "full_scale",
     ],
 )
 def test_an_update_leaves_to_a_full_pass_what_the_gate_must_judge(spoil: str) -> None:
@@ -133,6 +135,11 @@ def test_an_update_leaves_to_a_full_pass_what_the_gate_must_judge(spoil: str) ->
         s = replace(s, scale_m_s2=s.scale_m_s2 * 1.01)  # type: ignore[attr-defined,type-var]
     elif spoil == "node_restart":
         s = replace(s, segment_start=np.array([0, len(s.index) // 2]))  # type: ignore[attr-defined,type-var]
-    else:
+    elif spoil == "status_flag":
         s = replace(s, flags=("sensor_fault",))  # type: ignore[type-var]
+    else:  # one new sample at the sensor's limit: a saturating sensor is the gate's to refuse
+        counts = s.counts.copy()  # type: ignore[attr-defined]
+        at = int(np.searchsorted(s.index, s.mark_position[join + 2]))  # type: ignore[attr-defined]
+        counts[at] = -32767
+        s = replace(s, counts=counts)  # type: ignore[type-var]
     assert extend(fit, s) is None  # type: ignore[arg-type]
