@@ -343,11 +343,10 @@ def _samples(F: NDArray[np.int64], counts: NDArray[Any]) -> tuple[Any, Any, Any,
     index, the counts, which are valid, and where each frame's valid samples begin in the
     valid-sample arrays (:class:`_Triple` when all are valid: the common case, no copies)."""
     index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
-    np.add(
-        (SAMPLES_PER_FRAME * F)[:, None],
-        np.arange(SAMPLES_PER_FRAME),
-        out=index.reshape(-1, SAMPLES_PER_FRAME),
-    )
+    triples = index.reshape(-1, SAMPLES_PER_FRAME)
+    np.multiply(F, SAMPLES_PER_FRAME, out=triples[:, 0])  # no temporary of the run's length
+    for k in range(1, SAMPLES_PER_FRAME):
+        np.add(triples[:, 0], k, out=triples[:, k])
     flat = counts.reshape(-1)
     valid = flat != INVALID_COUNT
     if bool(valid.all()):
@@ -364,7 +363,8 @@ def rebuild_node(
     s_sel = dec.samples.node == node
     st_sel = dec.status.node == node
     m_sel = dec.marks.node == node
-    s_frame = dec.samples.frame[s_sel]
+    s_all = bool(s_sel.all())  # records gathered for this node alone: views, not copies
+    s_frame = dec.samples.frame if s_all else dec.samples.frame[s_sel]
     st_frame = dec.status.frame[st_sel]
     m_frame = dec.marks.frame[m_sel]
     all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)))
@@ -372,7 +372,7 @@ def rebuild_node(
     st_t = t_s[st_frame]
     rate, scale, warn = _status(node, dec, st_sel, st_t, all_frames, first_t, t0, strict_status)
 
-    seq = dec.samples.seq[s_sel].astype(np.int64)
+    seq = (dec.samples.seq if s_all else dec.samples.seq[s_sel]).astype(np.int64)
     restart_at = _restarts(seq, s_frame, st_frame, t_s, all_frames, rate)
     del all_frames  # a long run's node: free as soon as done
     keep, F, seg, lost = (
@@ -384,7 +384,7 @@ def rebuild_node(
     s_frame_k = s_frame if kept_all else s_frame[keep]
     seq_k = seq if kept_all else seq[keep]
     counts = dec.samples.counts
-    counts = counts if bool(s_sel.all()) else counts[s_sel]
+    counts = counts if s_all else counts[s_sel]
     counts = counts if kept_all else counts[keep]
     duplicates = int(len(seq) - len(seq_k))
     del seq, s_frame, restart_at, keep
@@ -393,7 +393,9 @@ def rebuild_node(
 
     index, flat, valid, frame_start = _samples(F, counts)
     all_valid = isinstance(frame_start, _Triple)
-    seg_first = np.flatnonzero(np.diff(seg, prepend=-1)) if len(seg) else np.zeros(0, np.int64)
+    seg_first = np.flatnonzero(seg[1:] != seg[:-1]) + 1 if len(seg) else np.zeros(0, np.int64)
+    if len(seg):
+        seg_first = np.concatenate(([0], seg_first))
     scale_start, scale_m_s2 = _scale_runs(st_frame, s_frame_k, scale, frame_start)
     m_pos, m_seg, m_rev, lost_marks, mark_warn = _marks(
         node, dec, m_sel, m_frame, s_frame_k, seq_k, F, seg
