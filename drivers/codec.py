@@ -80,6 +80,18 @@ def _put(data: NDArray[np.uint8], kind: str, name: str, values: ArrayLike) -> No
     data[:, offset : offset + size] = v.view(np.uint8).reshape(n, size)
 
 
+def _counts(b: NDArray[np.uint8]) -> NDArray[np.int16]:
+    """The SAMPLES frames' counts ``s0, s1, s2`` (n, 3) int16, by :data:`LAYOUT`: one copy
+    of their bytes when the layout keeps them side by side (it does), else field by field."""
+    offsets = [LAYOUT["SAMPLES"][f"s{k}"] for k in range(SAMPLES_PER_FRAME)]
+    first = offsets[0][0]
+    if all(o == (first + 2 * k, "<i2") for k, o in enumerate(offsets)):
+        cols = np.ascontiguousarray(b[:, first : first + 2 * SAMPLES_PER_FRAME])
+        return cols.view("<i2").reshape(len(b), SAMPLES_PER_FRAME).astype(np.int16, copy=False)
+    fields = [_field(b, None, "SAMPLES", f"s{k}") for k in range(SAMPLES_PER_FRAME)]
+    return np.stack(fields, -1).astype(np.int16, copy=False)
+
+
 def _records(
     d8: NDArray[np.uint8], node: NDArray[np.int64], rows: dict[str, NDArray[np.int64]]
 ) -> tuple[SamplesRecords, StatusRecords, MarkRecords]:
@@ -91,9 +103,7 @@ def _records(
         frame=r,
         node=node[r].astype(np.uint8),
         seq=_field(b, None, "SAMPLES", "seq"),
-        counts=np.stack([_field(b, None, "SAMPLES", f"s{k}") for k in range(3)], -1).astype(
-            np.int16, copy=False
-        ),
+        counts=_counts(b),
     )
     r = rows["STATUS"]
     b = d8[r]
@@ -136,7 +146,7 @@ def decode(frames: Frames) -> Decoded:
     standard = (frames.flags & (FLAG_EXTENDED | FLAG_ERROR)) == 0
     base = cid & ~0x3F
     node = cid & 0x3F
-    protocol = standard & np.isin(base, (SAMPLES_BASE, STATUS_BASE, MARK_BASE))
+    protocol = standard & ((base == SAMPLES_BASE) | (base == STATUS_BASE) | (base == MARK_BASE))
     protocol &= (node >= 1) & (node <= MAX_NODE)
 
     reason = np.zeros(len(frames), dtype=np.int8)  # BadReason.FINE
@@ -146,11 +156,13 @@ def decode(frames: Frames) -> Decoded:
     reason[protocol & fd] = BadReason.CAN_FD
     reason[protocol & remote] = BadReason.REMOTE
     d8 = frames.data[:, :FRAME_DLC]
-    is_mark = protocol & (base == MARK_BASE) & (reason == 0)
-    reason[is_mark & (_field(d8, None, "MARK", "slot") > SAMPLES_PER_FRAME - 1)] = BadReason.SLOT
-    is_status = protocol & (base == STATUS_BASE) & (reason == 0)
-    version = _field(d8, None, "STATUS", "version")
-    reason[is_status & (version != PROTOCOL_VERSION)] = BadReason.VERSION
+    # the fields that can spoil a MARK or a STATUS, read from those frames only
+    is_mark = np.flatnonzero(protocol & (base == MARK_BASE) & (reason == 0))
+    slot = _field(d8, is_mark, "MARK", "slot")
+    reason[is_mark[slot > SAMPLES_PER_FRAME - 1]] = BadReason.SLOT
+    is_status = np.flatnonzero(protocol & (base == STATUS_BASE) & (reason == 0))
+    version = _field(d8, is_status, "STATUS", "version")
+    reason[is_status[version != PROTOCOL_VERSION]] = BadReason.VERSION
 
     good = protocol & (reason == 0)
     rows = {
