@@ -287,8 +287,10 @@ def node_records(dec: Decoded, node: int) -> Decoded:
     """Only the records of one node (counts and bad frames are left out)."""
 
     def pick(records: Any) -> Any:
-        sel = records.node == node
-        return type(records)(**{f.name: getattr(records, f.name)[sel] for f in fields(records)})
+        at = np.flatnonzero(records.node == node)  # once, then each field gathered by it
+        return type(records)(
+            **{f.name: np.take(getattr(records, f.name), at, axis=0) for f in fields(records)}
+        )
 
     return Decoded(pick(dec.samples), pick(dec.status), pick(dec.marks), 0, 0)
 

@@ -231,11 +231,11 @@ def rebuild_decoded(
     """
     parts = [dec] if isinstance(dec, Decoded) else list(dec)
     t0 = float(t_s[0]) if len(t_s) else 0.0
-    present: NDArray[np.uint8] = np.zeros(0, np.uint8)
+    seen = np.zeros(256, np.int64)  # node ids are u8: a count per id, in one pass each
     for p in parts:
-        present = np.union1d(
-            present, np.union1d(np.union1d(p.samples.node, p.status.node), p.marks.node)
-        )
+        for records in (p.samples, p.status, p.marks):
+            seen += np.bincount(records.node, minlength=256)
+    present = np.flatnonzero(seen)
     from stand.drivers.node_build import rebuild_node  # it builds the NodeStream defined here
 
     nodes: dict[int, NodeStream] = {}
