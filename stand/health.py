@@ -203,12 +203,12 @@ def judge(
     del cfg
     data = [_datum(r)[0] for r in group.rows]
     sc = (scatter_pct / 100, math.radians(scatter_deg))
-    pairs = [whitened(p, d, *sc) for d in data]
-    c = cusum(scores([z for z, _ in pairs], [j for _, j in pairs]))
+    zs, Js = whitened(p, data, *sc)  # the whole group at once
+    c = cusum(scores(zs, Js))
     if c.alarm_at is None or c.change_at is None:
         return GroupHealth(group, c.top, None, None, None, ())
     start = c.change_at
-    best = single_fits([z for z, _ in pairs[start:]], [j for _, j in pairs[start:]])[0]
+    best = single_fits(zs[start:], Js[start:])[0]
     names = [best.name, *(n for n in best.alike if n in ("C1", "C2", "M1", "M2"))]
     names.sort(key=lambda n: n not in ("C1", "C2"))  # a stiffness first: rubber ages
     fits = tuple(fit(p, data[start:], n, *sc) for n in names)

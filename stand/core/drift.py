@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import cmath
 import dataclasses
-import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -79,16 +78,38 @@ class Datum:
     dU_kg_m: NDArray[np.complex128]
 
 
+@dataclass(frozen=True)
+class _Stack:
+    """The data of a series as arrays, datum by datum along the first axis (n)."""
+
+    omega: FloatArray  # (n,)
+    dA: NDArray[np.complex128]  # (n, 2): A1 - A0
+    cov: FloatArray  # (n, 4, 4): cov0 + cov1
+    dU: NDArray[np.complex128]  # (n, 2)
+
+    @classmethod
+    def of(cls, data: Sequence[Datum]) -> _Stack:
+        def rows(get: object) -> NDArray:  # type: ignore[type-arg]
+            return np.array([get(d) for d in data])  # type: ignore[operator]
+
+        return cls(
+            rows(lambda d: float(d.omega_rad_s)).reshape(-1),
+            rows(lambda d: np.asarray(d.A1) - np.asarray(d.A0)).reshape(-1, 2),
+            rows(lambda d: np.asarray(d.cov0) + np.asarray(d.cov1)).reshape(-1, 4, 4),
+            rows(lambda d: np.asarray(d.dU_kg_m, dtype=np.complex128)).reshape(-1, 2),
+        )
+
+
 def _real(z: NDArray[np.complex128]) -> FloatArray:
-    return np.column_stack([z.real, z.imag]).ravel()
+    """``[Re, Im]`` per support, ``[Re A1, Im A1, Re A2, Im A2]``: (..., 2) -> (..., 4)."""
+    return np.stack([z.real, z.imag], -1).reshape(*z.shape[:-1], 4)
 
 
-@functools.lru_cache(maxsize=256)
-def _F(p: StandParameters, omega: float) -> NDArray[np.complex128]:
-    """``forward`` as a 2 x 2 matrix (every datum of a series shares the speed: cached)."""
-    F = np.array(np.asarray(forward(p, omega, np.eye(2)), dtype=np.complex128).T)  # rows: supports
-    F.flags.writeable = False
-    return F
+def _F(p: StandParameters, omega: FloatArray) -> NDArray[np.complex128]:
+    """``forward`` as a 2 x 2 matrix per speed (rows: supports): (n, 2, 2), one call for the
+    whole series."""
+    F = np.asarray(forward(p, np.asarray(omega, float)[:, None], np.eye(2)), dtype=np.complex128)
+    return np.swapaxes(F, -1, -2)
 
 
 def _perturbed(p: StandParameters, name: str, x: float) -> StandParameters:
@@ -96,69 +117,87 @@ def _perturbed(p: StandParameters, name: str, x: float) -> StandParameters:
 
 
 def response(
-    p: StandParameters, omega: float, dU: NDArray[np.complex128], delta: dict[str, float]
+    p: StandParameters, omega: FloatArray, dU: NDArray[np.complex128], delta: dict[str, float]
 ) -> NDArray[np.complex128]:
-    """The stand's response ``F dU`` [m/s^2] with the parameters moved by ``delta``
-    (relative for C, M and gains, radians for the reference angle)."""
+    """The stand's response ``F dU`` [m/s^2] per datum, (n, 2), with the parameters moved by
+    ``delta`` (relative for C, M and gains, radians for the reference angle)."""
     q = p
     for name in ("C1", "C2", "M1", "M2"):
         if delta.get(name):
             q = _perturbed(q, name, delta[name])
-    out = _F(q, float(omega)) @ np.asarray(dU, dtype=np.complex128)
+    out = np.einsum("nij,nj->ni", _F(q, omega), dU)
     out = out * np.array([1 + delta.get("gain1", 0.0), 1 + delta.get("gain2", 0.0)])
     # a reference mark seen later by ``d`` turns every phasor by e^{+i d} (the model's sense)
     turned: NDArray[np.complex128] = out * cmath.exp(1j * delta.get("reference_angle", 0.0))
     return turned
 
 
-def jacobian(p: StandParameters, d: Datum, names: Sequence[str] = PARAMETERS) -> FloatArray:
-    """``d [Re, Im] (F dU) / d theta`` (4 x len(names)) at the calibration itself."""
-    return _columns(p, d, names, dict.fromkeys(names, 0.0))
-
-
-def covariance(p: StandParameters, d: Datum, scatter_rel: float, scatter_rad: float) -> FloatArray:
-    """The residual's real covariance: both runs' noise and the operator's placement."""
-    F = _F(p, float(d.omega_rad_s))
+def _covariance(
+    p: StandParameters, s: _Stack, scatter_rel: float, scatter_rad: float
+) -> FloatArray:
+    """The residuals' real covariances (n, 4, 4): both runs' noise and the operator's
+    placement."""
+    F = _F(p, s.omega)
     Fr = np.block([[F.real, -F.imag], [F.imag, F.real]])  # on [Re U, Im U] -> [Re A, Im A]
-    cu = np.zeros((4, 4))
-    for j, u in enumerate(d.dU_kg_m):
-        a = np.array([u.real, u.imag])
-        b = np.array([u.imag, -u.real])
-        block = scatter_rel**2 * np.outer(a, a) + scatter_rad**2 * np.outer(b, b)
+    cu = np.zeros((len(s.omega), 4, 4))
+    for j in range(2):
+        u = s.dU[:, j]
+        a = np.stack([u.real, u.imag], -1)
+        b = np.stack([u.imag, -u.real], -1)
+        block = scatter_rel**2 * a[:, :, None] * a[:, None, :]
+        block += scatter_rad**2 * b[:, :, None] * b[:, None, :]
         idx = [j, 2 + j]
-        cu[np.ix_(idx, idx)] = block
-    ca = Fr @ cu @ Fr.T  # ordered [Re A1, Re A2, Im A1, Im A2]
-    order = [0, 2, 1, 3]
-    return np.asarray(d.cov0 + d.cov1 + ca[np.ix_(order, order)], dtype=float)
+        cu[:, np.array(idx)[:, None], np.array(idx)[None, :]] = block
+    ca = Fr @ cu @ np.swapaxes(Fr, -1, -2)  # ordered [Re A1, Re A2, Im A1, Im A2]
+    order = np.array([0, 2, 1, 3])
+    return np.asarray(s.cov + ca[:, order[:, None], order[None, :]], dtype=float)
 
 
-def residual(p: StandParameters, d: Datum) -> FloatArray:
-    """``(A1 - A0) - F dU`` as ``[Re, Im]`` per support [m/s^2]."""
-    return _real(d.A1 - d.A0 - response(p, d.omega_rad_s, d.dU_kg_m, {}))
+def _cholesky(cov: FloatArray) -> FloatArray:
+    """Each datum's ``L`` (``L L^T = cov``); a datum whose covariance is not positive
+    definite is named."""
+    try:
+        return np.asarray(np.linalg.cholesky(cov), dtype=np.float64)
+    except np.linalg.LinAlgError:
+        for k, c in enumerate(cov):
+            try:
+                np.linalg.cholesky(c)
+            except np.linalg.LinAlgError as exc:
+                raise ModelError(f"datum {k + 1}: its covariance is not positive definite") from exc
+        raise
+
+
+def _solve(L: FloatArray, x: FloatArray) -> FloatArray:
+    """``L^-1 x`` per datum: ``x`` (n, 4) or (n, 4, k)."""
+    out = np.linalg.solve(L, x[..., None])[..., 0] if x.ndim == 2 else np.linalg.solve(L, x)
+    return np.asarray(out, dtype=np.float64)
 
 
 def whitened(
-    p: StandParameters, d: Datum, scatter_rel: float, scatter_rad: float
+    p: StandParameters, data: Sequence[Datum], scatter_rel: float, scatter_rad: float
 ) -> tuple[FloatArray, FloatArray]:
-    """The whitened residual ``z`` (4) and Jacobian (4 x P): ``L^-1 r``, ``L^-1 J`` with
-    ``L L^T`` the residual's covariance."""
-    try:
-        L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
-    except np.linalg.LinAlgError as exc:
-        raise ModelError("a datum's covariance is not positive definite") from exc
-    return np.linalg.solve(L, residual(p, d)), np.linalg.solve(L, jacobian(p, d))
+    """The whitened residuals ``z`` (n, 4) and Jacobians (n, 4, P) of a series: ``L^-1 r``,
+    ``L^-1 J`` with ``L L^T`` each residual's covariance, ``r = (A1 - A0) - F dU`` and
+    ``J = d [Re, Im] (F dU) / d theta`` at the calibration itself.  The model is evaluated
+    once per parameter for the whole series, not per datum."""
+    if not len(data):
+        return np.zeros((0, 4)), np.zeros((0, 4, len(PARAMETERS)))
+    s = _Stack.of(data)
+    L = _cholesky(_covariance(p, s, scatter_rel, scatter_rad))
+    r = _real(s.dA - response(p, s.omega, s.dU, {}))
+    J = _columns(p, s, PARAMETERS, dict.fromkeys(PARAMETERS, 0.0))
+    return _solve(L, r), _solve(L, J)
 
 
-def scores(zs: Sequence[FloatArray], Js: Sequence[FloatArray]) -> FloatArray:
+def scores(zs: FloatArray, Js: FloatArray) -> FloatArray:
     """Each datum's standardised score along each watched direction, both ways: ``(n, 10)``,
-    each N(0, 1) on a stable stand (``J_k^T z / |J_k|``)."""
+    each N(0, 1) on a stable stand (``J_k^T z / |J_k|``); ``zs`` (n, 4), ``Js`` (n, 4, P)
+    as :func:`whitened` gives them."""
     cols = [PARAMETERS.index(n) for n in WATCHED]
-    out = []
-    for z, J in zip(zs, Js, strict=True):
-        Jk = J[:, cols]
-        u = (Jk.T @ z) / np.linalg.norm(Jk, axis=0)
-        out.append(np.concatenate([u, -u]))
-    return np.array(out).reshape(len(out), 2 * len(cols))
+    Jk = np.asarray(Js, dtype=float).reshape(-1, 4, len(PARAMETERS))[:, :, cols]
+    z = np.asarray(zs, dtype=float).reshape(-1, 4)
+    u = np.einsum("nik,ni->nk", Jk, z) / np.linalg.norm(Jk, axis=1)
+    return np.concatenate([u, -u], axis=1)
 
 
 @dataclass(frozen=True)
@@ -199,10 +238,11 @@ class Fit:
     alike: tuple[str, ...]
 
 
-def single_fits(zs: Sequence[FloatArray], Js: Sequence[FloatArray]) -> list[Fit]:
-    """Each parameter fitted alone to the whitened residuals, best (least chi-square) first."""
-    z = np.concatenate(zs)
-    J = np.vstack(Js)
+def single_fits(zs: FloatArray, Js: FloatArray) -> list[Fit]:
+    """Each parameter fitted alone to the whitened residuals (:func:`whitened`'s), best
+    (least chi-square) first."""
+    z = np.asarray(zs, dtype=float).reshape(-1)
+    J = np.asarray(Js, dtype=float).reshape(len(z), len(PARAMETERS))
     norms = np.linalg.norm(J, axis=0)
     corr = (J.T @ J) / np.outer(norms, norms)
     fits = []
@@ -244,18 +284,15 @@ def fit_many(
     them: an 8 % stiffness change seen through the old one's slope reads 7 %), each with its
     95 % half-width from the information matrix."""
     change = dict.fromkeys(names, 0.0)
+    s = _Stack.of(data)
+    L = _cholesky(_covariance(p, s, scatter_rel, scatter_rad))
     for _ in range(iterations):
         q = p
         for n in names:
             q = _moved(q, n, change[n]) if n in ("C1", "C2", "M1", "M2") else q
         extra = {n: v for n, v in change.items() if n not in ("C1", "C2", "M1", "M2")}
-        zs, Js = [], []
-        for d in data:
-            L = np.linalg.cholesky(covariance(p, d, scatter_rel, scatter_rad))
-            r = _real(d.A1 - d.A0 - response(q, d.omega_rad_s, d.dU_kg_m, extra))
-            zs.append(np.linalg.solve(L, r))
-            Js.append(np.linalg.solve(L, _columns(p, d, names, change)))
-        z, J = np.concatenate(zs), np.vstack(Js)
+        z = _solve(L, _real(s.dA - response(q, s.omega, s.dU, extra))).reshape(-1)
+        J = _solve(L, _columns(p, s, names, change)).reshape(-1, len(names))
         info = J.T @ J
         try:
             cov = np.linalg.inv(info)
@@ -272,17 +309,17 @@ def fit_many(
 
 
 def _columns(
-    p: StandParameters, d: Datum, names: Sequence[str], at: dict[str, float]
+    p: StandParameters, s: _Stack, names: Sequence[str], at: dict[str, float]
 ) -> FloatArray:
-    """The response's derivative with respect to each of ``names`` at ``at``: 4 x n, by
-    central differences (1e-6)."""
+    """The response's derivative with respect to each of ``names`` at ``at``, per datum:
+    (n, 4, len(names)), by central differences (1e-6)."""
     h = 1e-6
     cols = []
     for n in names:
-        up = response(p, d.omega_rad_s, d.dU_kg_m, {**at, n: at[n] + h})
-        down = response(p, d.omega_rad_s, d.dU_kg_m, {**at, n: at[n] - h})
+        up = response(p, s.omega, s.dU, {**at, n: at[n] + h})
+        down = response(p, s.omega, s.dU, {**at, n: at[n] - h})
         cols.append(_real((up - down) / (2 * h)))
-    return np.column_stack(cols)
+    return np.stack(cols, -1)
 
 
 def _moved(p: StandParameters, name: str, change: float) -> StandParameters:
