@@ -237,6 +237,22 @@ def replay_estimates(
     return est
 
 
+def _kept_estimate(last: Any, exc: Exception) -> Any:
+    """The last estimate made while the run went on, kept as the answer because the whole
+    run could not be measured again, saying so (never in silence)."""
+    from dataclasses import replace
+
+    from stand.core import Diagnostic
+
+    note = Diagnostic(
+        "last_estimate",
+        f"the whole run could not be measured again ({exc}): the answer is the last "
+        "estimate made while it ran",
+        None,
+    )
+    return replace(last, warnings=[*last.warnings, note])
+
+
 def _final_result(
     session: LiveSession,
     cfg: Any,
@@ -256,10 +272,10 @@ def _final_result(
         if any(w.code == "no_status" for w in streams.warnings):
             session.streams(strict_status=True)  # raises NoStatusError, naming the node
         final = measure_streams(streams, cfg, params, options)
-    except (MeasurementError, NoStatusError):
+    except (MeasurementError, NoStatusError) as exc:
         if last is None:
             raise
-        final = last
+        final = _kept_estimate(last, exc)
     prov = Provenance(
         software=SOFTWARE,
         run_file=session.run_path,

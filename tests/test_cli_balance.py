@@ -127,3 +127,34 @@ def test_a_signal_stops_cleanly_keeps_the_recording_and_still_answers(
     rec = read_run(run)
     assert rec.meta["complete"] and len(rec.frames) > 5000  # about 2.5 s of frames kept
     assert res["planes"][0]["unbalance_g_mm"] == pytest.approx(5000, abs=50)
+
+
+@pytest.mark.realtime
+def test_an_answer_kept_from_the_last_estimate_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """When the whole run cannot be measured again once it has ended (here: made to fail),
+    the last estimate made while it ran is the answer, and a warning says so: never in
+    silence."""
+    import stand.live
+    from stand.errors import MeasurementError
+    from stand.live_session import LiveSession
+
+    closed = []
+    real_close, real_measure = LiveSession.close, stand.live.measure_streams
+
+    def close(self: LiveSession) -> object:
+        closed.append(True)
+        return real_close(self)
+
+    def measure(*args: object, **kwargs: object) -> object:
+        if closed:
+            raise MeasurementError("the drive stopped")
+        return real_measure(*args, **kwargs)
+
+    monkeypatch.setattr(LiveSession, "close", close)
+    monkeypatch.setattr(stand.live, "measure_streams", measure)
+    out = _balance(["--scene", "demo", "--out", str(tmp_path / "r.h5"), "--no-archive"], capsys)
+    (w,) = [w for w in out["warnings"] if "last estimate" in w]
+    assert "could not be measured again (the drive stopped)" in w
+    assert len(out["corrections"]) == 2
