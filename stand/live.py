@@ -19,11 +19,12 @@ import math
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from stand.core import Diagnostic
 from stand.drivers.recording import config_digest
 from stand.errors import (
     BusError,
@@ -240,16 +241,8 @@ def replay_estimates(
 def _kept_estimate(last: Any, exc: Exception) -> Any:
     """The last estimate made while the run went on, kept as the answer because the whole
     run could not be measured again, saying so (never in silence)."""
-    from dataclasses import replace
-
-    from stand.core import Diagnostic
-
-    note = Diagnostic(
-        "last_estimate",
-        f"the whole run could not be measured again ({exc}): the answer is the last "
-        "estimate made while it ran",
-        None,
-    )
+    why = f"the whole run could not be measured again ({exc}): the answer is the last estimate"
+    note = Diagnostic("last_estimate", why + " made while it ran", None)
     return replace(last, warnings=[*last.warnings, note])
 
 

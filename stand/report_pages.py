@@ -80,7 +80,7 @@ def render_speeds(out: dict[str, Any]) -> str:
         )
         + (" (left out: not independent)" if p["dependent"] else "")
         + (" (at the mass limit)" if p["at_limit"] else "")
-        + "</td></tr>"
+        + f"</td><td>{p['unbalance_g_mm']:.1f} ± {p['uncertainty_g_mm']:.1f}</td></tr>"
         for p in out["planes"]
     )
     verdict = {
@@ -111,7 +111,7 @@ def render_speeds(out: dict[str, Any]) -> str:
 of each speed's share of the tolerance).</p>
 <h2>Correction</h2>
 <table><tr><th class=l>plane</th><th>at [mm from the left end]</th><th>radius [mm]</th>
-<th class=l>what to do</th></tr>{planes}</table>
+<th class=l>what to do</th><th>its unbalance, 95 % [g mm]</th></tr>{planes}</table>
 <p class=muted>Angles from the reference mark, counted <b>against the direction of
 rotation</b>.</p>
 <h2>At each speed, predicted after the correction</h2>

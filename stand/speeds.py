@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
+from stand.core.multiplane_interval import correction_covariance, plane_radii
 from stand.errors import ConfigError, ModelError
 from stand.matrix import SAME_SPEED
 
@@ -76,6 +77,8 @@ class PlaneCorrection:
     correction: Any
     dependent: bool
     at_limit: bool
+    radius95_kg_m: float = 0.0
+    """The 95 % radius of ``W`` from the runs' noise (and the slow roll's)."""
 
 
 @dataclass(frozen=True)
@@ -138,6 +141,8 @@ class SlowRoll:
     run: str
     omega_rad_s: float
     A_m_s2: np.ndarray
+    cov_m2_s4: np.ndarray | None = None
+    """The real covariance of ``A_m_s2`` (4 x 4 on ``[Re A1, Im A1, Re A2, Im A2]``)."""
 
     def at(self, omega_rad_s: float) -> np.ndarray:
         """The runout's 1x at another speed [m/s^2] (kinematic: as the speed squared)."""
@@ -168,7 +173,45 @@ def slow_roll_of(path: str, config: str | None, runs: list[Any]) -> SlowRoll:
             f"({slowest * 30 / math.pi:.0f} rpm)",
             source=path,
         )
-    return SlowRoll(path, w_s, np.array([ph.A_m_s2 for ph in res.measurement.supports]))
+    sup = res.measurement.supports
+    cov = np.zeros((4, 4))
+    for i, ph in enumerate(sup):
+        cov[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = np.asarray(ph.cov_m2_s4, dtype=float)
+    return SlowRoll(path, w_s, np.array([ph.A_m_s2 for ph in sup]), cov)
+
+
+def _real_cov(cov: Any) -> np.ndarray:
+    """An unbalance covariance as the real 4 x 4 on ``[Re U1, Im U1, Re U2, Im U2]`` (a
+    complex 2 x 2 one is circular: half of it on each part)."""
+    from stand.core.multiplane_interval import complex_block
+
+    c = np.asarray(cov)
+    return np.asarray(c.real if c.shape == (4, 4) else complex_block(c) / 2, dtype=float)
+
+
+def _readings_covariance(
+    runs: list[Any], Es: list[np.ndarray], scales: list[np.ndarray], slow: SlowRoll | None
+) -> np.ndarray:
+    """The real covariance of the stacked readings (2 per speed, as shares of the permissible
+    unbalance): each run's own, and the slow roll's taken out of every speed (one reading
+    subtracted from all: they covary)."""
+    from stand.core.multiplane_interval import complex_block
+
+    n = len(runs)
+    cov = np.zeros((4 * n, 4 * n))
+    maps = []
+    for k, (_, res) in enumerate(runs):
+        S = np.diag(np.repeat(1.0 / scales[k], 2))
+        cov[4 * k : 4 * k + 4, 4 * k : 4 * k + 4] = (
+            S @ _real_cov(res.measurement.solution.cov_U) @ S
+        )
+        if slow is not None:
+            ratio = (res.omega_rad_s / slow.omega_rad_s) ** 2
+            maps.append(S @ complex_block(-ratio * Es[k]))
+    if slow is not None and slow.cov_m2_s4 is not None:
+        C = np.vstack(maps)
+        cov += C @ slow.cov_m2_s4 @ C.T
+    return cov
 
 
 def _readings(
@@ -180,11 +223,13 @@ def _readings(
     permissible values and the unbalances per speed."""
     from stand.core.beam import receptance, receptance_at
 
-    rows_A, rows_alpha, weights, per, unbalances = [], [], [], [], []
+    rows_A, rows_alpha, weights, per, unbalances, Es, scales = [], [], [], [], [], [], []
     for _, res in runs:
         w = res.omega_rad_s
         E = np.linalg.inv(receptance(beam, params, w))
         scale = np.ones(2) if res.tolerance is None else np.asarray(res.tolerance.per_plane_kg_m)
+        Es.append(E)
+        scales.append(scale)
         per.append(None if res.tolerance is None else res.tolerance.per_plane_kg_m)
         U = res.U_kg_m if slow is None else res.U_kg_m - E @ slow.at(w)
         unbalances.append(U)
@@ -192,11 +237,21 @@ def _readings(
         rows_alpha.append((E @ receptance_at(beam, params, w, at)) / scale[:, None])
         cov = np.asarray(res.measurement.solution.cov_U).real
         weights.append(scale / np.sqrt((cov.diagonal()[0::2] + cov.diagonal()[1::2]) / 2))
-    return np.concatenate(rows_A), np.vstack(rows_alpha), np.concatenate(weights), per, unbalances
+    return (
+        np.concatenate(rows_A),
+        np.vstack(rows_alpha),
+        np.concatenate(weights),
+        per,
+        unbalances,
+        _readings_covariance(runs, Es, scales, slow),
+    )
 
 
-def _plane_corrections(cfg: Any, sol: MultiPlaneSolution) -> tuple[PlaneCorrection, ...]:
-    """Each plane's correction as the config's ``[correction]`` makes it (weights, stock)."""
+def _plane_corrections(
+    cfg: Any, sol: MultiPlaneSolution, radii: np.ndarray
+) -> tuple[PlaneCorrection, ...]:
+    """Each plane's correction as the config's ``[correction]`` makes it (weights, stock),
+    with its 95 % radius [kg m]."""
     from stand.correct import weights_correction
 
     return tuple(
@@ -208,6 +263,7 @@ def _plane_corrections(cfg: Any, sol: MultiPlaneSolution) -> tuple[PlaneCorrecti
             correction=weights_correction(-complex(sol.W[j]), pl.radius_m, cfg.correction),
             dependent=j in sol.dependent,
             at_limit=sol.at_cap[j],
+            radius95_kg_m=float(radii[j]),
         )
         for j, pl in enumerate(cfg.rotor.planes)
     )
@@ -234,16 +290,20 @@ def balance_speeds(
             source=config or first,
             key="rotor.planes",
         )
-    A, alpha, weights, per, unbalances = _readings(
+    A, alpha, weights, per, unbalances, cov_A = _readings(
         runs, beam, params, [pl.position_m for pl in planes], slow
     )
     caps = (
         None if max_mass_g is None else max_mass_g * 1e-3 * np.array([pl.radius_m for pl in planes])
     )
+    how: dict[str, Any] = {
+        "method": method,
+        "weights": weights if method == "wls" else None,
+        "caps": caps,
+    }
     try:
-        sol = solve_multiplane(
-            A, alpha, method, weights=weights if method == "wls" else None, caps=caps
-        )
+        sol = solve_multiplane(A, alpha, **how)
+        radii = plane_radii(correction_covariance(A, alpha, cov_A, **how))
     except ModelError as exc:
         raise ConfigError(str(exc), source=config or first) from None
     speeds = tuple(
@@ -262,7 +322,7 @@ def balance_speeds(
         w for _, res in runs for w in res.warnings if w.code != "near_bending_mode"
     )
     mode = "remove" if cfg.correction.mode == "remove" else "add"
-    return SpeedsResult(speeds, _plane_corrections(cfg, sol), method, sol, mode, notes, slow)
+    return SpeedsResult(speeds, _plane_corrections(cfg, sol, radii), method, sol, mode, notes, slow)
 
 
 def correction_masses_across_speeds(
@@ -311,6 +371,7 @@ def speeds_json(result: SpeedsResult) -> dict[str, Any]:
                 "weights": weight_entries(p.correction),
                 "unbalance_g_mm": round(float(q) * 1e6, 3),
                 "unbalance_angle_deg": round(float(phi), 2),
+                "uncertainty_g_mm": round(p.radius95_kg_m * 1e6, 3),
                 "dependent": p.dependent,
                 "at_limit": p.at_limit,
             }

@@ -291,6 +291,11 @@ def print_speeds(out: dict[str, Any]) -> None:
             f"  plane {p['plane']} at {p['position_mm']:g} mm: {p['action']} {ws or 'nothing'} "
             f"at radius {p['radius_mm']:g} mm{extra}"
         )
+        if not p["dependent"]:
+            print(
+                f"    its unbalance {p['unbalance_g_mm']:.1f} +- {p['uncertainty_g_mm']:.1f} g mm "
+                "(95 %, from the runs' noise)"
+            )
     print(f"({ANGLE_NOTE})")
     if out.get("slow_roll"):
         sr = out["slow_roll"]
