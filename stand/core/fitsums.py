@@ -135,8 +135,8 @@ class WindowSums:
         """Add samples (their base rows :func:`base_rows`, accelerations and speeds)."""
         if not len(a):
             return
-        self.G += B @ B.T
-        self.Ba += B @ a
+        self.G += np.dot(B, B.T)  # np.dot lets other threads run (matmul holds the GIL)
+        self.Ba += np.dot(B, a)
         self.n += len(a)
         self.w_sum += float(np.sum(w))
         self.w_min = min(self.w_min, float(np.min(w)))
@@ -202,6 +202,12 @@ def block_fits(sums: FloatArray) -> tuple[NDArray[np.complex128], FloatArray, Fl
     return coef[:, 0] - 1j * coef[:, 1], n, var
 
 
+SIDE_BAND_GROUP = 64
+"""Samples per group for the side bands of a long window (:func:`side_band_sums`)."""
+TAYLOR_TOL = 1e-9
+"""Largest first term left out of the side bands' Taylor series, relative to the sums."""
+
+
 def side_band_sums(
     residual: AnyFloat,
     c: AnyFloat,
@@ -215,7 +221,79 @@ def side_band_sums(
     revolutions ``R``: one DFT bin next to 1x is one unit of it.  Single
     precision is ample for a noise level (1e-7 relative); the chunks' sums are
     added in double.  Returns shape (2, side_bands): the upper and lower bands.
+
+    In a long window ``phase`` moves little within a group of
+    :data:`SIDE_BAND_GROUP` samples, so ``e^{-i k phase}`` is taken at each
+    group's middle sample times its Taylor series in the distance ``d`` from
+    it: the sums need only the moments ``sum r e^{-i theta} d^p`` of each
+    group, ``p < P``, with ``P`` the fewest terms whose first term left out,
+    ``(K+1 max|d|)^P / P!``, is below :data:`TAYLOR_TOL` (a 600 s window: 3
+    terms).  A window too short for 8 terms is summed sample by sample.
     """
+    n = len(residual)
+    groups = n // SIDE_BAND_GROUP
+    m = groups * SIDE_BAND_GROUP
+    terms = _taylor_terms(phase[:m], groups, side_bands + 1) if groups >= 2 else None
+    if terms is None:
+        return _side_bands_direct(residual, c, s, phase, side_bands)
+    out = _side_bands_grouped(residual[:m], c[:m], s[:m], phase[:m], side_bands, groups, terms)
+    if m < n:
+        out += _side_bands_direct(residual[m:], c[m:], s[m:], phase[m:], side_bands)
+    return out
+
+
+def _taylor_terms(phase: AnyFloat, groups: int, k_max: int) -> int | None:
+    """Terms of the Taylor series the groups need (None: more than 8)."""
+    ph = phase.reshape(groups, SIDE_BAND_GROUP)
+    mid = SIDE_BAND_GROUP // 2
+    x = k_max * float(np.max(np.abs(ph - ph[:, mid : mid + 1])))
+    term, p = 1.0, 0
+    while term > TAYLOR_TOL:
+        p += 1
+        term *= x / p
+        if p > 8:
+            return None
+    return p
+
+
+def _side_bands_grouped(
+    residual: AnyFloat, c: AnyFloat, s: AnyFloat, phase: AnyFloat, side_bands: int,
+    groups: int, terms: int,
+) -> NDArray[np.complex128]:  # fmt: skip
+    """:func:`side_band_sums` from each group's moments (``len(residual)`` is ``groups`` times
+    :data:`SIDE_BAND_GROUP`)."""
+    shape = (groups, SIDE_BAND_GROUP)
+    mid = SIDE_BAND_GROUP // 2
+    ph = phase.reshape(shape)
+    ref = ph[:, mid].astype(np.float64)
+    d = ph - ph[:, mid : mid + 1]
+    base = np.empty((2, *shape), np.float32)  # r e^{-i theta}: real and imaginary rows
+    np.multiply(residual.reshape(shape), c.reshape(shape), out=base[0])
+    np.multiply(residual.reshape(shape), s.reshape(shape), out=base[1])
+    np.negative(base[1], out=base[1])
+    moments = np.empty((terms, 2, groups))
+    dp = np.ones(shape, np.float32)
+    for p in range(terms):  # einsum multiplies and sums in one pass
+        moments[p] = np.einsum("agl,gl->ag", base, dp)
+        if p + 1 < terms:
+            dp *= d
+    M = moments[:, 0] + 1j * moments[:, 1]  # (terms, groups)
+    z = np.exp(-1j * ref)  # e^{-i phase} at each group's middle, then its powers 2 .. K+1
+    E = np.empty((groups, side_bands), complex)
+    E[:, 0] = z * z
+    for j in range(1, side_bands):
+        np.multiply(E[:, j - 1], z, out=E[:, j])
+    k = np.arange(2, side_bands + 2)
+    coef = np.array([(-1j * k) ** p / math.factorial(p) for p in range(terms)])  # (terms, K)
+    up = np.sum((M @ E) * coef, axis=0)
+    low = np.sum((M.conj() @ E) * coef, axis=0)
+    return np.stack((up, low))
+
+
+def _side_bands_direct(
+    residual: AnyFloat, c: AnyFloat, s: AnyFloat, phase: AnyFloat, side_bands: int
+) -> NDArray[np.complex128]:
+    """:func:`side_band_sums` sample by sample."""
     n = len(residual)
     base = np.empty(n, np.complex64)  # the residual with 1x moved to 0: r e^{-i theta}
     base.real = residual * c
