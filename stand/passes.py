@@ -7,10 +7,9 @@ up the sums the gate and the block check need (per block of
 :data:`BLOCK_REVS` revolutions) and the fit's normal equations (per chunk; a
 chunk holds whole blocks, so a window that starts at any block is a sum of
 chunks, and of one chunk redone).  A second pass over the window adds the
-residual's side bands (the noise at 1x) once the coefficients are known, from
-a single-precision copy the first pass kept.  Nothing of the length of the
-run is allocated besides the stream itself (10 bytes a sample) and that copy
-(16 bytes a sample of the node being measured).
+residual's side bands (the noise at 1x) once the coefficients are known,
+computing each chunk's angle again.  Nothing of the length of the run is
+allocated besides the stream itself (10 bytes a sample).
 """
 
 from __future__ import annotations
@@ -36,6 +35,7 @@ from stand.core.fitsums import (
     model_values,
     side_band_sums,
 )
+from stand.core.trig import cos_sin
 from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 from stand.gate import (
@@ -102,7 +102,7 @@ class _NodeRun:
         at = self.s.index[i0:i1].astype(np.float64)
         th, w = angle_at(self.knots, at)
         th += self.gamma
-        return th, w, self.s.accel(i0, i1), np.cos(th), np.sin(th)
+        return th, w, self.s.accel(i0, i1), *cos_sin(th)
 
     def angle(self, i: int) -> float:
         """The shaft angle at sample ``i`` [rad]."""
@@ -110,35 +110,15 @@ class _NodeRun:
         return float(th[0]) + self.gamma
 
 
-@dataclass
-class _Kept:
-    """What the first pass keeps for the side bands, in single precision (16 bytes a sample).
-
-    The side bands are a noise level (single precision already); the residual
-    from ``c, s, w`` in single precision is off by about 1e-7 of the 1x
-    amplitude, far below any noise.  ``phase`` is the angle from the first
-    sample kept [rad].
-    """
-
-    lo: int
-    phase: np.ndarray
-    c: np.ndarray
-    s: np.ndarray
-    w: np.ndarray
-
-
 def _first_pass(
     run: _NodeRun, starts: np.ndarray, end: int, n_full: int, w0: float
-) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]], _Kept]:
+) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]]]:
     """Block sums of the ``n_full`` full blocks, and the fit's sums per chunk of blocks.
 
     ``starts``: the first sample of each block (the last one is the tail up to
-    ``end``).  Returns the block sums, ``(first block, last block + 1, sums)``
-    per chunk, and what the side bands need.
+    ``end``).  Returns the block sums and ``(first block, last block + 1, sums)``
+    per chunk.
     """
-    lo = int(starts[0])
-    kept = _Kept(lo, *(np.empty(end - lo, np.float32) for _ in range(4)))
-    th_lo = run.angle(lo) if end > lo else 0.0
     blocks = np.zeros((n_full, 9))
     chunks: list[tuple[int, int, WindowSums]] = []
     bounds = np.append(starts, end)
@@ -147,9 +127,7 @@ def _first_pass(
         j1 = int(np.searchsorted(bounds, bounds[j0] + CHUNK, side="right"))
         j1 = min(max(j1 - 1, j0 + 1), len(starts))
         i0, i1 = int(bounds[j0]), int(bounds[j1])
-        th, w, a, c, s = run.chunk(i0, i1)
-        k = slice(i0 - lo, i1 - lo)
-        kept.phase[k], kept.c[k], kept.s[k], kept.w[k] = th - th_lo, c, s, w
+        _, w, a, c, s = run.chunk(i0, i1)
         full = min(j1, n_full)
         if full > j0:
             upto = int(bounds[full]) - i0
@@ -160,7 +138,7 @@ def _first_pass(
         sums.add(base_rows(c, s, w, w0), a, w)
         chunks.append((j0, j1, sums))
         j0 = j1
-    return blocks, chunks, kept
+    return blocks, chunks
 
 
 def _window_sums(
@@ -180,33 +158,40 @@ def _window_sums(
 
 
 def _second_pass(
-    run: _NodeRun, kept: _Kept, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
+    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
     span: float, taper: bool,
 ) -> tuple[np.ndarray, float, float, float, complex]:  # fmt: skip
     """Side-band sums of the residual over the window, sum r^2, sum wt^2, sum wt, and
-    ``sum r e^{-5 i theta}`` (the fit has no 5x column: the residual holds all of it)."""
+    ``sum r e^{-5 i theta}`` (the fit has no 5x column: the residual holds all of it).
+
+    Each chunk's angle is computed again rather than kept from the first pass:
+    on the CI machine touching fresh memory costs more than the arithmetic
+    (a one-hour run would keep 230 MB a node).
+    """
     revs = span / (2 * math.pi)
     bands: np.ndarray = np.zeros((2, SIDE_BANDS), complex)
     rr = wt2 = wt1 = 0.0
     h5 = 0j
-    b = (T @ coef).astype(np.float32)
-    ph0 = float(kept.phase[i0 - kept.lo])
+    b = T @ coef
+    th0 = run.angle(i0)
+    per_bin = 1.0 / max(revs, 1e-12)
     for k0 in range(i0, i1, CHUNK):
         k1 = min(k0 + CHUNK, i1)
-        k = slice(k0 - kept.lo, k1 - kept.lo)
-        c, s, phase = kept.c[k], kept.s[k], kept.phase[k] - np.float32(ph0)
-        r = run.s.accel(k0, k1) - model_values(c, s, kept.w[k], w0, b)
-        rr += float(r @ r)
+        th, w, a, c, s = run.chunk(k0, k1)
+        th -= th0  # the angle from the window's start
+        r = a - model_values(c, s, w, w0, b)
+        rr += float(np.dot(r, r))
         if taper and span > 0:
-            wt = np.sin(np.float32(math.pi / span) * phase) ** 2
-            wt2 += float(wt @ wt)
+            wt = np.sin((math.pi / span) * th) ** 2
+            wt2 += float(np.dot(wt, wt))
             wt1 += float(np.sum(wt))
-            r = wt * r
+            r *= wt
         else:
             wt2 += k1 - k0
             wt1 += k1 - k0
-        bands += side_band_sums(r, c, s, phase / np.float32(max(revs, 1e-12)), SIDE_BANDS)
-        z = c - 1j * s  # e^{-i theta}, single precision
+        th *= per_bin
+        bands += side_band_sums(r, c, s, th.astype(np.float32), SIDE_BANDS)
+        z = c - 1j * s  # e^{-i theta}
         z2 = z * z
         h5 += complex(np.dot(r, z2 * z2 * z))
     return bands, rr, wt2, wt1, h5
@@ -314,7 +299,7 @@ def node_phasor(
     end = int(run.find(pos[b : b + 1], "right")[0])
     per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
     w0 = 2 * math.pi / float(np.median(per_rev))  # a fixed speed for the base columns
-    blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
+    blocks, chunks = _first_pass(run, starts, end, n_full, w0)
     first = settled_block(blocks) if gate else 0
     if first > 0:
         notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
@@ -342,8 +327,7 @@ def node_phasor(
     else:
         XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
     coef = np.linalg.solve(XtWX, XtWa)
-    bands, rr, wt2, wt1, h5 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
-    del kept
+    bands, rr, wt2, wt1, h5 = _second_pass(run, i0, end, w0, T, coef, span, tapered)
     sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
