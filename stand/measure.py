@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.beside import Beside, can_fork
 from stand.core import Diagnostic, StandParameters, solve_unbalance
 from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
@@ -205,6 +206,25 @@ def _support(
     return ph, window, [Diagnostic("gate", f"node {node}: {n}") for n in notes] + warnings, fit
 
 
+FORK_SAMPLES = 500_000
+"""A node with this many samples or more (about 2 min at 4 kHz) is measured beside the other,
+in a forked child (:mod:`stand.beside`): below it the fork costs more than it saves."""
+
+
+def _supports(args: list[tuple[Any, ...]]) -> list[tuple[Phasor, Window, list[Diagnostic], Any]]:
+    """:func:`_support` of each node, in order; the second beside the first when both are
+    long and the process may fork (the first node's error is raised first, as in order)."""
+    if len(args) == 2 and min(a[1].samples for a in args) >= FORK_SAMPLES and can_fork():
+        other = Beside(_support, *args[1])
+        try:
+            first = _support(*args[0])
+        except BaseException:
+            other.cancel()
+            raise
+        return [first, other.result()]
+    return [_support(*a) for a in args]
+
+
 def judge_support(
     node: int, ph: Phasor, window: Window, ratio: float, sensor: tuple[float, float]
 ) -> tuple[Phasor, list[Diagnostic]]:
@@ -304,16 +324,16 @@ def measure(
     # frames left out as malformed explain a node with nothing usable: say so beside it
     bad = next((f" ({w.message})" for w in streams.warnings if w.code == "bad_frames"), "")
     for node in SUPPORT_NODES:
-        s = streams.nodes.get(node)
-        if s is None:
+        if streams.nodes.get(node) is None:
             raise MeasurementError(
                 f"node {node} sent nothing: need nodes 1 and 2 (one per "
                 f"support), got {sorted(streams.nodes) or 'none'}{bad}"
             )
-        k = node - 1
-        ph, window, notes, fit = _support(
-            node, s, gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad
-        )
+    args = [
+        (node, streams.nodes[node], gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad)
+        for k, node in enumerate(SUPPORT_NODES)
+    ]
+    for ph, window, notes, fit in _supports(args):
         warnings.extend(notes)
         supports.append(ph)
         windows.append(window)
