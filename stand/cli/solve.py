@@ -53,6 +53,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
     if args.across_speeds:
         return run_across_speeds(args)
+    if len(args.runs) == 1 and args.runs[0].lower().endswith(".h5"):
+        from stand.drivers.seal import prefetch_seal
+
+        prefetch_seal(args.runs[0])  # hashed on the second core while the modules load
     if args.method != "ls" or args.max_mass_g is not None:
         raise UsageError("stand solve: --method and --max-mass-g go with --across-speeds")
     options = solve_options(args)
