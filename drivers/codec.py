@@ -92,34 +92,43 @@ def _counts(b: NDArray[np.uint8]) -> NDArray[np.int16]:
     return np.stack(fields, -1).astype(np.int16, copy=False)
 
 
+def _rows(d8: NDArray[np.uint8], r: NDArray[np.int64]) -> NDArray[np.uint8]:
+    """Rows ``r`` of the frames' 8 bytes: gathered as one 8-byte word each where the
+    bytes lie row after row (a fifth of the time of a gather of 8-byte rows)."""
+    if d8.flags.c_contiguous and d8.shape[1] == 8:
+        words: NDArray[np.uint8] = d8.view(np.uint64)[:, 0].take(r).view(np.uint8)
+        return words.reshape(len(r), 8)
+    return d8[r]
+
+
 def _records(
-    d8: NDArray[np.uint8], node: NDArray[np.int64], rows: dict[str, NDArray[np.int64]]
+    d8: NDArray[np.uint8], node: NDArray[np.uint8], rows: dict[str, NDArray[np.int64]]
 ) -> tuple[SamplesRecords, StatusRecords, MarkRecords]:
     """The records of each kind from the good frames' 8 bytes, by :data:`LAYOUT` (each
     kind's rows gathered once, its fields then cut from them)."""
     r = rows["SAMPLES"]
-    b = d8[r]
+    b = _rows(d8, r)
     samples = SamplesRecords(
         frame=r,
-        node=node[r].astype(np.uint8),
+        node=node[r],
         seq=_field(b, None, "SAMPLES", "seq"),
         counts=_counts(b),
     )
     r = rows["STATUS"]
-    b = d8[r]
+    b = _rows(d8, r)
     status = StatusRecords(
         frame=r,
-        node=node[r].astype(np.uint8),
+        node=node[r],
         rate=_field(b, None, "STATUS", "rate"),
         scale=_field(b, None, "STATUS", "scale"),
         flags=_field(b, None, "STATUS", "flags"),
         version=_field(b, None, "STATUS", "version"),
     )
     r = rows["MARK"]
-    b = d8[r]
+    b = _rows(d8, r)
     marks = MarkRecords(
         frame=r,
-        node=node[r].astype(np.uint8),
+        node=node[r],
         seq=_field(b, None, "MARK", "seq"),
         slot=_field(b, None, "MARK", "slot"),
         frac=_field(b, None, "MARK", "frac"),
@@ -141,11 +150,11 @@ def decode(frames: Frames) -> Decoded:
     Decoded
         Records of each kind carry ``frame``, their index in ``frames``.
     """
-    cid = frames.can_id.astype(np.int64)
+    cid = frames.can_id.astype(np.uint32, copy=False)  # ids are 29 bits: 4 bytes do
     error = (frames.flags & FLAG_ERROR) != 0
     standard = (frames.flags & (FLAG_EXTENDED | FLAG_ERROR)) == 0
-    base = cid & ~0x3F
-    node = cid & 0x3F
+    base = cid & np.uint32(~0x3F & 0xFFFFFFFF)
+    node = (cid & np.uint32(0x3F)).astype(np.uint8)
     protocol = standard & ((base == SAMPLES_BASE) | (base == STATUS_BASE) | (base == MARK_BASE))
     protocol &= (node >= 1) & (node <= MAX_NODE)
 

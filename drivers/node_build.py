@@ -178,7 +178,7 @@ def _status(
     dec: Decoded,
     st_sel: NDArray[np.bool_],
     st_t: NDArray[np.float64],
-    all_frames: NDArray[Any],
+    frames: tuple[int, int],
     first_t: float,
     t0: float,
     strict_status: bool,
@@ -192,12 +192,12 @@ def _status(
         came = "none came" if len(st_t) == 0 else f"the first came after {st_t[0] - first_t:.2f} s"
         what = (
             f"node {node}: no STATUS within {STATUS_WITHIN_S} s of its first frame "
-            f"(frame {int(all_frames[0])}, {came}): its samples cannot be scaled"
+            f"(frame {frames[0]}, {came}): its samples cannot be scaled"
         )
         if strict_status and node in SUPPORT_NODES:
-            raise NoStatusError(what, node=node, frame=int(all_frames[0]))
+            raise NoStatusError(what, node=node, frame=frames[0])
         if node not in SUPPORT_NODES:
-            what += f" (not a support node: {len(all_frames)} frames left aside)"
+            what += f" (not a support node: {frames[1]} frames left aside)"
         warn.append(Diagnostic("no_status", what, None, float(first_t - t0)))
     for name, values, unit in (("rate", rate, "Hz"), ("scale", scale, "µm/s² per count")):
         if len(np.unique(values)) > 1:
@@ -212,16 +212,18 @@ def _restarts(
     s_frame: NDArray[Any],
     st_frame: NDArray[Any],
     t_s: NDArray[np.float64],
-    all_frames: NDArray[Any],
+    m_frame: NDArray[Any],
     rate: NDArray[np.float64],
 ) -> NDArray[np.bool_]:
     """Where the node restarted: a STATUS after silence, unless seq runs on across it as the
     time passed predicts (a bus dropout is silence too)."""
     st_t = t_s[st_frame]
-    pos_in_node = np.searchsorted(all_frames, st_frame)
-    gap_before = np.where(
-        pos_in_node > 0, st_t - t_s[all_frames[np.maximum(pos_in_node - 1, 0)]], 0.0
-    )
+    prev = np.full(len(st_frame), -1, np.int64)  # the node's frame before each STATUS
+    for frames in (s_frame, st_frame, m_frame):  # each sorted: no sort of the node's frames
+        j = np.searchsorted(frames, st_frame)
+        has = j > 0
+        prev[has] = np.maximum(prev[has], frames[j[has] - 1])
+    gap_before = np.where(prev >= 0, st_t - t_s[np.maximum(prev, 0)], 0.0)
     after_silence = gap_before > SILENCE_S
     restart_at = np.zeros(len(seq), dtype=bool)
     hit = np.searchsorted(s_frame, st_frame[after_silence])
@@ -368,15 +370,18 @@ def rebuild_node(
     s_frame = dec.samples.frame if s_all else dec.samples.frame[s_sel]
     st_frame = dec.status.frame[st_sel]
     m_frame = dec.marks.frame[m_sel]
-    # three sorted runs: a stable sort (timsort for int64) merges them in linear time
-    all_frames = np.sort(np.concatenate((s_frame, st_frame, m_frame)), kind="stable")
-    first_t, last_t = float(t_s[all_frames[0]]), float(t_s[all_frames[-1]])
+    # three sorted runs: their ends give the node's first and last frames
+    runs = [f for f in (s_frame, st_frame, m_frame) if len(f)]
+    first, last = min(int(f[0]) for f in runs), max(int(f[-1]) for f in runs)
+    first_t, last_t = float(t_s[first]), float(t_s[last])
     st_t = t_s[st_frame]
-    rate, scale, warn = _status(node, dec, st_sel, st_t, all_frames, first_t, t0, strict_status)
+    n_frames = len(s_frame) + len(st_frame) + len(m_frame)
+    rate, scale, warn = _status(
+        node, dec, st_sel, st_t, (first, n_frames), first_t, t0, strict_status
+    )
 
     seq = (dec.samples.seq if s_all else dec.samples.seq[s_sel]).astype(np.int64)
-    restart_at = _restarts(seq, s_frame, st_frame, t_s, all_frames, rate)
-    del all_frames  # a long run's node: free as soon as done
+    restart_at = _restarts(seq, s_frame, st_frame, t_s, m_frame, rate)
     keep, F, seg, lost = (
         _unwrap_samples(seq, restart_at)
         if len(seq)

@@ -283,16 +283,35 @@ def shift_decoded(dec: Decoded, offset: int) -> Decoded:
     )
 
 
-def node_records(dec: Decoded, node: int) -> Decoded:
-    """Only the records of one node (counts and bad frames are left out)."""
+def node_records(parts: Sequence[Decoded], node: int) -> Decoded:
+    """Only the records of one node, from decoded blocks one after the other, in one
+    array per field (counts and bad frames are left out).
 
-    def pick(records: Any) -> Any:
-        at = np.flatnonzero(records.node == node)  # once, then each field gathered by it
-        return type(records)(
-            **{f.name: np.take(getattr(records, f.name), at, axis=0) for f in fields(records)}
-        )
+    Each field is gathered straight into its place in one array of the node's
+    length: no array per block, and no second copy to join them.
+    """
 
-    return Decoded(pick(dec.samples), pick(dec.status), pick(dec.marks), 0, 0)
+    def gather(records: Sequence[Any]) -> Any:
+        at = [np.flatnonzero(r.node == node) for r in records]  # once, then every field
+        total = sum(len(a) for a in at)
+        out = {}
+        for f in fields(records[0]):
+            first = getattr(records[0], f.name)
+            field = np.empty((total, *first.shape[1:]), first.dtype)
+            k = 0
+            for r, a in zip(records, at, strict=True):
+                np.take(getattr(r, f.name), a, axis=0, out=field[k : k + len(a)])
+                k += len(a)
+            out[f.name] = field
+        return type(records[0])(**out)
+
+    return Decoded(
+        gather([p.samples for p in parts]),
+        gather([p.status for p in parts]),
+        gather([p.marks for p in parts]),
+        0,
+        0,
+    )
 
 
 def concat_decoded(parts: Sequence[Decoded]) -> Decoded:

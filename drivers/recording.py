@@ -229,12 +229,12 @@ def _unreadable(exc: Exception, path: Path) -> RecordingError:
 def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
     g = f["frames"]
     cols = {k: g[k][lo:hi] for k in _FRAME_FIELDS}
-    return Frames(
-        cols["t_s"].astype(np.float64),
-        cols["can_id"].astype(np.uint32),
-        cols["dlc"].astype(np.uint8),
+    return Frames(  # each column as stored: a copy only where the file's type differs
+        cols["t_s"].astype(np.float64, copy=False),
+        cols["can_id"].astype(np.uint32, copy=False),
+        cols["dlc"].astype(np.uint8, copy=False),
         np.ascontiguousarray(g["data"][lo:hi], dtype=np.uint8),
-        cols["flags"].astype(np.uint8),
+        cols["flags"].astype(np.uint8, copy=False),
     )
 
 
@@ -337,7 +337,7 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
             for block in iter_log(path, warn=warn):
                 builder.add(block)
         rec = Recording(str(path), Frames.empty(), warnings=tuple(warn))
-    return rec, builder.streams(strict_status=strict_status)
+    return rec, builder.streams(strict_status=strict_status, release=True)
 
 
 def is_run_file(path: str | Path) -> bool:
