@@ -191,10 +191,27 @@ def _second_pass(
             wt1 += k1 - k0
         th *= per_bin
         bands += side_band_sums(r, c, s, th.astype(np.float32), SIDE_BANDS)
-        z = c - 1j * s  # e^{-i theta}
-        z2 = z * z
-        h5 += complex(np.dot(r, z2 * z2 * z))
+        c5, s5 = _fifth(c, s)
+        h5 += complex(float(np.dot(r, c5)), -float(np.dot(r, s5)))
     return bands, rr, wt2, wt1, h5
+
+
+def _fifth(c: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``cos 5 theta, sin 5 theta`` from ``cos theta, sin theta``, by the double angle
+    twice and one sum (real arithmetic: a third of the time of complex powers)."""
+    c2 = c * c
+    c2 -= s * s
+    s2 = s * c
+    s2 *= 2.0
+    c4 = c2 * c2
+    c4 -= s2 * s2
+    s4 = s2 * c2
+    s4 *= 2.0
+    c5 = c4 * c
+    c5 -= s4 * s
+    s4 *= c
+    s4 += c4 * s
+    return c5, s4
 
 
 def _tapered_normal_equations(
