@@ -24,7 +24,8 @@ import os
 import subprocess
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Literal
 
@@ -77,13 +78,21 @@ def seal_state(path: str | Path) -> SealState:
     """
     p = Path(path)
     key = _file_key(p)
+    found = _take_ahead(p, key)
+    return found if found is not None else _state(p)
+
+
+def _take_ahead(p: Path, key: tuple[str, int, int, int] | None) -> SealState | None:
+    """The state hashed ahead for ``key`` (None: none); every check of this file ahead,
+    stale or not, is joined and forgotten."""
     found: SealState | None = None
-    for k in [k for k in _AHEAD if k[0] == key[0]]:  # this file's, and any stale one
+    name = str(p.resolve())
+    for k in [k for k in _AHEAD if k[0] == name]:
         thread, box = _AHEAD.pop(k)
         thread.join()
         if k == key and box:
             found = box[0]
-    return found if found is not None else _state(p)
+    return found
 
 
 def _state(p: Path) -> SealState:
@@ -102,6 +111,17 @@ _AHEAD: dict[tuple[str, int, int, int], tuple[threading.Thread, list[SealState]]
 def _file_key(p: Path) -> tuple[str, int, int, int]:
     st = p.stat()
     return (str(p.resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
+
+
+@contextmanager
+def seal_ahead(path: str | Path) -> Iterator[None]:
+    """:func:`prefetch_seal` for the time of the block; what was not taken up by then is
+    joined and forgotten (a command that ends before it reads leaves no thread)."""
+    prefetch_seal(path)
+    try:
+        yield
+    finally:
+        _take_ahead(Path(path), None)
 
 
 def prefetch_seal(path: str | Path) -> None:

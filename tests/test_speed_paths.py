@@ -161,16 +161,25 @@ def test_a_prefetched_seal_is_the_seal(tmp_path: Path) -> None:
     sc, p, _ = load_scene("demo")
     run = tmp_path / "r.h5"
     write_recording(Recording("t", simulate(sc, p).frames, {}), run)
+
+    def ahead() -> list[object]:
+        return [k for k in seal._AHEAD if k[0] == str(run.resolve())]
+
     seal.prefetch_seal(run)
     assert seal.seal_state(run) == "intact"
-    assert not seal._AHEAD
+    assert not ahead()
+    with seal.seal_ahead(run):  # not taken up: forgotten at the end, its thread joined
+        assert ahead()
+    assert not ahead()
     seal.prefetch_seal(run)
     with run.open("r+b") as f:  # altered after the prefetch: checked again, not taken
         f.seek(-100, os.SEEK_END)
         f.write(b"\x55" * 10)
     assert seal.seal_state(run) == "broken"
+    assert not ahead()
+    n = len(seal._AHEAD)
     seal.prefetch_seal(tmp_path / "missing.h5")  # nothing to read: nothing started
-    assert not seal._AHEAD
+    assert len(seal._AHEAD) == n
 
 
 def test_streams_released_are_the_streams() -> None:

@@ -53,10 +53,16 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
     if args.across_speeds:
         return run_across_speeds(args)
-    if len(args.runs) == 1 and args.runs[0].lower().endswith(".h5"):
-        from stand.drivers.seal import prefetch_seal
+    if len(args.runs) == 1 and not args.summary and args.runs[0].lower().endswith(".h5"):
+        from stand.drivers.seal import seal_ahead
 
-        prefetch_seal(args.runs[0])  # hashed on the second core while the modules load
+        with seal_ahead(args.runs[0]):  # hashed on the second core while the modules load
+            return _run(args)
+    return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """One run (its result) or a batch (a line a run, the summary)."""
     if args.method != "ls" or args.max_mass_g is not None:
         raise UsageError("stand solve: --method and --max-mass-g go with --across-speeds")
     options = solve_options(args)
