@@ -33,6 +33,7 @@ from stand.core.beam import BeamRotor
 from stand.core.dsp import angle_at, angle_knots
 from stand.core.fitsums import base_rows
 from stand.core.influence import InfluenceMap
+from stand.core.trig import cos_sin
 from stand.drivers.protocol import WRAP
 from stand.drivers.streams import SUPPORT_NODES, NodeStream, RunStreams
 from stand.gate import FULL_SCALE_COUNT, SPEED_TOLERANCE
@@ -89,7 +90,7 @@ def extend(fit: NodeFit, s: NodeStream) -> NodeFit | None:
     th += fit.gamma
     a = counts * np.float64(fit.scale_m_s2)
     sums = fit.sums.copy()
-    c, sn = np.cos(th), np.sin(th)
+    c, sn = cos_sin(th)  # as the full pass computes them
     sums.add(base_rows(c, sn, w, fit.w0), a, w)
     revs = int(rev[last] - rev[1])
     # the window's start and end stay the full pass's: the tail's sample positions count
