@@ -86,7 +86,7 @@ def _take_ahead(p: Path, key: tuple[str, int, int, int] | None) -> SealState | N
     """The state hashed ahead for ``key`` (None: none); every check of this file ahead,
     stale or not, is joined and forgotten."""
     found: SealState | None = None
-    name = str(p.resolve())
+    name = os.path.realpath(p)  # never raises (a symlink loop stays as it is)
     for k in [k for k in _AHEAD if k[0] == name]:
         thread, box = _AHEAD.pop(k)
         thread.join()
@@ -110,7 +110,7 @@ _AHEAD: dict[tuple[str, int, int, int], tuple[threading.Thread, list[SealState]]
 
 def _file_key(p: Path) -> tuple[str, int, int, int]:
     st = p.stat()
-    return (str(p.resolve()), st.st_size, st.st_mtime_ns, st.st_ino)
+    return (os.path.realpath(p), st.st_size, st.st_mtime_ns, st.st_ino)
 
 
 @contextmanager

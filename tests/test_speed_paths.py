@@ -163,7 +163,7 @@ def test_a_prefetched_seal_is_the_seal(tmp_path: Path) -> None:
     write_recording(Recording("t", simulate(sc, p).frames, {}), run)
 
     def ahead() -> list[object]:
-        return [k for k in seal._AHEAD if k[0] == str(run.resolve())]
+        return [k for k in seal._AHEAD if k[0] == os.path.realpath(run)]
 
     seal.prefetch_seal(run)
     assert seal.seal_state(run) == "intact"
