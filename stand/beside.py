@@ -10,10 +10,11 @@ value back through a pipe, pickled.  The child leaves by ``os._exit``: it
 never flushes the parent's buffered output, runs no ``atexit`` hook and
 writes no file.
 
-Only where it is safe and pays (:func:`can_fork`): a platform with ``fork``,
-two cores or more, and no other Python thread in the process (a thread
-holding a lock at the fork would leave the child stuck on it: the station
-and live sessions measure serially).  ``STAND_SERIAL=1`` turns it off.  If
+Only where it is safe and pays (:func:`can_fork`): Linux (where ``fork`` of a
+process running numpy is safe; macOS's frameworks are not), two cores or
+more, and no other Python thread in the process (a thread holding a lock at
+the fork would leave the child stuck on it: the station and live sessions
+measure serially).  ``STAND_SERIAL=1`` turns it off.  If
 the child dies or its answer cannot be read, the parent does the work
 itself: the answer never depends on how it was computed.
 """
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import sys
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -30,7 +32,7 @@ from typing import Any
 def can_fork() -> bool:
     """Whether work may be forked beside this process now (see the module's notes)."""
     return (
-        hasattr(os, "fork")
+        sys.platform.startswith("linux")  # macOS: fork is unsafe once its frameworks load
         and (os.cpu_count() or 1) >= 2
         and threading.active_count() == 1
         and os.environ.get("STAND_SERIAL", "") in ("", "0")
