@@ -49,9 +49,14 @@ class Beside:
 
     def __init__(self, fn: Callable[..., Any], *args: Any) -> None:
         self._fn, self._args = fn, args
-        self._pid = 0
+        self._pid, self._read = 0, -1
         read, write = os.pipe()
-        pid = os.fork()
+        try:
+            pid = os.fork()
+        except OSError:  # no process to be had (memory, limits): the work is done here
+            os.close(read)
+            os.close(write)
+            return
         if pid == 0:  # the child: compute, answer, leave without any clean-up of the parent's
             try:
                 os.close(read)
@@ -63,7 +68,9 @@ class Beside:
 
     def result(self) -> Any:
         """The child's value (or its exception, raised here); computed here if the child
-        could not answer."""
+        could not answer (or none could be forked)."""
+        if self._read < 0:
+            return self._fn(*self._args)
         try:
             with os.fdopen(self._read, "rb") as f:
                 data = f.read()

@@ -114,6 +114,16 @@ def test_work_beside_returns_its_value_and_raises_its_errors() -> None:
     assert time.perf_counter() - t0 < 5
 
 
+def test_no_process_to_fork_the_work_is_done_here(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse() -> int:
+        raise BlockingIOError(11, "Resource temporarily unavailable")
+
+    monkeypatch.setattr(os, "fork", refuse)
+    b = beside.Beside(_square, 9)
+    assert b.result() == 81
+    b.cancel()  # nothing to end
+
+
 def test_no_fork_with_other_threads_or_when_told(monkeypatch: pytest.MonkeyPatch) -> None:
     import threading
 
