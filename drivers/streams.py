@@ -233,7 +233,7 @@ def rebuild_decoded(
     are gathered from them on their own, so the blocks are never joined whole.
     ``release``: the list of blocks is this function's to empty once every
     node's records are gathered (a long run's blocks are let go before the
-    nodes are rebuilt: 200 MB less at the peak of a one-hour run).
+    nodes are rebuilt: 140 MiB less at the peak of a one-hour run).
     """
     parts = [dec] if isinstance(dec, Decoded) else dec
     t0 = float(t_s[0]) if len(t_s) else 0.0
