@@ -33,7 +33,7 @@ def can_fork() -> bool:
     """Whether work may be forked beside this process now (see the module's notes)."""
     return (
         sys.platform.startswith("linux")  # macOS: fork is unsafe once its frameworks load
-        and (os.cpu_count() or 1) >= 2
+        and len(os.sched_getaffinity(0)) >= 2  # the cores this process may run on
         and threading.active_count() == 1
         and os.environ.get("STAND_SERIAL", "") in ("", "0")
     )
