@@ -8,13 +8,14 @@ up the sums the gate and the block check need (per block of
 chunk holds whole blocks, so a window that starts at any block is a sum of
 chunks, and of one chunk redone).  A second pass over the window adds the
 residual's side bands (the noise at 1x) once the coefficients are known,
-computing each chunk's angle again.  Nothing of the length of the run is
-allocated besides the stream itself (10 bytes a sample).
+from a single-precision copy the first pass kept (16 bytes a sample, up to
+:data:`KEEP_BYTES`), or computing each chunk's angle again.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,6 +49,11 @@ from stand.gate import (
 
 CHUNK = 1 << 16
 """Samples per chunk (about): a chunk holds whole blocks of revolutions."""
+KEEP_BYTES = 64 << 20
+"""The first pass keeps a single-precision copy of each sample's angle, cos, sin and speed
+(16 bytes a sample) for the second when it takes no more than this (a node's 17 min at
+4 kHz); a longer run's second pass computes them again.  Kept: 0.145 s a node at 600 s;
+computed again: 0.19 s (fresh memory costs more than the arithmetic only past that)."""
 
 
 @dataclass(frozen=True)
@@ -110,15 +116,37 @@ class _NodeRun:
         return float(th[0]) + self.gamma
 
 
+@dataclass
+class _Kept:
+    """What the first pass keeps for the second, in single precision (16 bytes a sample).
+
+    The side bands are a noise level (single precision already); the residual
+    from ``c, s, w`` in single precision is off by about 1e-7 of the 1x
+    amplitude, far below any noise.  ``phase`` is the angle from the first
+    sample kept [rad].
+    """
+
+    lo: int
+    phase: np.ndarray
+    c: np.ndarray
+    s: np.ndarray
+    w: np.ndarray
+
+
 def _first_pass(
     run: _NodeRun, starts: np.ndarray, end: int, n_full: int, w0: float
-) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]]]:
+) -> tuple[np.ndarray, list[tuple[int, int, WindowSums]], _Kept | None]:
     """Block sums of the ``n_full`` full blocks, and the fit's sums per chunk of blocks.
 
     ``starts``: the first sample of each block (the last one is the tail up to
-    ``end``).  Returns the block sums and ``(first block, last block + 1, sums)``
-    per chunk.
+    ``end``).  Returns the block sums, ``(first block, last block + 1, sums)``
+    per chunk, and the copy the second pass reads (None past :data:`KEEP_BYTES`).
     """
+    lo = int(starts[0])
+    kept = None
+    if 16 * (end - lo) <= KEEP_BYTES:
+        kept = _Kept(lo, *(np.empty(end - lo, np.float32) for _ in range(4)))
+    th_lo = run.angle(lo) if end > lo else 0.0
     blocks = np.zeros((n_full, 9))
     chunks: list[tuple[int, int, WindowSums]] = []
     bounds = np.append(starts, end)
@@ -127,7 +155,10 @@ def _first_pass(
         j1 = int(np.searchsorted(bounds, bounds[j0] + CHUNK, side="right"))
         j1 = min(max(j1 - 1, j0 + 1), len(starts))
         i0, i1 = int(bounds[j0]), int(bounds[j1])
-        _, w, a, c, s = run.chunk(i0, i1)
+        th, w, a, c, s = run.chunk(i0, i1)
+        if kept is not None:
+            k = slice(i0 - lo, i1 - lo)
+            kept.phase[k], kept.c[k], kept.s[k], kept.w[k] = th - th_lo, c, s, w
         full = min(j1, n_full)
         if full > j0:
             upto = int(bounds[full]) - i0
@@ -138,7 +169,7 @@ def _first_pass(
         sums.add(base_rows(c, s, w, w0), a, w)
         chunks.append((j0, j1, sums))
         j0 = j1
-    return blocks, chunks
+    return blocks, chunks, kept
 
 
 def _window_sums(
@@ -157,29 +188,37 @@ def _window_sums(
     return total
 
 
+def _window_chunks(
+    run: _NodeRun, kept: _Kept | None, i0: int, i1: int
+) -> Iterator[tuple[np.ndarray, ...]]:
+    """The window's samples by chunks: angle from the window's start, speed, acceleration,
+    cos and sin; read from the first pass's copy, or computed again."""
+    ph0 = run.angle(i0) if kept is None else kept.phase[i0 - kept.lo]
+    for k0 in range(i0, i1, CHUNK):
+        k1 = min(k0 + CHUNK, i1)
+        if kept is None:
+            th, w, a, c, s = run.chunk(k0, k1)
+            th -= ph0
+            yield th, w, a, c, s
+        else:
+            k = slice(k0 - kept.lo, k1 - kept.lo)
+            yield kept.phase[k] - ph0, kept.w[k], run.s.accel(k0, k1), kept.c[k], kept.s[k]
+
+
 def _second_pass(
-    run: _NodeRun, i0: int, i1: int, w0: float, T: np.ndarray, coef: np.ndarray,
-    span: float, taper: bool,
+    run: _NodeRun, kept: _Kept | None, i0: int, i1: int, w0: float, T: np.ndarray,
+    coef: np.ndarray, span: float, taper: bool,
 ) -> tuple[np.ndarray, float, float, float, complex]:  # fmt: skip
     """Side-band sums of the residual over the window, sum r^2, sum wt^2, sum wt, and
-    ``sum r e^{-5 i theta}`` (the fit has no 5x column: the residual holds all of it).
-
-    Each chunk's angle is computed again rather than kept from the first pass:
-    on the CI machine touching fresh memory costs more than the arithmetic
-    (a one-hour run would keep 230 MB a node).
-    """
+    ``sum r e^{-5 i theta}`` (the fit has no 5x column: the residual holds all of it)."""
     revs = span / (2 * math.pi)
     bands: np.ndarray = np.zeros((2, SIDE_BANDS), complex)
     rr = wt2 = wt1 = 0.0
     h5 = 0j
     b = T @ coef
-    th0 = run.angle(i0)
     per_bin = 1.0 / max(revs, 1e-12)
-    for k0 in range(i0, i1, CHUNK):
-        k1 = min(k0 + CHUNK, i1)
-        th, w, a, c, s = run.chunk(k0, k1)
-        th -= th0  # the angle from the window's start
-        r = a - model_values(c, s, w, w0, b)
+    for th, w, a, c, s in _window_chunks(run, kept, i0, i1):
+        r = a - model_values(c, s, w, w0, b.astype(c.dtype))
         rr += float(np.dot(r, r))
         if taper and span > 0:
             wt = np.sin((math.pi / span) * th) ** 2
@@ -187,10 +226,10 @@ def _second_pass(
             wt1 += float(np.sum(wt))
             r *= wt
         else:
-            wt2 += k1 - k0
-            wt1 += k1 - k0
-        th *= per_bin
-        bands += side_band_sums(r, c, s, th.astype(np.float32), SIDE_BANDS)
+            wt2 += len(r)
+            wt1 += len(r)
+        phase = (th * per_bin).astype(np.float32)
+        bands += side_band_sums(r, c, s, phase, SIDE_BANDS)
         c5, s5 = _fifth(c, s)
         h5 += complex(float(np.dot(r, c5)), -float(np.dot(r, s5)))
     return bands, rr, wt2, wt1, h5
@@ -316,7 +355,7 @@ def node_phasor(
     end = int(run.find(pos[b : b + 1], "right")[0])
     per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
     w0 = 2 * math.pi / float(np.median(per_rev))  # a fixed speed for the base columns
-    blocks, chunks = _first_pass(run, starts, end, n_full, w0)
+    blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
     first = settled_block(blocks) if gate else 0
     if first > 0:
         notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
@@ -344,7 +383,8 @@ def node_phasor(
     else:
         XtWX, XtWa = T.T @ sums.G @ T, T.T @ sums.Ba
     coef = np.linalg.solve(XtWX, XtWa)
-    bands, rr, wt2, wt1, h5 = _second_pass(run, i0, end, w0, T, coef, span, tapered)
+    bands, rr, wt2, wt1, h5 = _second_pass(run, kept, i0, end, w0, T, coef, span, tapered)
+    del kept
     sigma2 = float(np.mean(np.abs(bands) ** 2)) / wt2
     bread = np.linalg.inv(XtWX)
     cov_coef = sigma2 * (bread @ XtW2X @ bread if tapered else bread)
