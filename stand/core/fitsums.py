@@ -247,6 +247,8 @@ def _taylor_terms(phase: AnyFloat, groups: int, k_max: int) -> int | None:
     ph = phase.reshape(groups, SIDE_BAND_GROUP)
     mid = SIDE_BAND_GROUP // 2
     x = k_max * float(np.max(np.abs(ph - ph[:, mid : mid + 1])))
+    if not math.isfinite(x):
+        return None  # summed sample by sample, as ever: whatever it gives, it gives there
     term, p = 1.0, 0
     while term > TAYLOR_TOL:
         p += 1
