@@ -233,20 +233,22 @@ def side_band_sums(
     n = len(residual)
     groups = n // SIDE_BAND_GROUP
     m = groups * SIDE_BAND_GROUP
-    terms = _taylor_terms(phase[:m], groups, side_bands + 1) if groups >= 2 else None
+    ph = phase[:m].reshape(groups, SIDE_BAND_GROUP)
+    mid = SIDE_BAND_GROUP // 2
+    d = ph - ph[:, mid : mid + 1]  # each sample's distance from its group's middle
+    terms = _taylor_terms(d, side_bands + 1) if groups >= 2 else None
     if terms is None:
         return _side_bands_direct(residual, c, s, phase, side_bands)
-    out = _side_bands_grouped(residual[:m], c[:m], s[:m], phase[:m], side_bands, groups, terms)
+    out = _side_bands_grouped(residual[:m], c[:m], s[:m], ph[:, mid], d, side_bands, terms)
     if m < n:
         out += _side_bands_direct(residual[m:], c[m:], s[m:], phase[m:], side_bands)
     return out
 
 
-def _taylor_terms(phase: AnyFloat, groups: int, k_max: int) -> int | None:
-    """Terms of the Taylor series the groups need (None: more than 8)."""
-    ph = phase.reshape(groups, SIDE_BAND_GROUP)
-    mid = SIDE_BAND_GROUP // 2
-    x = k_max * float(np.max(np.abs(ph - ph[:, mid : mid + 1])))
+def _taylor_terms(d: AnyFloat, k_max: int) -> int | None:
+    """Terms of the Taylor series the groups need for distances ``d`` from their middles
+    (None: more than 8)."""
+    x = k_max * float(np.max(np.abs(d)))
     if not math.isfinite(x):
         return None  # summed sample by sample, as ever: whatever it gives, it gives there
     term, p = 1.0, 0
@@ -259,16 +261,14 @@ def _taylor_terms(phase: AnyFloat, groups: int, k_max: int) -> int | None:
 
 
 def _side_bands_grouped(
-    residual: AnyFloat, c: AnyFloat, s: AnyFloat, phase: AnyFloat, side_bands: int,
-    groups: int, terms: int,
+    residual: AnyFloat, c: AnyFloat, s: AnyFloat, middle: AnyFloat, d: AnyFloat,
+    side_bands: int, terms: int,
 ) -> NDArray[np.complex128]:  # fmt: skip
-    """:func:`side_band_sums` from each group's moments (``len(residual)`` is ``groups`` times
-    :data:`SIDE_BAND_GROUP`)."""
-    shape = (groups, SIDE_BAND_GROUP)
-    mid = SIDE_BAND_GROUP // 2
-    ph = phase.reshape(shape)
-    ref = ph[:, mid].astype(np.float64)
-    d = ph - ph[:, mid : mid + 1]
+    """:func:`side_band_sums` from each group's moments: ``middle`` is each group's phase at
+    its middle, ``d`` (groups, :data:`SIDE_BAND_GROUP`) each sample's distance from it."""
+    shape = d.shape
+    groups = shape[0]
+    ref = middle.astype(np.float64)
     base = np.empty((2, *shape), np.float32)  # r e^{-i theta}: real and imaginary rows
     np.multiply(residual.reshape(shape), c.reshape(shape), out=base[0])
     np.multiply(residual.reshape(shape), s.reshape(shape), out=base[1])
