@@ -4,8 +4,8 @@ Pure numerics (arrays in, arrays out).  numpy's float64 ``cos`` and ``sin``
 call the C library once per element: about 16 ns each on the 2-core CI
 machine, a third of the first pass over a run's samples.  Here an angle is
 split as ``theta = k 2 pi / N + delta`` with ``k`` the nearest multiple
-(Cody and Waite's two-part constant keeps ``k 2 pi / N`` exact to 2^-80 for
-``|theta|`` up to :data:`THETA_MAX`), ``cos`` and ``sin`` of ``k 2 pi / N``
+(Cody and Waite's two-part constant keeps ``k 2 pi / N`` within 7e-18 of
+its true value for ``|theta|`` up to :data:`THETA_MAX`), ``cos`` and ``sin`` of ``k 2 pi / N``
 come from a table of ``N`` = :data:`TABLE` entries, and those of ``|delta| <=
 pi / N`` from their Taylor series (the first term left out is below 1e-19),
 combined by the angle-sum formulas.  The result is within a few units in
