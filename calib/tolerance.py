@@ -20,13 +20,17 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import StandParameters
 from stand.core.dsp import radius95
-from stand.core.model import inverse_matrix
+from stand.core.model import plane_matrix
+
+_MODEL = tuple(f.name for f in dataclasses.fields(StandParameters))
+"""The stand's parameters (the gains are the nodes', not the model's)."""
 
 
 @dataclass(frozen=True)
@@ -66,16 +70,30 @@ def _names(tol: Tolerances) -> list[tuple[str, float, bool]]:
 
 
 def _solve(
-    p: StandParameters, w: float, A: NDArray[np.complex128], change: dict[str, float]
+    p: StandParameters, w: float, A: NDArray[np.complex128], changes: list[dict[str, float]]
 ) -> NDArray[np.float64]:
-    fields = {k: v for k, v in change.items() if not k.startswith("gain")}
-    q = dataclasses.replace(p, **{k: getattr(p, k) + v for k, v in fields.items()})
-    g = np.array([1 + change.get("gain1", 0.0), 1 + change.get("gain2", 0.0)])
+    """``[Re U1, Im U1, Re U2, Im U2]`` for each of ``changes`` (one row each).
+
+    Each changed stand is checked as :class:`StandParameters` checks it; the
+    inverse matrices of all of them are then computed at once, their
+    parameters as arrays, one entry a change: the same IEEE operations
+    elementwise, so each row is bitwise what :func:`inverse_matrix` of that
+    stand alone gives (tested).
+    """
+    stands = [
+        dataclasses.replace(p, **{k: getattr(p, k) + v for k, v in c.items() if k in _MODEL})
+        for c in changes
+    ]
+    batch = SimpleNamespace(
+        **{k: np.array([getattr(q, k) for q in stands]) for k in _MODEL}
+    )  # read as a stand, by attribute only
+    w_ = np.asarray(w, dtype=np.float64)
+    scale = -1.0 / (w_ * w_ * (batch.b + batch.c))
+    G = plane_matrix(batch, w_) * scale[:, None, None]  # type: ignore[arg-type]
     # a node that reads (1 + d) times the truth: the true phasor is A / (1 + d)
-    # U = G A, as solve_unbalance gives it (the same G, bitwise), without the diagnostics
-    # it adds (the split's condition, the static resultant): 25 of these per answer
-    U = inverse_matrix(q, w) @ (A / g)
-    return np.array([U[0].real, U[0].imag, U[1].real, U[1].imag])
+    g = np.array([[1 + c.get("gain1", 0.0), 1 + c.get("gain2", 0.0)] for c in changes])
+    U = np.array([Gk @ (A / gk) for Gk, gk in zip(G, g, strict=True)])  # as solve_unbalance
+    return np.stack([U[:, 0].real, U[:, 0].imag, U[:, 1].real, U[:, 1].imag], axis=1)
 
 
 def _radius(cov: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -97,13 +115,13 @@ def parameter_uncertainty(
         k: (h * (getattr(p, k) if not k.startswith("gain") else 1.0) if rel else h)
         for k, h, rel in params
     }
-    base = _solve(p, omega_rad_s, A, {})
-    J = np.empty((4, len(params)))
-    for j, (k, _, _) in enumerate(params):
-        step = 1e-4 * scale[k] if scale[k] else 1e-9
-        J[:, j] = (_solve(p, omega_rad_s, A, {k: step}) - _solve(p, omega_rad_s, A, {k: -step})) / (
-            2 * step
-        )
+    steps = [1e-4 * scale[k] if scale[k] else 1e-9 for k, _, _ in params]
+    changes: list[dict[str, float]] = [{}]
+    for (k, _, _), step in zip(params, steps, strict=True):
+        changes += [{k: step}, {k: -step}]
+    U = _solve(p, omega_rad_s, A, changes)
+    base = U[0]
+    J = ((U[1::2] - U[2::2]) / (2 * np.array(steps))[:, None]).T
     sigma2 = np.array([scale[k] ** 2 / 3 for k, _, _ in params])  # uniform in +-band
     cov_lin = (J * sigma2) @ J.T
     contrib = J**2 * sigma2  # per component and parameter
@@ -117,11 +135,10 @@ def parameter_uncertainty(
     cov_mc = cov_lin  # draws = 0: the linearised answer only
     if draws > 0:
         rng = np.random.default_rng(seed)
-        samples = np.empty((draws, 4))
-        for n in range(draws):
-            change = {k: float(rng.uniform(-scale[k], scale[k])) for k, _, _ in params}
-            samples[n] = _solve(p, omega_rad_s, A, change)
-        cov_mc = np.cov(samples.T)
+        draw = [
+            {k: float(rng.uniform(-scale[k], scale[k])) for k, _, _ in params} for _ in range(draws)
+        ]
+        cov_mc = np.cov(_solve(p, omega_rad_s, A, draw).T)
     return ParameterUncertainty(
         U_kg_m=np.array([complex(base[0], base[1]), complex(base[2], base[3])]),
         cov_linear=cov_lin,

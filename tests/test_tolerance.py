@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from strategies import DEMO
 
 from stand.calib.tolerance import Tolerances, parameter_uncertainty
@@ -53,3 +55,34 @@ def test_solve_uncertainty_from_the_cli(tmp_path: Path, capsys: pytest.CaptureFi
     out = tmp_path / "r.html"
     assert main(["report", str(run), "-o", str(out), "--uncertainty", "--draws", "100"]) == 0
     assert "Parameter tolerances" in out.read_text()
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.floats(0.2, 5.0),  # speed, times the demo's 900 rpm
+    st.lists(st.floats(-0.05, 0.05), min_size=8, max_size=8),  # relative changes
+    st.floats(-0.02, 0.02),
+)
+def test_all_stands_at_once_are_each_stand_alone_to_the_bit(
+    speed: float, rel: list[float], gain: float
+) -> None:
+    """The changed stands solved as arrays give, row by row, the very bits of each
+    stand solved alone by the model's own inverse (the same IEEE operations)."""
+    import dataclasses
+
+    from stand.calib.tolerance import _solve
+    from stand.core.model import inverse_matrix
+
+    w = rpm_to_rad_s(900.0) * speed
+    A = np.array([0.3 + 0.1j, -0.2 + 0.4j])
+    names = ("C1", "C2", "M1", "M2", "M3", "J3", "a", "d")
+    changes = [{k: r * getattr(DEMO, k)} for k, r in zip(names, rel, strict=True)]
+    changes += [{}, {"gain1": gain, "C1": 0.01 * DEMO.C1}]
+    got = _solve(DEMO, w, A, changes)
+    for row, c in zip(got, changes, strict=True):
+        q = dataclasses.replace(
+            DEMO, **{k: getattr(DEMO, k) + v for k, v in c.items() if not k.startswith("gain")}
+        )
+        g = np.array([1 + c.get("gain1", 0.0), 1 + c.get("gain2", 0.0)])
+        U = inverse_matrix(q, w) @ (A / g)
+        assert np.array_equal(row, [U[0].real, U[0].imag, U[1].real, U[1].imag])
