@@ -42,7 +42,7 @@ HDF5 would never finish reading is refused instead of hanging the command.
 from __future__ import annotations
 
 import datetime as _dt
-from collections.abc import Callable, Collection, Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -309,19 +309,11 @@ def read_run(path: str | Path, *, guard: bool = True) -> Recording:
     return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 
-def read_streams(
-    path: str | Path,
-    *,
-    strict_status: bool = True,
-    later: Collection[int] = (),
-    later_from: int = 0,
-) -> tuple[Recording, RunStreams]:
+def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
     """A recording's per-node streams, read and decoded in blocks (bounded memory).
 
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
-    ``later``: nodes left to build on first use if each has ``later_from`` samples
-    (:mod:`stand.drivers.node_map`).
     """
     from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder
@@ -345,9 +337,7 @@ def read_streams(
             for block in iter_log(path, warn=warn):
                 builder.add(block)
         rec = Recording(str(path), Frames.empty(), warnings=tuple(warn))
-    return rec, builder.streams(
-        strict_status=strict_status, release=True, later=later, later_from=later_from
-    )
+    return rec, builder.streams(strict_status=strict_status, release=True)
 
 
 def is_run_file(path: str | Path) -> bool:

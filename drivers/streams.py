@@ -31,9 +31,7 @@ are carried out step by step.
 
 from __future__ import annotations
 
-from collections.abc import Collection
 from dataclasses import dataclass, field, fields, replace
-from functools import partial
 from typing import Any
 
 import numpy as np
@@ -41,9 +39,6 @@ from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.codec import decode
-from stand.drivers.node_map import (
-    NodeMap as NodeMap,  # re-exported: the measuring path reads it here
-)
 from stand.drivers.protocol import (
     SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
 )
@@ -190,27 +185,15 @@ class NodeStream:
 
 @dataclass(frozen=True)
 class RunStreams:
-    """All nodes of a run, and what did not fit the protocol.
+    """All nodes of a run, and what did not fit the protocol."""
 
-    ``nodes`` may hold nodes left to build on first use (:mod:`stand.drivers.node_map`);
-    ``warnings`` are every node's rebuild warnings (in node order), then the run's own
-    (``run_warnings``: malformed and error frames).
-    """
-
-    nodes: NodeMap
+    nodes: dict[int, NodeStream]
     frames: int
     unknown_frames: int
     error_frames: int
     bad: tuple[BadFrame, ...]
     duration_s: float
-    run_warnings: tuple[Diagnostic, ...] = field(default=())
-
-    @property
-    def warnings(self) -> tuple[Diagnostic, ...]:
-        """The nodes' warnings, then the run's (a node left for later is built for them
-        unless its warnings were recorded where it was built)."""
-        mine = [w for n in self.nodes for w in self.nodes.warnings_of(n)]
-        return (*mine, *self.run_warnings)
+    warnings: tuple[Diagnostic, ...] = field(default=())
 
     @property
     def bad_frames(self) -> int:
@@ -243,8 +226,6 @@ def rebuild_decoded(
     *,
     strict_status: bool = True,
     release: bool = False,
-    later: Collection[int] = (),
-    later_from: int = 0,
 ) -> RunStreams:
     """:func:`rebuild` from frames already decoded (``t_s``: every frame's host time [s]).
 
@@ -252,43 +233,33 @@ def rebuild_decoded(
     are gathered from them on their own, so the blocks are never joined whole.
     ``release``: the list of blocks is this function's to empty once every
     node's records are gathered (a long run's blocks are let go before the
-    nodes are rebuilt: 140 MiB less at the peak of a one-hour run).  ``later``:
-    these nodes are left to build on first use (:class:`~stand.drivers.node_map.NodeMap`;
-    the blocks are then kept for them) when each has ``later_from`` samples or more.
+    nodes are rebuilt: 140 MiB less at the peak of a one-hour run).
     """
     parts = [dec] if isinstance(dec, Decoded) else dec
     t0 = float(t_s[0]) if len(t_s) else 0.0
     seen = np.zeros(256, np.int64)  # node ids are u8: a count per id, in one pass each
-    sampled = np.zeros(256, np.int64)
     for p in parts:
-        sampled += np.bincount(p.samples.node, minlength=256)
-        for kind in (p.status, p.marks):
-            seen += np.bincount(kind.node, minlength=256)
-    present = [int(n) for n in np.flatnonzero(seen + sampled)]
+        for records in (p.samples, p.status, p.marks):
+            seen += np.bincount(records.node, minlength=256)
+    present = [int(n) for n in np.flatnonzero(seen)]
     from stand.drivers.node_build import rebuild_node  # it builds the NodeStream defined here
 
     bad = tuple(b for p in parts for b in p.bad)
     errors = sum(p.error_frames for p in parts)
     unknown = sum(p.unknown_frames for p in parts)
-    if any(3 * sampled[n] < later_from for n in later):
-        later = ()
-    now = [n for n in present if n not in later]
-    single = parts[0] if len(parts) == 1 else None
-
-    def records(node: int) -> Decoded:
-        return single if single is not None else node_records(parts, node)
-
-    def build(node: int) -> tuple[NodeStream, list[Diagnostic]]:
-        return rebuild_node(node, records(node), t_s, t0, strict_status)
-
-    pending = {n: (partial(build, n), int(sampled[n])) for n in present if n in later}
-    mine = {node: records(node) for node in now}
-    if release and not pending and isinstance(dec, list):
+    if len(parts) == 1:
+        mine = dict.fromkeys(present, parts[0])
+    else:
+        mine = {node: node_records(parts, node) for node in present}
+    if release and isinstance(dec, list):
         dec.clear()
-    built = {}
-    for node in now:
-        built[node] = rebuild_node(node, mine.pop(node), t_s, t0, strict_status)
+    del parts
+    nodes: dict[int, NodeStream] = {}
     warnings: list[Diagnostic] = []
+    for node in present:
+        stream, w = rebuild_node(node, mine.pop(node), t_s, t0, strict_status)
+        nodes[node] = stream
+        warnings.extend(w)
     if bad:
         b = bad[0]
         warnings.append(
@@ -305,13 +276,13 @@ def rebuild_decoded(
         )
     duration = float(t_s[-1] - t_s[0]) if len(t_s) else 0.0
     return RunStreams(
-        nodes=NodeMap(built, pending),
+        nodes=nodes,
         frames=len(t_s),
         unknown_frames=unknown,
         error_frames=errors,
         bad=bad,
         duration_s=duration,
-        run_warnings=tuple(warnings),
+        warnings=tuple(warnings),
     )
 
 
@@ -352,32 +323,18 @@ class StreamBuilder:
             self._times[-2:] = [np.concatenate(self._times[-2:])]
             self._sizes[-2:] = [self._sizes[-2] + self._sizes[-1]]
 
-    def streams(
-        self,
-        *,
-        strict_status: bool = True,
-        release: bool = False,
-        later: Collection[int] = (),
-        later_from: int = 0,
-    ) -> RunStreams:
+    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
         """The node streams of every frame added so far (the blocks are not joined whole).
 
         ``release``: the builder is done with: its decoded blocks are let go as
-        soon as every node's records are gathered from them.  ``later``: nodes left
-        to build on first use, if each has ``later_from`` samples (:func:`rebuild_decoded`).
+        soon as every node's records are gathered from them.
         """
         t_s = np.concatenate(self._times) if self._times else np.zeros(0)
         if not release:
-            return rebuild_decoded(
-                list(self._parts), t_s, strict_status=strict_status, later=later,
-                later_from=later_from,
-            )  # fmt: skip
+            return rebuild_decoded(list(self._parts), t_s, strict_status=strict_status)
         parts, self._parts, self._times, self._sizes = self._parts, [], [], []
         self.frames, self.last_block = 0, Frames.empty()
-        return rebuild_decoded(
-            parts, t_s, strict_status=strict_status, release=True, later=later,
-            later_from=later_from,
-        )  # fmt: skip
+        return rebuild_decoded(parts, t_s, strict_status=strict_status, release=True)
 
     def tail(self, from_frame: int) -> RunStreams:
         """The node streams of the frames from ``from_frame`` (arrival order) on.

@@ -30,7 +30,7 @@ from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
-from stand.drivers.streams import SUPPORT_NODES, NodeMap, RunStreams
+from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
 from stand.passes import NodeFit, node_phasor
@@ -209,61 +209,20 @@ def _support(
 FORK_SAMPLES = 500_000
 """A node with this many samples or more (about 2 min at 4 kHz) is measured beside the other,
 in a forked child (:mod:`stand.beside`): below it the fork costs more than it saves."""
-BUILD_BESIDE_SAMPLES = 6_000_000
-"""A solve leaves support nodes of this many samples or more (25 min at 4 kHz) to build in
-the process that measures them (:mod:`stand.drivers.node_map`): the decoded blocks are
-then kept until both are built, 50 MiB more at 10 min for 0.03 s, none more at one hour
-(where the peak lies in the read) for 0.3 s."""
 
 
-def _supports(
-    streams: RunStreams, rest: list[tuple[Any, ...]]
-) -> tuple[list[tuple[Phasor, Window, list[Diagnostic], Any]], tuple[float, ...]]:
-    """:func:`_support` of each support node (``rest``: each one's arguments after the
-    stream), and their sample rates [Hz].
-
-    When both nodes are long and the process may fork, node 2 is built and measured
-    in a forked child while this process builds and measures node 1.  Errors come as
-    they would in order: node 1's rebuild, node 2's, node 1's measurement, node 2's.
-    """
-    nodes = streams.nodes
-    one, two = SUPPORT_NODES
-    if min(nodes.samples_of(n) for n in SUPPORT_NODES) >= FORK_SAMPLES and can_fork():
-        other = Beside(_built_support, nodes, two, rest[1])
+def _supports(args: list[tuple[Any, ...]]) -> list[tuple[Phasor, Window, list[Diagnostic], Any]]:
+    """:func:`_support` of each node, in order; the second beside the first when both are
+    long and the process may fork (the first node's error is raised first, as in order)."""
+    if len(args) == 2 and min(a[1].samples for a in args) >= FORK_SAMPLES and can_fork():
+        other = Beside(_support, *args[1])
         try:
-            s1 = nodes[one]
-            first = _support(one, s1, *rest[0])
-        except Exception:
-            if one in nodes.pending():  # node 1's rebuild failed: it comes first
-                other.cancel()
-                raise
-            other.result()  # node 2's rebuild error comes before node 1's measurement's
-            raise
+            first = _support(*args[0])
         except BaseException:
             other.cancel()
             raise
-        warnings2, rate2, second = other.result()
-        nodes.built_elsewhere(two, warnings2)
-        if isinstance(second, BaseException):
-            raise second
-        return [first, second], (float(s1.rate_hz or 0.0), rate2)
-    built = [nodes[n] for n in SUPPORT_NODES]  # both rebuilt before either is measured
-    done = [_support(n, s, *r) for n, s, r in zip(SUPPORT_NODES, built, rest, strict=True)]
-    return done, tuple(float(s.rate_hz or 0.0) for s in built)
-
-
-def _built_support(
-    nodes: NodeMap, node: int, rest: tuple[Any, ...]
-) -> tuple[tuple[Diagnostic, ...], float, Any]:
-    """Build ``node``'s stream (in the forked child) and measure it: the rebuild's
-    warnings, the node's rate [Hz], and its :func:`_support` or the error that refused
-    it (a rebuild error is raised)."""
-    s = nodes[node]
-    rate = float(s.rate_hz or 0.0)
-    try:
-        return nodes.warnings_of(node), rate, _support(node, s, *rest)
-    except Exception as exc:  # handed back as a value: node 1's error may come first
-        return nodes.warnings_of(node), rate, exc
+        return [first, other.result()]
+    return [_support(*a) for a in args]
 
 
 def judge_support(
@@ -363,23 +322,23 @@ def measure(
     fits: list[NodeFit | None] = []
     gamma = math.radians(reference_angle_deg)
     # frames left out as malformed explain a node with nothing usable: say so beside it
-    bad = next((f" ({w.message})" for w in streams.run_warnings if w.code == "bad_frames"), "")
+    bad = next((f" ({w.message})" for w in streams.warnings if w.code == "bad_frames"), "")
     for node in SUPPORT_NODES:
-        if node not in streams.nodes:
+        if streams.nodes.get(node) is None:
             raise MeasurementError(
                 f"node {node} sent nothing: need nodes 1 and 2 (one per "
                 f"support), got {sorted(streams.nodes) or 'none'}{bad}"
             )
-    rest = [
-        (gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad)
-        for k in range(len(SUPPORT_NODES))
+    args = [
+        (node, streams.nodes[node], gamma, taper, gate, (sensor_gain[k], sensor_delay_s[k]), bad)
+        for k, node in enumerate(SUPPORT_NODES)
     ]
-    measured, rates = _supports(streams, rest)
-    for ph, window, notes, fit in measured:
+    for ph, window, notes, fit in _supports(args):
         warnings.extend(notes)
         supports.append(ph)
         windows.append(window)
         fits.append(fit)
+    rates = tuple(float(streams.nodes[n].rate_hz or 0.0) for n in SUPPORT_NODES)
     m = combine(supports, windows, warnings, p, rates, clock_tolerance, influence, beam)
     done = [f for f in fits if f is not None]
     return replace(m, fits=tuple(done) if len(done) == len(fits) else None)

@@ -22,10 +22,9 @@ from typing import Any
 from stand.core import StandParameters
 from stand.correct import removed_masses
 from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest
-from stand.drivers.streams import SUPPORT_NODES
 from stand.errors import MeasurementError, NoStatusError, StandError
 from stand.matrix import parse_matrix
-from stand.measure import BUILD_BESIDE_SAMPLES, Measurement, measure
+from stand.measure import Measurement, measure
 from stand.pipeline import (
     SOFTWARE,
     SolveOptions,
@@ -80,14 +79,10 @@ def solve_recording(
     StandError
         Bad input, naming the file and what is wrong.
     """
-    from stand.beside import can_fork
     from stand.drivers.recording import read_streams
 
-    # a long run's support nodes each built where it is measured (stand.measure), unless
-    # the traces want both here
-    later = SUPPORT_NODES if can_fork() and not options.traces else ()
     with named_errors(path):
-        rec, streams = read_streams(path, later=later, later_from=BUILD_BESIDE_SAMPLES)
+        rec, streams = read_streams(path)
     if config:
         cfg, params, text = load_config_text(config)
         source = config

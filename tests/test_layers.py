@@ -78,7 +78,7 @@ ALLOWED: dict[str, set[str]] = {
                                          "stand.drivers.recording"},
     "stand/pipeline.py": NUMERIC | APP | {"stand.config", "stand.correct"},
     # the recording path: a run file or a CAN log and a config to one Result
-    "stand/recordings.py": NUMERIC | APP | {"stand.config", "stand.correct", "stand.beside"},
+    "stand/recordings.py": NUMERIC | APP | {"stand.config", "stand.correct"},
     # the tooling's unbalance (index runs), kept per tooling and subtracted from every run
     "stand/tooling.py": NUMERIC | APP,
     # the plant's systems: an OPC UA result server (asyncua), MQTT (paho)
