@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
+from stand.drivers.frame_index import FrameIndex
 from stand.drivers.protocol import (
     FRAC_SCALE,
     INVALID_COUNT,
@@ -341,17 +342,20 @@ def _marks(
     return pos, mseg.astype(np.int32), m_rev, lost_marks, warn
 
 
-def _samples(F: NDArray[np.int64], counts: NDArray[Any]) -> tuple[Any, Any, Any, Any]:
+def _samples(F: NDArray[np.int64], counts: NDArray[Any], one_segment: bool) -> tuple[Any, ...]:
     """Each kept frame's three samples by their index in the node's sample clock: the
     index, the counts, which are valid, and where each frame's valid samples begin in the
-    valid-sample arrays (:class:`_Triple` when all are valid: the common case, no copies)."""
+    valid-sample arrays (:class:`_Triple` when all are valid: the common case, no copies;
+    then, in one segment, the index is the frames' numbers alone, a :class:`FrameIndex`)."""
+    flat = counts.reshape(-1)
+    valid = flat != INVALID_COUNT
+    if bool(valid.all()) and one_segment:
+        return FrameIndex(F), flat, valid, _Triple()
     index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
     triples = index.reshape(-1, SAMPLES_PER_FRAME)
     np.multiply(F, SAMPLES_PER_FRAME, out=triples[:, 0])  # no temporary of the run's length
     for k in range(1, SAMPLES_PER_FRAME):
         np.add(triples[:, 0], k, out=triples[:, k])
-    flat = counts.reshape(-1)
-    valid = flat != INVALID_COUNT
     if bool(valid.all()):
         return index, flat, valid, _Triple()
     starts = np.concatenate(([0], np.cumsum(valid.reshape(-1, SAMPLES_PER_FRAME).sum(1))))
@@ -398,7 +402,7 @@ def rebuild_node(
     n_seg = int(seg[-1]) + 1 if len(seg) else 0
     warn += _frame_warnings(node, n_seg, lost, len(seq_k))
 
-    index, flat, valid, frame_start = _samples(F, counts)
+    index, flat, valid, frame_start = _samples(F, counts, n_seg == 1)
     all_valid = isinstance(frame_start, _Triple)
     seg_first = np.flatnonzero(seg[1:] != seg[:-1]) + 1 if len(seg) else np.zeros(0, np.int64)
     if len(seg):

@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.codec import decode
+from stand.drivers.frame_index import FrameIndex
 from stand.drivers.protocol import (
     SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
 )
@@ -64,8 +65,10 @@ class NodeStream:
         Nominal sample rate from STATUS [Hz] (None: no STATUS seen).
     scale_um_s2 : float or None
         Scale from STATUS [µm/s² per count] (the latest one if it changed).
-    index : ndarray of int64
-        Sample index of every valid sample, within its segment.
+    index : ndarray of int64, or FrameIndex
+        Sample index of every valid sample, within its segment; a node whose
+        samples are all valid, in one segment, keeps it as its frames' numbers
+        (:class:`~stand.drivers.frame_index.FrameIndex`, which reads as the array).
     counts : ndarray of int16
         The count of every valid sample.
     segment_start : ndarray of int64
@@ -97,7 +100,7 @@ class NodeStream:
     node: int
     rate_hz: float | None
     scale_um_s2: float | None
-    index: NDArray[np.int64]
+    index: NDArray[np.int64] | FrameIndex
     counts: NDArray[np.int16]
     segment_start: NDArray[np.int64]
     scale_start: NDArray[np.int64] | None
