@@ -48,6 +48,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.files import (
@@ -226,11 +227,13 @@ def _unreadable(exc: Exception, path: Path) -> RecordingError:
     return RecordingError(f"not a readable run file ({exc})", path=str(path))
 
 
-def _frame_rows(f: Any, lo: int, hi: int) -> Frames:
+def _frame_rows(f: Any, lo: int, hi: int, t_s: NDArray[np.float64] | None = None) -> Frames:
+    """Frames ``lo:hi`` of the file (their times cut from ``t_s`` if given: all of them)."""
     g = f["frames"]
-    cols = {k: g[k][lo:hi] for k in _FRAME_FIELDS}
+    cols = {k: g[k][lo:hi] for k in _FRAME_FIELDS if k != "t_s" or t_s is None}
+    times = t_s[lo:hi] if t_s is not None else cols["t_s"].astype(np.float64, copy=False)
     return Frames(  # each column as stored: a copy only where the file's type differs
-        cols["t_s"].astype(np.float64, copy=False),
+        times,
         cols["can_id"].astype(np.uint32, copy=False),
         cols["dlc"].astype(np.uint8, copy=False),
         np.ascontiguousarray(g["data"][lo:hi], dtype=np.uint8),
@@ -284,8 +287,11 @@ def _read_checked(
 
             frames_budget(n, str(p))
             step = max(n, 1) if rows is None else rows
+            # in blocks: the times read whole, once, so that the blocks' times are views of
+            # one array, which the streams then take as it is (no copy of the run's length)
+            t_s = f["frames"]["t_s"][:n].astype(np.float64, copy=False) if n > step else None
             for lo in range(0, n, step):
-                block = _frame_rows(f, lo, min(lo + step, n))
+                block = _frame_rows(f, lo, min(lo + step, n), t_s)
                 check_timestamps(block.t_s, p, lo)
                 take(block)
     except RecordingError:

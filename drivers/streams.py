@@ -32,6 +32,7 @@ are carried out step by step.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -332,7 +333,7 @@ class StreamBuilder:
         ``release``: the builder is done with: its decoded blocks are let go as
         soon as every node's records are gathered from them.
         """
-        t_s = np.concatenate(self._times) if self._times else np.zeros(0)
+        t_s = _joined(self._times)
         if not release:
             return rebuild_decoded(list(self._parts), t_s, strict_status=strict_status)
         parts, self._parts, self._times, self._sizes = self._parts, [], [], []
@@ -356,6 +357,26 @@ class StreamBuilder:
             at += len(t)
         t_s = np.concatenate(times) if times else np.zeros(0)
         return rebuild_decoded(parts, t_s, strict_status=False)
+
+
+def _joined(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
+    """The arrays one after the other: the very array they are consecutive views of (a run
+    file's times, read whole), else a copy."""
+    if not parts:
+        return np.zeros(0)
+    base = parts[0].base
+    if (
+        isinstance(base, np.ndarray)
+        and base.ndim == 1
+        and base.dtype == parts[0].dtype
+        and base.flags.c_contiguous
+        and all(p.base is base and p.flags.c_contiguous for p in parts)
+        and all(a.ctypes.data + a.nbytes == b.ctypes.data for a, b in pairwise(parts))
+    ):
+        start = (parts[0].ctypes.data - base.ctypes.data) // base.itemsize
+        joined: NDArray[np.float64] = base[start : start + sum(len(p) for p in parts)]
+        return joined
+    return np.concatenate(parts)
 
 
 def _records_from(dec: Decoded, frame: int) -> Decoded:

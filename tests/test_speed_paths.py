@@ -238,3 +238,44 @@ def test_free_memory_is_handed_back_before_a_fork(monkeypatch: pytest.MonkeyPatc
     assert len(last) == 65536
     monkeypatch.setattr(beside.sys, "platform", "darwin")
     beside._release_free_memory()  # no glibc: nothing, and no error
+
+
+def test_a_run_files_times_are_read_once_and_taken_without_a_copy(tmp_path: Path) -> None:
+    """Read in blocks, a run file's times are views of the one array read whole: the
+    streams take that array itself (and what live blocks bring is still joined)."""
+    from stand.drivers import recording
+    from stand.drivers.recording import Recording, read_streams, write_recording
+    from stand.drivers.streams import StreamBuilder, _joined
+    from stand.sim import load_scene, simulate
+
+    sc, p, _ = load_scene("demo")
+    frames = simulate(sc, p).frames
+    run = tmp_path / "r.h5"
+    write_recording(Recording("t", frames, {}), run)
+    seen: list[np.ndarray] = []
+
+    class Watch(StreamBuilder):
+        def add(self, block: object) -> None:
+            seen.append(block.t_s)  # type: ignore[attr-defined]
+            super().add(block)  # type: ignore[arg-type]
+
+    whole = read_streams(run)[1]
+    old = recording.READ_ROWS
+    try:
+        recording.READ_ROWS = 7000
+        import stand.drivers.streams as streams_module
+
+        real = streams_module.StreamBuilder
+        streams_module.StreamBuilder = Watch  # type: ignore[misc]
+        blocks = read_streams(run)[1]
+    finally:
+        recording.READ_ROWS = old
+        streams_module.StreamBuilder = real  # type: ignore[misc]
+    assert len(seen) > 1 and seen[0].base is not None
+    assert all(t.base is seen[0].base for t in seen)
+    joined = _joined(seen)
+    assert joined.base is seen[0].base and np.array_equal(joined, frames.t_s)
+    assert blocks.duration_s == whole.duration_s and blocks.frames == whole.frames
+    apart = [frames.t_s[:10].copy(), frames.t_s[10:30].copy()]  # live blocks: joined, copied
+    assert np.array_equal(_joined(apart), frames.t_s[:30]) and _joined(apart).base is None
+    assert len(_joined([])) == 0
