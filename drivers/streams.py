@@ -80,7 +80,7 @@ class NodeStream:
         The scale in force, as runs: from ``counts[scale_start[j]]`` on, one
         count is ``scale_m_s2[j]`` [m/s²].  None without STATUS.
         ``accel_m_s2`` and :meth:`accel` apply it; nothing else stores the
-        accelerations, so a long run costs 10 bytes per sample.
+        accelerations, so a long run costs 2 bytes a sample and its index (8/3 or 8).
     mark_position : ndarray of float64
         Reference edges, as sample positions (sub-sample) within their segment.
     mark_segment : ndarray of int32
