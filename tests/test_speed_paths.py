@@ -279,3 +279,55 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(tmp_path: Path
     apart = [frames.t_s[:10].copy(), frames.t_s[10:30].copy()]  # live blocks: joined, copied
     assert np.array_equal(_joined(apart), frames.t_s[:30]) and _joined(apart).base is None
     assert len(_joined([])) == 0
+
+
+def test_blocks_read_ahead_come_in_order_and_leave_no_thread() -> None:
+    """Each block read in a thread while the one before is taken: in order; an error
+    reading one is raised where it is taken; a consumer that stops early (a refused
+    block) waits for the read under way, so the file is never closed under it."""
+    import threading
+
+    from stand.drivers.recording import _read_ahead
+
+    bounds = [(k, k + 1) for k in range(6)]
+    threads = threading.active_count()
+
+    def read(lo: int, hi: int) -> object:
+        time.sleep(0.01)
+        if lo == 4:
+            raise OSError(f"block {lo} unreadable")
+        return lo
+
+    got: list[object] = []
+    with pytest.raises(OSError, match="block 4"):
+        for block in _read_ahead(read, bounds):  # type: ignore[arg-type]
+            got.append(block)
+    assert got == [0, 1, 2, 3] and threading.active_count() == threads
+    from contextlib import closing
+
+    with closing(_read_ahead(read, bounds)) as blocks:  # type: ignore[arg-type]
+        assert next(blocks) == 0  # block 1 is being read now
+    assert threading.active_count() == threads
+
+
+def test_a_run_read_in_many_blocks_is_the_run_read_whole(tmp_path: Path) -> None:
+    from dataclasses import fields
+
+    from stand.drivers import recording
+    from stand.drivers.recording import Recording, read_streams, write_recording
+    from stand.sim import load_scene, simulate
+
+    sc, p, _ = load_scene("demo")
+    run = tmp_path / "r.h5"
+    write_recording(Recording("t", simulate(sc, p).frames, {}), run)
+    whole = read_streams(run)[1]
+    old = recording.READ_ROWS
+    try:
+        recording.READ_ROWS = 5000
+        blocks = read_streams(run)[1]
+    finally:
+        recording.READ_ROWS = old
+    for node, s in whole.nodes.items():
+        for f in fields(s):
+            x, y = getattr(s, f.name), getattr(blocks.nodes[node], f.name)
+            assert np.array_equal(x, y) if hasattr(x, "__array__") else x == y, f.name
