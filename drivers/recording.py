@@ -42,8 +42,7 @@ HDF5 would never finish reading is refused instead of hanging the command.
 from __future__ import annotations
 
 import datetime as _dt
-import threading
-from collections.abc import Callable, Generator, Iterable
+from collections.abc import Callable, Iterable
 from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -58,6 +57,7 @@ from stand.drivers.files import (
     check_timestamps,
 )
 from stand.drivers.protocol import Frames
+from stand.drivers.read_ahead import read_ahead
 from stand.drivers.seal import read_in_child, seal_state
 from stand.drivers.streams import RunStreams
 from stand.errors import RecordingError
@@ -293,7 +293,7 @@ def _read_checked(
             # one array, which the streams then take as it is (no copy of the run's length)
             t_s = f["frames"]["t_s"][:n].astype(np.float64, copy=False) if n > step else None
             bounds = [(lo, min(lo + step, n)) for lo in range(0, n, step)]
-            with closing(_read_ahead(lambda lo, hi: _frame_rows(f, lo, hi, t_s), bounds)) as got:
+            with closing(read_ahead(lambda lo, hi: _frame_rows(f, lo, hi, t_s), bounds)) as got:
                 for (lo, _), block in zip(bounds, got, strict=True):
                     check_timestamps(block.t_s, p, lo)
                     take(block)
@@ -308,41 +308,6 @@ def _read_checked(
     ) as exc:  # h5py's, whatever the file holds
         raise _unreadable(exc, p) from exc
     return meta, warnings
-
-
-def _read_ahead(
-    read: Callable[[int, int], Frames], bounds: list[tuple[int, int]]
-) -> Generator[Frames, None, None]:
-    """``read(lo, hi)`` of each of ``bounds``, in order, the next one read in a thread while
-    the one before is taken (h5py lets go of the interpreter's lock while HDF5 reads, so
-    the read of one block and the decoding of the last run side by side).  Closing the
-    generator waits for a read under way: the file stays open until it ends."""
-    done: dict[int, tuple[bool, Any]] = {}
-
-    def fetch(i: int) -> None:
-        try:
-            done[i] = (True, read(*bounds[i]))
-        except BaseException as exc:  # raised where the block is taken
-            done[i] = (False, exc)
-
-    ahead: threading.Thread | None = None
-    try:
-        for i in range(len(bounds)):
-            if ahead is None:
-                fetch(i)
-            else:
-                ahead.join()
-            ahead = None
-            if i + 1 < len(bounds):
-                ahead = threading.Thread(target=fetch, args=(i + 1,), daemon=True)
-                ahead.start()
-            ok, value = done.pop(i)
-            if not ok:
-                raise value
-            yield value
-    finally:
-        if ahead is not None:
-            ahead.join()
 
 
 def read_run(path: str | Path, *, guard: bool = True) -> Recording:

@@ -287,7 +287,7 @@ def test_blocks_read_ahead_come_in_order_and_leave_no_thread() -> None:
     block) waits for the read under way, so the file is never closed under it."""
     import threading
 
-    from stand.drivers.recording import _read_ahead
+    from stand.drivers.read_ahead import read_ahead
 
     bounds = [(k, k + 1) for k in range(6)]
     threads = threading.active_count()
@@ -300,12 +300,12 @@ def test_blocks_read_ahead_come_in_order_and_leave_no_thread() -> None:
 
     got: list[object] = []
     with pytest.raises(OSError, match="block 4"):
-        for block in _read_ahead(read, bounds):  # type: ignore[arg-type]
+        for block in read_ahead(read, bounds):
             got.append(block)
     assert got == [0, 1, 2, 3] and threading.active_count() == threads
     from contextlib import closing
 
-    with closing(_read_ahead(read, bounds)) as blocks:  # type: ignore[arg-type]
+    with closing(read_ahead(read, bounds)) as blocks:
         assert next(blocks) == 0  # block 1 is being read now
     assert threading.active_count() == threads
 
