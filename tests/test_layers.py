@@ -64,8 +64,9 @@ ALLOWED: dict[str, set[str]] = {
     # the measuring path: streams in, unbalance out
     "stand/measure.py": NUMERIC | CORE | {"stand.drivers.streams", "stand.passes",
                                           "stand.gate", "stand.beside"},
-    # work forked beside the main process (the standard library only)
-    "stand/beside.py": set(),
+    # work forked beside the main process (the standard library only), and glibc's allocator
+    "stand/beside.py": {"stand.allocator"},
+    "stand/allocator.py": set(),
     "stand/passes.py": NUMERIC | CORE | {"stand.drivers.streams", "stand.gate"},
     "stand/gate.py": NUMERIC | CORE | {"stand.drivers.streams"},
     "stand/live_fit.py": NUMERIC | CORE | {"stand.drivers.streams", "stand.drivers.protocol",
@@ -131,8 +132,8 @@ ALLOWED: dict[str, set[str]] = {
     "stand/cli": NUMERIC | APP | {"stand.cli", "stand.config", "stand.sim", "stand.evaluate",
                                   "stand.live", "stand.live_session", "stand.typed", "stand.report",
                                   "stand.report_pages", "stand.units", "stand.printing",
-                                  "stand.station", "stand.opcua", "stand.mqtt", "pydantic",
-                                  "rich"},
+                                  "stand.station", "stand.opcua", "stand.mqtt", "stand.allocator",
+                                  "pydantic", "rich"},
 }  # fmt: skip
 """Layer (a folder or a file) -> the non-stdlib modules it may import (and their children;
 ``stand`` alone is the package's ``__init__``: its version)."""

@@ -26,7 +26,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stand import beside, measure
+from stand import allocator, beside, measure
 from stand.core import fitsums, trig
 from stand.errors import MeasurementError
 
@@ -233,11 +233,12 @@ def test_free_memory_is_handed_back_before_a_fork(monkeypatch: pytest.MonkeyPatc
     last = blocks[-1]
     del blocks
     before = resident()
-    beside._release_free_memory()
+    allocator.release_free_memory()
     assert before - resident() > 32 << 20
     assert len(last) == 65536
-    monkeypatch.setattr(beside.sys, "platform", "darwin")
-    beside._release_free_memory()  # no glibc: nothing, and no error
+    monkeypatch.setattr(allocator.sys, "platform", "darwin")
+    allocator.release_free_memory()  # no glibc: nothing, and no error
+    allocator.keep_freed_memory()
 
 
 def test_a_run_files_times_are_read_once_and_taken_without_a_copy(tmp_path: Path) -> None:

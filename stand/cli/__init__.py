@@ -17,6 +17,7 @@ import sys
 from collections.abc import Callable, Sequence
 
 from stand import __version__
+from stand.allocator import keep_freed_memory
 from stand.errors import StandError, UsageError
 
 EXIT_OK = 0
@@ -65,28 +66,8 @@ BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 REUSE_MEMORY = ("solve", "report")
-"""Commands that read whole runs: freed memory is kept for reuse (:func:`_reuse_memory`)."""
-
-
-def _reuse_memory() -> None:
-    """glibc's allocator: blocks under 32 MB from the heap, and freed heap kept (up to 1 GB).
-
-    A run is read and measured in blocks and chunks of 1 to 8 MB; by default
-    glibc maps each such block afresh and unmaps it when freed, and memory
-    touched for the first time is what costs most on the CI machine (a
-    one-hour run, three solves each way: 0.75 to 1.7 s of system time,
-    0.45 to 1.24 s with this).  For the one-shot commands that read whole runs; not the station.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL("libc.so.6")
-        libc.mallopt(-3, 32 << 20)  # M_MMAP_THRESHOLD
-        libc.mallopt(-1, 1 << 30)  # M_TRIM_THRESHOLD
-    except (OSError, AttributeError):  # another C library: its own defaults
-        pass
+"""Commands that read whole runs: freed memory is kept for reuse
+(:func:`stand.allocator.keep_freed_memory`)."""
 
 
 def _chosen(argv: Sequence[str]) -> str | None:
@@ -141,7 +122,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ.setdefault(var, "1")
     chosen = _chosen(args_list)
     if chosen in REUSE_MEMORY:
-        _reuse_memory()
+        keep_freed_memory()
     try:
         parser = build_parser(chosen)
         args = parser.parse_args(args_list)
