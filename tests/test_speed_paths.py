@@ -196,8 +196,6 @@ def test_a_prefetched_seal_is_the_seal(tmp_path: Path) -> None:
 
 def test_streams_released_are_the_streams() -> None:
     """A builder's blocks let go during the rebuild give the streams kept blocks give."""
-    from dataclasses import fields
-
     from stand.drivers.streams import StreamBuilder
     from stand.sim import load_scene, simulate
 
@@ -210,12 +208,20 @@ def test_streams_released_are_the_streams() -> None:
         b.add(block)
     kept, released = a.streams(), b.streams(release=True)
     assert b.frames == 0
-    for node, s in kept.nodes.items():
-        r = released.nodes[node]
+    _same_streams(kept, released)
+
+
+def _same_streams(a: object, b: object) -> None:
+    """Every node's every field equal (arrays, or what reads as one, element by element),
+    and the same warnings."""
+    from dataclasses import fields
+
+    for node, s in a.nodes.items():  # type: ignore[attr-defined]
+        r = b.nodes[node]  # type: ignore[attr-defined]
         for f in fields(s):
             x, y = getattr(s, f.name), getattr(r, f.name)
             assert np.array_equal(x, y) if hasattr(x, "__array__") else x == y, f.name
-    assert [w.message for w in kept.warnings] == [w.message for w in released.warnings]
+    assert [w.message for w in a.warnings] == [w.message for w in b.warnings]  # type: ignore[attr-defined]
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's malloc_trim")
@@ -241,9 +247,13 @@ def test_free_memory_is_handed_back_before_a_fork(monkeypatch: pytest.MonkeyPatc
     allocator.keep_freed_memory()
 
 
-def test_a_run_files_times_are_read_once_and_taken_without_a_copy(tmp_path: Path) -> None:
+def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Read in blocks, a run file's times are views of the one array read whole: the
-    streams take that array itself (and what live blocks bring is still joined)."""
+    streams take that array itself (and what live blocks bring is still joined); the
+    streams are those of the run read whole."""
+    import stand.drivers.streams as streams_module
     from stand.drivers import recording
     from stand.drivers.recording import Recording, read_streams, write_recording
     from stand.drivers.streams import StreamBuilder, _joined
@@ -261,22 +271,15 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(tmp_path: Path
             super().add(block)  # type: ignore[arg-type]
 
     whole = read_streams(run)[1]
-    old = recording.READ_ROWS
-    try:
-        recording.READ_ROWS = 7000
-        import stand.drivers.streams as streams_module
-
-        real = streams_module.StreamBuilder
-        streams_module.StreamBuilder = Watch  # type: ignore[misc]
-        blocks = read_streams(run)[1]
-    finally:
-        recording.READ_ROWS = old
-        streams_module.StreamBuilder = real  # type: ignore[misc]
+    monkeypatch.setattr(recording, "READ_ROWS", 7000)
+    monkeypatch.setattr(streams_module, "StreamBuilder", Watch)
+    blocks = read_streams(run)[1]
     assert len(seen) > 1 and seen[0].base is not None
     assert all(t.base is seen[0].base for t in seen)
     joined = _joined(seen)
     assert joined.base is seen[0].base and np.array_equal(joined, frames.t_s)
     assert blocks.duration_s == whole.duration_s and blocks.frames == whole.frames
+    _same_streams(whole, blocks)
     apart = [frames.t_s[:10].copy(), frames.t_s[10:30].copy()]  # live blocks: joined, copied
     assert np.array_equal(_joined(apart), frames.t_s[:30]) and _joined(apart).base is None
     assert len(_joined([])) == 0
@@ -309,26 +312,3 @@ def test_blocks_read_ahead_come_in_order_and_leave_no_thread() -> None:
     with closing(read_ahead(read, bounds)) as blocks:
         assert next(blocks) == 0  # block 1 is being read now
     assert threading.active_count() == threads
-
-
-def test_a_run_read_in_many_blocks_is_the_run_read_whole(tmp_path: Path) -> None:
-    from dataclasses import fields
-
-    from stand.drivers import recording
-    from stand.drivers.recording import Recording, read_streams, write_recording
-    from stand.sim import load_scene, simulate
-
-    sc, p, _ = load_scene("demo")
-    run = tmp_path / "r.h5"
-    write_recording(Recording("t", simulate(sc, p).frames, {}), run)
-    whole = read_streams(run)[1]
-    old = recording.READ_ROWS
-    try:
-        recording.READ_ROWS = 5000
-        blocks = read_streams(run)[1]
-    finally:
-        recording.READ_ROWS = old
-    for node, s in whole.nodes.items():
-        for f in fields(s):
-            x, y = getattr(s, f.name), getattr(blocks.nodes[node], f.name)
-            assert np.array_equal(x, y) if hasattr(x, "__array__") else x == y, f.name
