@@ -133,7 +133,7 @@ def _fast_candump(raw: np.ndarray) -> Frames | None:
     if (lens == 0).any():
         return None
     parts: list[tuple[np.ndarray, tuple[np.ndarray, ...]]] = []
-    for length in np.unique(lens).tolist():
+    for length in np.flatnonzero(np.bincount(lens)).tolist():  # the lengths there are
         rows = np.flatnonzero(lens == length)
         block = raw[starts[rows].astype(np.int64)[:, None] + np.arange(length)]
         # lines of one length may still differ in layout: sort them by where '.', ')', '#'
@@ -141,12 +141,15 @@ def _fast_candump(raw: np.ndarray) -> Frames | None:
         layout = np.argmax(block == 41, axis=1) * 4096 + np.argmax(block == 35, axis=1)
         layout = layout * 4096 + np.argmax(block == 46, axis=1)
         layout = layout * 4096 + np.argmax(block[:, ::-1] == 32, axis=1)
-        for key in np.unique(layout).tolist():
-            same = layout == key
-            got = _group(block[same])
+        if (layout == layout[0]).all():  # the common case: one layout, no copy
+            groups = [(rows, block)]
+        else:
+            groups = [(rows[layout == k], block[layout == k]) for k in np.unique(layout).tolist()]
+        for at, lines in groups:
+            got = _group(lines)
             if got is None:
                 return None
-            parts.append((rows[same], got))
+            parts.append((at, got))
     order = np.argsort(np.concatenate([r for r, _ in parts]), kind="stable")
     t_s, raw_id, data, dlc, ext = (
         np.concatenate([g[i] for _, g in parts])[order] for i in range(5)

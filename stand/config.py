@@ -38,7 +38,7 @@ from stand.config_correction import check_correction
 from stand.config_rotor import SHAFT_AGREE
 from stand.config_rotor import RotorTable as RotorTable  # re-exported
 from stand.core.model import STAND_KEYS, StandParameters
-from stand.errors import ConfigError, ParameterError
+from stand.errors import ConfigError, ModelError, ParameterError
 from stand.tables import STRICT as STRICT  # re-exported: every table's model config
 from stand.tables import Angle, Mass, Name, Stiffness
 
@@ -262,9 +262,6 @@ def with_shaft(cfg: Config, source: str) -> Config:
     """The config with ``M3, J3, a, b, c, d`` (and ``bending_hz``) from its ``[rotor.shaft]``
     table; values given as well must agree within :data:`SHAFT_AGREE`.  Without a shaft
     table, every one of them must be given."""
-    from stand.core.shaft import shaft_rotor
-    from stand.errors import ModelError
-
     r = cfg.rotor
     keys = ("M3", "J3", "a", "b", "c", "d")
     if r.shaft is None:
@@ -276,6 +273,8 @@ def with_shaft(cfg: Config, source: str) -> Config:
                 key=f"rotor.{missing[0]}",
             )
         return cfg
+    from stand.core.shaft import shaft_rotor  # here: a rigid rotor's config needs none of it
+
     s = r.shaft
     try:
         got = shaft_rotor(*s.core_args())

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from stand.core.dsp import median
 from stand.core.fitsums import block_fits
 from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
@@ -70,7 +71,7 @@ def node_segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
     if not s.rate_hz or s.rate_hz <= 0:
         raise SensorFaultError(f"its STATUS says a sample rate of {s.rate_hz} Hz")
     revs = s.mark_rev[m]
-    if len(revs) >= 3 and len(np.unique(revs)) < 3:
+    if len(revs) >= 3 and np.count_nonzero(np.diff(np.sort(revs))) < 2:  # < 3 values
         raise SensorFaultError(
             f"its reference edges' revolution counter does not count: {len(revs)} edges "
             f"say only {sorted(set(revs.tolist()))[:3]}"
@@ -127,7 +128,7 @@ def steady_revolutions(pos: np.ndarray, rev: np.ndarray) -> tuple[int, int, list
         raise MeasurementError(f"only {len(pos)} reference edges: need at least 3")
     period = np.diff(pos) / np.maximum(np.diff(rev), 1)  # samples per revolution
     speed = 1.0 / period
-    steady = np.abs(speed / np.median(speed) - 1) < SPEED_TOLERANCE
+    steady = np.abs(speed / median(speed) - 1) < SPEED_TOLERANCE
     best: tuple[int, int] = (0, 0)
     start: int | None = None
     for k, ok in enumerate([*steady.tolist(), False]):  # revolution k: edges k .. k+1

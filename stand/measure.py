@@ -19,21 +19,23 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from stand.beside import Beside, can_fork
 from stand.core import Diagnostic, StandParameters, solve_unbalance
-from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
-from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
 from stand.passes import NodeFit, node_phasor
+
+if TYPE_CHECKING:  # imported where used: a rigid rotor's solve needs neither
+    from stand.core.beam import BeamRotor
+    from stand.core.influence import InfluenceMap
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 
@@ -366,8 +368,12 @@ def combine(
     warnings.extend(jitter_notes)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
     if influence is not None:
+        from stand.core.influence import solve_influence
+
         sol = solve_influence(influence, A, cov)
     elif beam is not None:
+        from stand.core.beam import solve_beam
+
         sol = solve_beam(beam, p, omega, A, cov)
     else:
         sol = solve_unbalance(p, omega, A, cov)

@@ -23,7 +23,6 @@ from stand.core import StandParameters
 from stand.correct import removed_masses
 from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest
 from stand.errors import MeasurementError, NoStatusError, StandError
-from stand.matrix import parse_matrix
 from stand.measure import Measurement, measure
 from stand.pipeline import (
     SOFTWARE,
@@ -91,6 +90,8 @@ def solve_recording(
         source = f"{rec.path} (stored)"
     stored = rec.meta.get(MATRIX_ATTR)
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
+        from stand.matrix import parse_matrix  # only a run that stores a matrix
+
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
     check_matrix(options, cfg, live=True)
     with named_errors(path):

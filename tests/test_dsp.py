@@ -190,3 +190,48 @@ def test_a_beat_is_not_mistaken_for_settling_and_lost_frames_raise_no_flag() -> 
     m = measure(rebuild(simulate(lossy, p).frames), p)
     assert not any(w.code == "unsteady_1x" for w in m.warnings)
     assert np.all(np.abs(m.solution.U_kg_m - U) <= m.radius95_kg_m)
+
+
+_values = st.lists(
+    st.one_of(st.floats(allow_nan=False, allow_infinity=False), st.integers(-5, 5).map(float)),
+    max_size=40,
+)
+
+
+@given(_values, st.booleans())
+def test_median_is_numpys_to_the_bit(values: list[float], with_nan: bool) -> None:
+    """:func:`stand.core.dsp.median` is ``np.median`` exactly (no tolerance: the same
+    partition and the same mean of the middle two), NaN in, NaN out; none: NaN."""
+    from stand.core.dsp import median
+
+    x = np.array(values + ([math.nan] if with_nan else []))
+    got = median(x)
+    if not len(x) or with_nan:
+        assert math.isnan(got)
+        return
+    with np.errstate(over="ignore"):  # the mean of two huge ones overflows in both
+        want = float(np.median(x))
+    assert got == want, (got, want)
+
+
+_intervals = st.tuples(st.floats(1.0, 1e6), st.integers(0, 3), st.booleans())
+
+
+@given(st.lists(_intervals, min_size=1, max_size=40))
+def test_local_period_is_the_median_of_its_neighbours(rows: list[tuple[float, int, bool]]) -> None:
+    """The edges' local period is ``np.nanmedian`` of the nearby good intervals, to the bit
+    (computed without it: numpy's imports ``numpy.ma``)."""
+    import warnings
+
+    from stand.drivers.node_build import _local_period
+
+    dp = np.array([r[0] for r in rows])
+    dr = np.array([r[1] for r in rows], dtype=np.int64)
+    ok = np.array([r[2] for r in rows], dtype=bool)
+    per = np.where(ok, dp / np.maximum(dr, 1), np.nan)
+    padded = np.concatenate((np.full(4, np.nan), per, np.full(4, np.nan)))
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows
+        want = np.nanmedian(windows, axis=1)
+    assert np.array_equal(_local_period(dp, dr, ok), want, equal_nan=True)

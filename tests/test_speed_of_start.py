@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -42,3 +43,42 @@ def test_the_program_leaves_its_objects_out_of_the_last_collection(
     finally:
         gc.unfreeze()
     assert "missing.h5" in capsys.readouterr().err
+
+
+LEFT_OUT = {
+    "numpy.ma",
+    "stand.matrix",
+    "stand.core.beam",
+    "stand.core.influence",
+    "stand.core.shaft",
+}
+"""What solving a rigid rotor's run does without: numpy's masked arrays (which its
+``median`` and ``unique`` import, 8 ms) and the models of bending rotors and stored
+matrices."""
+
+
+@pytest.mark.parametrize("suffix", [".h5", ".log"])
+def test_solving_a_rigid_rotor_imports_only_what_it_needs(
+    demo_run: Path, tmp_path: Path, suffix: str
+) -> None:
+    from stand.drivers.logs import write_log
+    from stand.drivers.recording import read_recording
+
+    argv = ["solve", str(demo_run), "--json"]
+    if suffix == ".log":
+        rec = read_recording(demo_run)
+        write_log(rec.frames, tmp_path / "run.log")
+        (tmp_path / "cfg.toml").write_text(str(rec.meta["config_toml"]))
+        argv = [*argv[:1], str(tmp_path / "run.log"), "--json"]
+        argv += ["--config", str(tmp_path / "cfg.toml")]
+    code = (
+        "import sys, io, contextlib\n"
+        "from stand.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    assert main({argv!r}) == 0\n"
+        "print(' '.join(sorted(sys.modules)))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    loaded = set(done.stdout.split())
+    assert "stand.measure" in loaded  # it did measure
+    assert not loaded & LEFT_OUT, sorted(loaded & LEFT_OUT)

@@ -52,6 +52,23 @@ SIDE_BANDS = 8
 """Side bands each side of 1x used to estimate the noise at 1x."""
 
 
+def median(x: ArrayLike) -> float:
+    """``np.median`` of the values ``x`` (NaN if one is NaN or there are none), to the bit.
+
+    The same partition and the same mean of the middle two; numpy's own
+    imports ``numpy.ma`` on its first call (8 ms of every command that measures).
+    """
+    a = np.asarray(x, dtype=np.float64).ravel()
+    n = len(a)
+    if n == 0:
+        return math.nan
+    k = n // 2
+    part = np.partition(a, [k - 1, k, n - 1] if n % 2 == 0 else [k, n - 1])
+    if math.isnan(part[-1]):  # NaN sorts last
+        return math.nan
+    return float(part[k]) if n % 2 else 0.5 * (float(part[k - 1]) + float(part[k]))
+
+
 def radius_factor(dof: float, p: float = 0.95) -> float:
     """``k`` such that ``k^2 var`` is the squared radius holding a complex error with probability p.
 
@@ -185,7 +202,7 @@ def edge_jitter(edge_position: ArrayLike, edge_rev: ArrayLike) -> float:
     d2 = np.diff(x, 2)[one]
     if len(d2) < 8:
         return 0.0
-    mad = float(np.median(np.abs(d2 - np.median(d2))))
+    mad = median(np.abs(d2 - median(d2)))
     return 1.4826 * mad / math.sqrt(6.0)
 
 
