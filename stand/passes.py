@@ -33,6 +33,7 @@ from stand.core.fitsums import (
     WindowSums,
     base_rows,
     block_sums,
+    double_angle,
     model_transform,
     model_values,
     side_band_sums,
@@ -162,7 +163,8 @@ def _first_pass(
         th, w, a, c, s = run.chunk(i0, i1)
         if kept is not None:
             k = slice(i0 - lo, i1 - lo)
-            kept.phase[k], kept.c[k], kept.s[k], kept.w[k] = th - th_lo, c, s, w
+            np.subtract(th, th_lo, out=kept.phase[k], casting="same_kind")
+            kept.c[k], kept.s[k], kept.w[k] = c, s, w
         full = min(j1, n_full)
         if full > j0:
             upto = int(bounds[full]) - i0
@@ -222,7 +224,8 @@ def _second_pass(
     b = T @ coef
     per_bin = 1.0 / max(revs, 1e-12)
     for th, w, a, c, s in _window_chunks(run, kept, i0, i1):
-        r = a - model_values(c, s, w, w0, b.astype(c.dtype))
+        c2, s2 = double_angle(c, s)
+        r = a - model_values(c, s, w, w0, b.astype(c.dtype), c2, s2)
         rr += float(np.dot(r, r))
         if taper and span > 0:
             wt = np.sin((math.pi / span) * th) ** 2
@@ -234,18 +237,17 @@ def _second_pass(
             wt1 += len(r)
         phase = (th * per_bin).astype(np.float32)
         bands += side_band_sums(r, c, s, phase, SIDE_BANDS)
-        c5, s5 = _fifth(c, s)
+        c5, s5 = _fifth(c, s, c2, s2)
         h5 += complex(float(np.dot(r, c5)), -float(np.dot(r, s5)))
     return bands, rr, wt2, wt1, h5
 
 
-def _fifth(c: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``cos 5 theta, sin 5 theta`` from ``cos theta, sin theta``, by the double angle
-    twice and one sum (real arithmetic: a third of the time of complex powers)."""
-    c2 = c * c
-    c2 -= s * s
-    s2 = s * c
-    s2 *= 2.0
+def _fifth(
+    c: np.ndarray, s: np.ndarray, c2: np.ndarray, s2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``cos 5 theta, sin 5 theta`` from ``cos, sin`` of ``theta`` and ``2 theta``, by the
+    double angle once more and one sum (real arithmetic: a third of the time of complex
+    powers)."""
     c4 = c2 * c2
     c4 -= s2 * s2
     s4 = s2 * c2

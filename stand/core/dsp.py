@@ -229,25 +229,25 @@ def angle_at(
     h = np.diff(xk)
     hm0, hm1 = h * mk[:-1], h * mk[1:]
     dy = np.diff(yk)
-    c2 = 3 * dy - 2 * hm0 - hm1  # the cubic per interval: y + hm0 t + c2 t^2 + c3 t^3
-    c3 = hm0 + hm1 - 2 * dy
-    hk = np.repeat(h, counts)
-    t = s - np.repeat(xk[:-1], counts)
-    t /= hk
-    a1, a2, a3 = np.repeat(hm0, counts), np.repeat(c2, counts), np.repeat(c3, counts)
-    theta = a3 * t
-    theta += a2
-    theta *= t
-    theta += a1
-    a3 *= 3 * t  # the derivative, in place of the coefficients it no longer needs
-    a2 *= 2
-    a3 += a2
-    a3 *= t
-    a3 += a1
-    a3 /= hk
-    theta *= t
+    # the cubic per interval, in t = u / h: y + hm0 t + c2 t^2 + c3 t^3; here in u (the
+    # samples past the interval's first knot): y + m u + b2 u^2 + b3 u^3, no division a sample
+    b2 = (3 * dy - 2 * hm0 - hm1) / (h * h)
+    b3 = (hm0 + hm1 - 2 * dy) / (h * h * h)
+    u = s - np.repeat(xk[:-1], counts)
+    g1, g2 = np.repeat(mk[:-1], counts), np.repeat(b2, counts)
+    theta = np.repeat(b3, counts)
+    theta *= u  # b3 u
+    w = theta * 3.0
+    theta += g2
+    g2 *= 2.0
+    w += g2
+    w *= u
+    w += g1  # the derivative: m + 2 b2 u + 3 b3 u^2
+    theta *= u
+    theta += g1
+    theta *= u
     theta += np.repeat(yk[:-1], counts)
-    return theta, a3
+    return theta, w
 
 
 @dataclass(frozen=True)

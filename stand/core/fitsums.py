@@ -50,12 +50,9 @@ def base_rows(c: FloatArray, s: FloatArray, w: FloatArray, w0: float) -> FloatAr
     n = len(c)
     B = np.empty((N_BASE, n))
     P, Q = B[2], B[3]  # P and Q live where Q c and Q s go, until those are written
-    np.divide(w, w0, out=Q)
+    np.divide(w, w0, out=Q)  # 1 + u
+    np.multiply(Q, Q, out=P)  # (1 + u)^2
     Q -= 1.0  # u
-    np.multiply(Q, Q, out=P)
-    P += Q
-    P += Q
-    P += 1.0  # (1 + u)^2
     Q *= P  # P u
     np.multiply(P, c, out=B[0])
     np.multiply(P, s, out=B[1])
@@ -175,18 +172,18 @@ def block_sums(
     sizes = np.diff(np.append(starts, len(a)))
     has = sizes > 0
     at = starts[has]
-    rows = np.empty((8, len(a)))
+    rows = np.empty((5, len(a)))  # the products; c, s and a summed as they are (no copy)
     np.multiply(c, c, out=rows[0])
     np.multiply(c, s, out=rows[1])
-    rows[2], rows[3] = c, s
-    np.multiply(a, a, out=rows[4])
-    np.multiply(a, c, out=rows[5])
-    np.multiply(a, s, out=rows[6])
-    rows[7] = a
-    sums = np.add.reduceat(rows, at, axis=1).T
-    out[has, :4] = sums[:, :4]
+    np.multiply(a, a, out=rows[2])
+    np.multiply(a, c, out=rows[3])
+    np.multiply(a, s, out=rows[4])
+    sums = np.add.reduceat(rows, at, axis=1)
+    out[has, 0], out[has, 1] = sums[0], sums[1]
+    out[has, 2], out[has, 3] = np.add.reduceat(c, at), np.add.reduceat(s, at)
     out[has, 4] = sizes[has]
-    out[has, 5:] = sums[:, 4:]
+    out[has, 5:8] = sums[2:].T
+    out[has, 8] = np.add.reduceat(a, at)
     return out
 
 
@@ -323,19 +320,38 @@ def _side_bands_direct(
     return out
 
 
-def model_values(c: AnyFloat, s: AnyFloat, w: AnyFloat, w0: float, coef_base: AnyFloat) -> AnyFloat:
-    """``B coef_base`` without forming ``B``: the fitted signal at each sample."""
-    u = w / w0 - 1.0
-    P = (1.0 + u) ** 2
+def double_angle(c: AnyFloat, s: AnyFloat) -> tuple[AnyFloat, AnyFloat]:
+    """``cos 2 theta, sin 2 theta`` from ``cos theta, sin theta = c, s``."""
+    c2 = c * c
+    c2 -= s * s
+    s2 = s * c
+    s2 *= 2.0
+    return c2, s2
+
+
+def model_values(
+    c: AnyFloat, s: AnyFloat, w: AnyFloat, w0: float, coef_base: AnyFloat,
+    c2: AnyFloat, s2: AnyFloat,
+) -> AnyFloat:  # fmt: skip
+    """``B coef_base`` without forming ``B``: the fitted signal at each sample (``c2, s2``:
+    :func:`double_angle` of ``c, s``)."""
+    v = w / w0  # 1 + u, as in base_rows
+    P = v * v
+    u = v - 1.0
     b = coef_base
-    c2 = c * c - s * s
-    s2 = 2.0 * s * c
     out: AnyFloat = (b[0] + b[2] * u) * c
     out += (b[1] + b[3] * u) * s
     out *= P
     out += b[ONE]
-    out += b[4] * c2
-    out += b[5] * s2
-    out += b[6] * (c2 * c - s2 * s)
-    out += b[7] * (s2 * c + c2 * s)
+    # b4 c2 + b5 s2 + b6 c3 + b7 s3, with c3 = c2 c - s2 s and s3 = s2 c + c2 s
+    h = b[6] * c
+    h += b[7] * s
+    h += b[4]
+    h *= c2
+    out += h
+    h = b[7] * c
+    h -= b[6] * s
+    h += b[5]
+    h *= s2
+    out += h
     return out
