@@ -318,18 +318,22 @@ def read_run(path: str | Path, *, guard: bool = True) -> Recording:
     return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 
-def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
+def read_streams(
+    path: str | Path, *, strict_status: bool = True, guard: bool = True
+) -> tuple[Recording, RunStreams]:
     """A recording's per-node streams, read and decoded in blocks (bounded memory).
 
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
+    ``guard=False``: a run file's seal is not checked (:func:`read_run`); the
+    caller checks it (:mod:`stand.read_beside`).
     """
     from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder
 
     builder = StreamBuilder(merge=False)  # a few blocks of READ_ROWS: rebuilt once
     if is_run_file(path):
-        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
+        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS, guard=guard)
         rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:
         from stand.drivers.logs import iter_log
