@@ -248,10 +248,7 @@ def _fifth(
     """``cos 5 theta, sin 5 theta`` from ``cos, sin`` of ``theta`` and ``2 theta``, by the
     double angle once more and one sum (real arithmetic: a third of the time of complex
     powers)."""
-    c4 = c2 * c2
-    c4 -= s2 * s2
-    s4 = s2 * c2
-    s4 *= 2.0
+    c4, s4 = double_angle(c2, s2)
     c5 = c4 * c
     c5 -= s4 * s
     s4 *= c

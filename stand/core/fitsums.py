@@ -58,11 +58,7 @@ def base_rows(c: FloatArray, s: FloatArray, w: FloatArray, w0: float) -> FloatAr
     np.multiply(P, s, out=B[1])
     np.multiply(Q, c, out=B[2])  # over P: no longer needed
     np.multiply(Q, s, out=B[3])  # Q s last: B[3] is Q itself
-    c2, s2 = B[4], B[5]
-    np.multiply(c, c, out=c2)
-    c2 -= s * s
-    np.multiply(s, c, out=s2)
-    s2 *= 2.0
+    c2, s2 = double_angle(c, s, out=(B[4], B[5]))
     np.multiply(c2, c, out=B[6])
     B[6] -= s2 * s
     np.multiply(s2, c, out=B[7])
@@ -320,11 +316,14 @@ def _side_bands_direct(
     return out
 
 
-def double_angle(c: AnyFloat, s: AnyFloat) -> tuple[AnyFloat, AnyFloat]:
-    """``cos 2 theta, sin 2 theta`` from ``cos theta, sin theta = c, s``."""
-    c2 = c * c
+def double_angle(
+    c: AnyFloat, s: AnyFloat, out: tuple[AnyFloat, AnyFloat] | None = None
+) -> tuple[AnyFloat, AnyFloat]:
+    """``cos 2 theta, sin 2 theta`` from ``cos theta, sin theta = c, s`` (into ``out``)."""
+    c2, s2 = (np.empty_like(c), np.empty_like(s)) if out is None else out
+    np.multiply(c, c, out=c2)
     c2 -= s * s
-    s2 = s * c
+    np.multiply(s, c, out=s2)
     s2 *= 2.0
     return c2, s2
 
