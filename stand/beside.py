@@ -60,7 +60,7 @@ class Beside:
     def __init__(self, fn: Callable[..., Any], *args: Any, shared_bytes: int = 0) -> None:
         self._fn, self._args = fn, args
         self._pid, self._read = 0, -1
-        self._shared = mmap.mmap(-1, shared_bytes) if shared_bytes > 0 else None
+        self._shared = _mapping(shared_bytes)
         release_free_memory()  # not shared with the child: fewer pages copied
         read, write = os.pipe()
         try:
@@ -116,6 +116,17 @@ class Beside:
         if self._pid:
             pid, self._pid = self._pid, 0
             os.waitpid(pid, 0)
+
+
+def _mapping(size: int) -> mmap.mmap | None:
+    """An anonymous mapping of ``size`` bytes shared with a child forked after it (None:
+    none asked for, or none to be had: the answer then goes through the pipe)."""
+    if size <= 0:
+        return None
+    try:
+        return mmap.mmap(-1, size)
+    except (OSError, ValueError, OverflowError):
+        return None
 
 
 def _answer(

@@ -13,6 +13,7 @@ import mmap
 import os
 from contextlib import redirect_stdout
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -48,6 +49,15 @@ def test_an_answer_comes_back_through_shared_memory_as_views_of_it() -> None:
     # too small for it: the old way, through the pipe
     small = beside.Beside(_arrays, 100_000, shared_bytes=4096).result()
     assert np.array_equal(small["a"], want["a"]) and not _in_shared_memory(small["a"])
+
+
+def test_no_shared_memory_to_be_had_the_pipe_carries_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    def refuse(*a: object) -> None:
+        raise OSError(12, "Cannot allocate memory")
+
+    monkeypatch.setattr(beside, "mmap", SimpleNamespace(mmap=refuse))
+    got = beside.Beside(_arrays, 1000, shared_bytes=1 << 20).result()
+    assert np.array_equal(got["a"], _arrays(1000)["a"]) and not _in_shared_memory(got["a"])
 
 
 def test_an_error_in_the_child_is_raised_with_shared_memory_too() -> None:
