@@ -357,7 +357,8 @@ def node_phasor(
     starts = run.find(edges)  # the first sample of the n_full blocks and of the tail
     end = int(run.find(pos[b : b + 1], "right")[0])
     per_rev = np.diff(pos[a : b + 1]) / np.maximum(np.diff(rev[a : b + 1]), 1)
-    w0 = 2 * math.pi / median(per_rev)  # a fixed speed for the base columns
+    period = median(per_rev)  # samples a revolution
+    w0 = 2 * math.pi / period  # a fixed speed for the base columns
     blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
     first = settled_block(blocks) if gate else 0
     if first > 0:
@@ -401,7 +402,7 @@ def node_phasor(
     if not tapered:
         scale = float(s.scale_m_s2[-1]) if s.scale_m_s2 is not None else 0.0
         fit = NodeFit(
-            gamma, w0, sums.copy(), int(rev[b]), median(per_rev), window, span,
+            gamma, w0, sums.copy(), int(rev[b]), period, window, span,
             sigma2, 2 * h5 / wt1, residual, rate, scale,
         )  # fmt: skip
     return ph, window, blocks[first:], notes, fit
