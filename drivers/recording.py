@@ -326,7 +326,7 @@ def read_streams(
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
     ``guard=False``: a run file's seal is not checked (:func:`read_run`); the
-    caller checks it (:mod:`stand.read_beside`).
+    caller checks it (:mod:`stand.process.read_beside`).
     """
     from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder

@@ -6,7 +6,7 @@ support -> unbalance per plane -> correction.
 
 - :mod:`stand.core`: the pure numerical core (model, inverse, time path);
   arrays in, arrays out, no I/O.
-- :mod:`stand.config`: the TOML configuration, validated.
+- :mod:`stand.config.schema`: the TOML configuration, validated.
 - :mod:`stand.cli`: the ``stand`` command.
 """
 

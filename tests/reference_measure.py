@@ -1,7 +1,7 @@
 """The measuring path as it was before it was chunked: all samples at once (a test reference).
 
 Kept verbatim (but for the stream accessors) so that tests can show the chunked
-:mod:`stand.measure` gives the same answer to rounding.  Original docstring:
+:mod:`stand.measuring.measure` gives the same answer to rounding.  Original docstring:
 
 From per-node streams to the unbalance, with a 95 % interval: the one measuring path.
 

@@ -242,9 +242,9 @@ def _batch_results(n: int, systematic: complex, spread_kg_m: float, seed: int):
     """``n`` rotors of one type (:func:`_made`), each measured on the simulated demo stand
     (2 s runs)."""
     from stand.drivers.streams import rebuild
-    from stand.pipeline import SolveOptions, build_result, measure_streams
-    from stand.result import Job, Provenance
     from stand.sim import load_scene, simulate
+    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
+    from stand.solve.result import Job, Provenance
 
     sc, p, _ = load_scene("demo")
     cfg = sc.config()

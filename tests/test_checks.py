@@ -21,7 +21,7 @@ from stand.cli import main
 from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.streams import rebuild
 from stand.errors import MeasurementError, SensorFaultError
-from stand.measure import measure
+from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
 
 TRUTH = np.array([5000e-6 * np.exp(-1j * np.radians(30)), 3000e-6 * np.exp(-1j * np.radians(200))])
@@ -124,9 +124,9 @@ def test_3x_is_judged_only_against_a_1x_that_is_there(unbalanced: bool) -> None:
 @pytest.mark.parametrize("g_mm", [0.0, 5000.0])
 def test_at_the_noise_floor_no_correction_is_prescribed(g_mm: float) -> None:
     """A plane whose unbalance is inside its own interval gets no weight and no angle."""
-    from stand.pipeline import SolveOptions, build_result, measure_streams
-    from stand.result import Provenance
-    from stand.result_json import to_json
+    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
+    from stand.solve.result import Provenance
+    from stand.solve.result_json import to_json
 
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 import reference_measure
 
-from stand import measure, passes
 from stand.drivers.streams import rebuild
+from stand.measuring import measure, passes
 from stand.sim import load_scene, simulate
 
 

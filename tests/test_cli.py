@@ -184,7 +184,7 @@ def test_a_meaningless_speed_is_refused_before_any_arithmetic(
 
 def test_finite_names_the_first_bad_key_and_passes_good_objects() -> None:
     from stand.errors import ModelError
-    from stand.result import finite
+    from stand.solve.result import finite
 
     good = {"a": [1.0, {"b": 2}], "c": None, "d": "x"}
     assert finite(good) is good

@@ -136,12 +136,12 @@ def test_an_answer_kept_from_the_last_estimate_says_so(
     """When the whole run cannot be measured again once it has ended (here: made to fail),
     the last estimate made while it ran is the answer, and a warning says so: never in
     silence."""
-    import stand.live
+    import stand.live.loop
     from stand.errors import MeasurementError
-    from stand.live_session import LiveSession
+    from stand.live.session import LiveSession
 
     closed = []
-    real_close, real_measure = LiveSession.close, stand.live.measure_streams
+    real_close, real_measure = LiveSession.close, stand.live.loop.measure_streams
 
     def close(self: LiveSession) -> object:
         closed.append(True)
@@ -153,7 +153,7 @@ def test_an_answer_kept_from_the_last_estimate_says_so(
         return real_measure(*args, **kwargs)
 
     monkeypatch.setattr(LiveSession, "close", close)
-    monkeypatch.setattr(stand.live, "measure_streams", measure)
+    monkeypatch.setattr(stand.live.loop, "measure_streams", measure)
     out = _balance(["--scene", "demo", "--out", str(tmp_path / "r.h5"), "--no-archive"], capsys)
     (w,) = [w for w in out["warnings"] if "last estimate" in w]
     assert "could not be measured again (the drive stopped)" in w

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from stand.config import load_config
+from stand.config.schema import load_config
 from stand.errors import ConfigError, StandError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -171,7 +171,7 @@ def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path)
 
     from stand.cli import build_parser
     from stand.cli.common import bus_kwargs
-    from stand.config import config_toml
+    from stand.config.schema import config_toml
 
     text = (
         MINIMAL
@@ -189,7 +189,7 @@ def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path)
 
 def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
     """calibrate wrote the config anew and dropped every comment the user had put in it."""
-    from stand.config import config_from_dict, updated_toml
+    from stand.config.schema import config_from_dict, updated_toml
 
     text = (ROOT / "examples" / "demo-stand.toml").read_text()
     cfg, _ = load_config(write(tmp_path, text))

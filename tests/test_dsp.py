@@ -13,7 +13,7 @@ from test_sim import scene
 from stand.core import forward, unbalance_from_polar
 from stand.core.dsp import fit_1x, radius_factor, shaft_angle
 from stand.drivers.streams import rebuild
-from stand.measure import measure
+from stand.measuring.measure import measure
 from stand.sim import simulate
 
 A_TRUE = 1.3 * np.exp(0.7j)

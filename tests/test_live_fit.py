@@ -1,4 +1,4 @@
-"""Live updates between full passes (stand.live_fit, stand.live.Estimates).
+"""Live updates between full passes (stand.measuring.live_fit, stand.live.loop.Estimates).
 
 An update adds the revolutions that came since the last estimate to the fit's
 sums and reads only the frames of the last few revolutions.  What is checked:
@@ -29,12 +29,12 @@ import numpy as np
 import pytest
 
 from stand.drivers.streams import rebuild
-from stand.live import replay_estimates
-from stand.live_fit import extend
-from stand.measure import measure
-from stand.passes import node_phasor, sums_phasor
-from stand.pipeline import SolveOptions, measure_streams
+from stand.live.loop import replay_estimates
+from stand.measuring.live_fit import extend
+from stand.measuring.measure import measure
+from stand.measuring.passes import node_phasor, sums_phasor
 from stand.sim import load_scene, simulate
+from stand.solve.pipeline import SolveOptions, measure_streams
 
 
 @functools.cache

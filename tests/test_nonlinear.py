@@ -25,7 +25,7 @@ from stand.core.nonlinear import (
     force_1x,
 )
 from stand.drivers.streams import rebuild
-from stand.measure import measure
+from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
 
 _P = load_scene("demo")[1]

@@ -23,9 +23,9 @@ def _results(n: int) -> list[tuple[Any, int | None]]:
     the first :data:`CHECKED` (their residual a few tens of g mm): (result, index of the
     run it checks)."""
     from stand.drivers.streams import rebuild
-    from stand.pipeline import SolveOptions, build_result, measure_streams
-    from stand.result import Job, Provenance
     from stand.sim import load_scene, simulate
+    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
+    from stand.solve.result import Job, Provenance
 
     sc, p, _ = load_scene("demo")
     cfg = sc.config()

@@ -20,9 +20,9 @@ import pytest
 from synth import sine_run
 from test_speed_paths import _same_streams
 
-from stand import beside, read_beside
 from stand.drivers.recording import Recording, read_streams, write_recording
 from stand.errors import NoStatusError
+from stand.process import beside, read_beside
 
 pytestmark = pytest.mark.skipif(not beside.can_fork(), reason="no fork here")
 

@@ -99,7 +99,7 @@ def test_the_certificate_prints_to_a_pdf_of_two_a4_pages(tmp_path: Path) -> None
     import shutil
     import subprocess
 
-    from stand.printing import BROWSERS
+    from stand.report.printing import BROWSERS
 
     if not any(shutil.which(b) for b in BROWSERS):
         pytest.skip("Chromium is not installed (Debian: apt-get install chromium)")

@@ -14,7 +14,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from strategies import log_uniform, stands, unbalances
 
-from stand.config import validate
+from stand.config.schema import validate
 from stand.core import (
     StandParameters,
     forward,

@@ -26,9 +26,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stand import allocator, beside, measure
 from stand.core import fitsums, trig
 from stand.errors import MeasurementError
+from stand.measuring import measure
+from stand.process import allocator, beside
 
 finite = st.floats(-trig.THETA_MAX, trig.THETA_MAX, allow_nan=False)
 

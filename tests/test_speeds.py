@@ -117,7 +117,7 @@ def test_the_station_shows_the_correction_across_speeds_of_archived_runs(
     read."""
     from stand.archive import archive_result
     from stand.errors import UsageError
-    from stand.recordings import solve_recording
+    from stand.solve.recordings import solve_recording
     from stand.station.service import Station
 
     rotors = Path(__file__).resolve().parents[1] / "stand" / "data" / "rotors"

@@ -141,7 +141,7 @@ def _table(model: type[BaseModel], name: str, lines: list[str], seen: set[str]) 
 
 
 def config_reference() -> str:
-    from stand.config import Config
+    from stand.config.schema import Config
     from stand.sim.scene import Scene
 
     lines = [

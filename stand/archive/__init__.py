@@ -20,8 +20,8 @@ from typing import Any
 
 from stand.archive.store import Archive, default_url
 from stand.errors import StandError
-from stand.result import Result, json_text
-from stand.result_json import to_json
+from stand.solve.result import Result, json_text
+from stand.solve.result_json import to_json
 
 __all__ = ["Archive", "archive_result", "default_url", "file_digest", "url_for"]
 
@@ -126,7 +126,7 @@ def add_result(archive: Archive, result: Result, *, config: str | None = None) -
         prev = result.check.previous_run
         checks = archive.run_id(file_digest(prev))
         if checks is None:
-            from stand.recordings import solve_recording
+            from stand.solve.recordings import solve_recording
 
             before = solve_recording(prev, config)
             checks = archive.add(*rows(before, file_digest(prev), None))
@@ -142,7 +142,7 @@ def result_of(row: Any) -> dict[str, Any]:
 def import_runs(paths: list[str], url: str, config: str | None = None) -> list[tuple[str, int]]:
     """Archive runs recorded before (solved with their stored config, or ``config``):
     ``(path, id)`` each; a run already archived keeps its id."""
-    from stand.recordings import solve_recording
+    from stand.solve.recordings import solve_recording
 
     done = []
     with Archive(url) as archive:

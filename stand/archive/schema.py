@@ -4,7 +4,7 @@ One row per run (its job, its file and digest, its verdict, the run it
 checks), one row per plane (the unbalance as a complex number in kg m, its
 95 % radius, the tolerance and the URR when it was a check), and one row
 per confirmed correction with its check (the calibration datum of
-:mod:`stand.health`).  SI units and
+:mod:`stand.health.monitor`).  SI units and
 complex parts in columns; the whole result as JSON beside them, so that a
 report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -90,6 +90,6 @@ corrections = Table(
     Column("start_time", String(40), nullable=False),  # the check run's
     Column("archived_at", String(40), nullable=False),
     Column("datum_json", Text, nullable=False),  # phasors, covariances, correction, config
-)  # revision 0003: each confirmed correction and its check (stand.health)
+)  # revision 0003: each confirmed correction and its check (stand.health.monitor)
 Index("ix_corrections_group", corrections.c.stand_id, corrections.c.rotor_type,
       corrections.c.start_time)  # fmt: skip

@@ -171,7 +171,7 @@ class Archive:
         return self._insert_once(runs, "file_sha256", row, "run", with_planes)
 
     def add_correction(self, row: dict[str, Any]) -> int:
-        """Write one correction datum (:mod:`stand.health`); a check already stored (the
+        """Write one correction datum (:mod:`stand.health.monitor`); a check already stored (the
         same digest) is not written again: its id is returned."""
         from stand.archive.schema import corrections
 

@@ -17,8 +17,8 @@ import sys
 from collections.abc import Callable, Sequence
 
 from stand import __version__
-from stand.allocator import keep_freed_memory
 from stand.errors import StandError, UsageError
+from stand.process.allocator import keep_freed_memory
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -71,7 +71,7 @@ variable to an empty string to have pydantic load its plugins again."""
 
 REUSE_MEMORY = ("solve", "report")
 """Commands that read whole runs: freed memory is kept for reuse
-(:func:`stand.allocator.keep_freed_memory`)."""
+(:func:`stand.process.allocator.keep_freed_memory`)."""
 
 
 def _chosen(argv: Sequence[str]) -> str | None:

@@ -6,7 +6,7 @@ import argparse
 from typing import Any
 
 from stand.cli.format import dump_json
-from stand.typed import parse_rpm
+from stand.config.typed import parse_rpm
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -21,7 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from stand.calib.advisor import advise
-    from stand.config import load_config
+    from stand.config.schema import load_config
 
     cfg, params = load_config(args.config)
     top = args.max_rpm or (cfg.tolerance.max_speed_rpm if cfg.tolerance else None)

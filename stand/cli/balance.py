@@ -13,12 +13,12 @@ from stand.cli.common import (
     add_across_speeds_arguments,
     add_live_measure_arguments,
 )
-from stand.typed import parse_rpm
+from stand.config.typed import parse_rpm
 
 
 def parse_masses(text: str) -> list[tuple[int, float, float, float | None]]:
     """``1:55.5@30,2:-12@200:80``: the masses put on, as ``--add`` takes each."""
-    from stand.typed import parse_mass
+    from stand.config.typed import parse_mass
 
     return [parse_mass(x) for x in text.split(",")]
 
@@ -82,7 +82,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.check import with_check
     from stand.cli.common import (
         archive_live,
         solve_options,
@@ -90,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
     )
     from stand.cli.format import show
     from stand.cli.panel import measure_live_from_args
-    from stand.result_json import to_json
+    from stand.solve.check import with_check
+    from stand.solve.result_json import to_json
 
     if args.speeds:
         return _across_speeds(args)
@@ -115,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_archive:  # a stand that drifted from its calibration says so, widened
         from stand.cli.common import archive_url
         from stand.errors import ArchiveError, StandError
-        from stand.health import with_drift
+        from stand.health.monitor import with_drift
 
         try:
             result = with_drift(archive_url(args, cfg), result, cfg, params, options)
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     show(out, args.json)  # the answer first: the report takes a moment
     sys.stdout.flush()
     from stand.cli.common import write_text_output
-    from stand.report import render
+    from stand.report.certificate import render
 
     inputs = [i for i in (result.provenance.run_file, args.check, args.config) if i]
     write_text_output(report, render(result), force=args.force, inputs=inputs)
@@ -145,8 +145,8 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
     """A check after a confirmed correction: the pair into the archive (stand health)."""
     from stand.archive import Archive, file_digest
     from stand.cli.common import archive_url
-    from stand.health import datum_row
-    from stand.recordings import result_masses, solve_recording
+    from stand.health.monitor import datum_row
+    from stand.solve.recordings import result_masses, solve_recording
 
     if not (args.applied or args.applied_masses):
         print(
@@ -190,10 +190,10 @@ def _across_speeds(args: argparse.Namespace) -> int:
     from stand.cli.common import archive_live, run_path, solve_options, targets_from
     from stand.cli.format import dump_json, print_speeds
     from stand.cli.panel import measure_live_from_args
+    from stand.config.matrix import SAME_SPEED
     from stand.errors import UsageError
-    from stand.matrix import SAME_SPEED
-    from stand.report_pages import render_speeds
-    from stand.speeds import balance_speeds, speeds_json
+    from stand.field.speeds import balance_speeds, speeds_json
+    from stand.report.pages import render_speeds
 
     if args.check or args.rpm:
         raise UsageError("stand balance: --speeds sets the speeds: no --check or --rpm")

@@ -17,7 +17,7 @@ from stand.cli.common import (
     write_text_output,
 )
 from stand.cli.format import dump_json
-from stand.config import STRICT
+from stand.config.schema import STRICT
 from stand.errors import ConfigError
 
 
@@ -97,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("stand calibrate: give RUNS.toml and --out (or --from-archive)")
 
     from stand.calib.identify import NAMES, identify
-    from stand.config import load_config
+    from stand.config.schema import load_config
     from stand.drivers.files import check_output
     from stand.errors import ModelError, UsageError
 
@@ -165,8 +165,8 @@ def _calibration_runs(args: argparse.Namespace, params: Any) -> list[Any]:
     import numpy as np
 
     from stand.calib.identify import CalibrationRun
-    from stand.config import read_toml, validate
-    from stand.recordings import measure_recording
+    from stand.config.schema import read_toml, validate
+    from stand.solve.recordings import measure_recording
 
     _, data = read_toml(args.runs)
     spec = validate(CalibFile, data, args.runs)
@@ -235,7 +235,7 @@ def _write(
     """The calibrated configuration, its fit and standard errors as comments on top."""
     import numpy as np
 
-    from stand.config import read_toml, updated_toml
+    from stand.config.schema import read_toml, updated_toml
 
     v, se = res.values, res.std_errors
     header = [
@@ -268,7 +268,7 @@ FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
 def _refitted_config(cfg: Any, r: Any, original: str) -> tuple[list[str], str]:
     """The config with the refitted values (stiffnesses, masses, gains; today's date), its
     header of comments with the fits, and its text (the user's comments kept)."""
-    from stand.config import updated_toml
+    from stand.config.schema import updated_toml
 
     stand = cfg.stand.model_copy(
         update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
@@ -297,10 +297,10 @@ def _from_archive(args: argparse.Namespace) -> int:
     written beside the old (with a diff), the last rotors' answers old and new."""
     import difflib
 
-    from stand.config import load_config, read_toml
+    from stand.config.schema import load_config, read_toml
     from stand.drivers.files import check_output
     from stand.errors import UsageError
-    from stand.health import answers, refit
+    from stand.health.monitor import answers, refit
 
     out_path = args.out or str(
         Path(args.config).with_name(Path(args.config).stem + "-recalibrated.toml")

@@ -9,8 +9,8 @@ import sys
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from stand.config.typed import parse_angle, parse_mass, parse_rpm, positive_float
 from stand.errors import UsageError
-from stand.typed import parse_angle, parse_mass, parse_rpm, positive_float
 
 if TYPE_CHECKING:
     pass
@@ -76,11 +76,11 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
     masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
     runs = getattr(args, "apply", None) or []
     if len(runs) == 1:
-        from stand.recordings import correction_masses
+        from stand.solve.recordings import correction_masses
 
         masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
     elif runs:
-        from stand.speeds import correction_masses_across_speeds
+        from stand.field.speeds import correction_masses_across_speeds
 
         slow = getattr(args, "apply_slow_roll", None)
         masses += [
@@ -93,7 +93,7 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
 def add_across_speeds_arguments(p: argparse.ArgumentParser, *, flag: bool = True) -> None:
     """``--across-speeds`` (unless ``flag`` is False), ``--method``, ``--max-mass-g``: one
     rotor's runs at several speeds corrected in the config's ``[[rotor.planes]]``
-    (:mod:`stand.speeds`)."""
+    (:mod:`stand.field.speeds`)."""
     g = p.add_argument_group("balancing across speeds (a bending rotor)")
     if flag:
         g.add_argument(
@@ -225,8 +225,8 @@ def add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
-    """The :class:`stand.pipeline.SolveOptions` the arguments ask for (validated)."""
-    from stand.pipeline import SolveOptions
+    """The :class:`stand.solve.pipeline.SolveOptions` the arguments ask for (validated)."""
+    from stand.solve.pipeline import SolveOptions
 
     tolerances = None
     if getattr(args, "uncertainty", False):
@@ -247,7 +247,7 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
         )
     matrix = None
     if getattr(args, "matrix", None):
-        from stand.matrix import read_matrix
+        from stand.config.matrix import read_matrix
 
         matrix = read_matrix(args.matrix)
     return SolveOptions(
@@ -342,7 +342,7 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
         ) from exc
     if not args.quiet:
         print(f"archived as run {run_id}", file=sys.stderr)
-    from stand.mqtt import publish_archived
+    from stand.plant.mqtt import publish_archived
 
     said = publish_archived(result, cfg)
     if said and (not args.quiet or said.startswith("not")):
@@ -369,8 +369,8 @@ def add_job_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def job_from(args: argparse.Namespace) -> Any:
-    """The :class:`stand.result.Job` the options give (UsageError for unusable text)."""
-    from stand.result import Job
+    """The :class:`stand.solve.result.Job` the options give (UsageError for unusable text)."""
+    from stand.solve.result import Job
 
     values = {}
     for name in JOB_FIELDS:
@@ -395,7 +395,7 @@ def check_live_arguments(args: argparse.Namespace, command: str) -> None:
 
 def targets_from(args: argparse.Namespace, tolerance_share: float | None = None) -> Any:
     """``targets(cfg, params, U) -> (kg m, kg m)``: the precision the options ask for."""
-    from stand.pipeline import precision_targets
+    from stand.solve.pipeline import precision_targets
 
     abs_kg_m = None if args.target_g_mm is None else args.target_g_mm * 1e-6
 

@@ -18,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.evaluate import POSITIONS, SPREAD_LIMIT, evaluate
+    from stand.health.evaluate import POSITIONS, SPREAD_LIMIT, evaluate
     from stand.sim import load_scene
 
     scene, params, _ = load_scene(args.scene)

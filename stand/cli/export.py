@@ -30,8 +30,8 @@ def _date(text: str | None, flag: str) -> dt.date | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.archive.qdas import export_qdas
     from stand.archive.query import Filters
+    from stand.plant.qdas import export_qdas
 
     f = Filters(
         since=_date(args.since, "--since"), until=_date(args.until, "--until"), stand=args.stand

@@ -1,6 +1,6 @@
 """A result as text for the operator, and as strict JSON: formatting only.
 
-Everything printed here comes from :func:`stand.result_json.to_json`'s object,
+Everything printed here comes from :func:`stand.solve.result_json.to_json`'s object,
 so the text and the JSON of one run agree to the last digit shown.
 """
 
@@ -10,8 +10,8 @@ import sys
 from collections.abc import Iterable
 from typing import Any, TextIO
 
-from stand.result import json_text
-from stand.units import Display
+from stand.report.units import Display
+from stand.solve.result import json_text
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
 
@@ -270,7 +270,7 @@ def print_summary(out: dict[str, Any]) -> None:
 
 def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
     """What a recording holds: one JSON object, or the table (and the warnings on stderr)."""
-    from stand.recordings import recording_summary
+    from stand.solve.recordings import recording_summary
 
     out = recording_summary(rec, streams)
     if as_json:
@@ -281,7 +281,7 @@ def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
 
 
 def print_speeds(out: dict[str, Any]) -> None:
-    """A correction across speeds (:func:`stand.speeds.speeds_json`): the planes, then per
+    """A correction across speeds (:func:`stand.field.speeds.speeds_json`): the planes, then per
     speed each measuring plane before and after against its permissible value."""
     print(f"correction in {len(out['planes'])} planes for {len(out['speeds'])} speeds:")
     for p in out["planes"]:

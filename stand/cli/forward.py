@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from stand.cli.format import dump_json, print_warnings
-from stand.config import load_config
+from stand.config.schema import load_config
+from stand.config.typed import parse_rpm, parse_unbalance
 from stand.core import (
     forward,
     natural_frequencies,
@@ -18,7 +19,6 @@ from stand.core import (
 )
 from stand.core.inverse import speed_diagnostics
 from stand.errors import UsageError
-from stand.typed import parse_rpm, parse_unbalance
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     omega = float(rpm_to_rad_s(args.rpm))
     beam = cfg.rotor.beam()
     if beam is None:  # the rigid rotor
-        from stand.pipeline import rigid_note
+        from stand.solve.pipeline import rigid_note
 
         A = forward(params, omega, U)
         fn_hz = natural_frequencies(params) / (2 * math.pi)

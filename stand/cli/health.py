@@ -18,7 +18,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.health import health, health_json
+    from stand.health.monitor import health, health_json
 
     out = health_json(health(archive_url(args), args.stand, args.rotor_type))
     if args.json:

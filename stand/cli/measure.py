@@ -19,7 +19,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from stand.cli.format import show
     from stand.cli.panel import measure_live_from_args
-    from stand.result_json import to_json
+    from stand.solve.result_json import to_json
 
     result, cfg, _ = measure_live_from_args(
         args, "measure", targets_from(args), solve_options(args)

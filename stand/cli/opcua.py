@@ -1,5 +1,5 @@
 """The OPC UA result server on its own: identification, state and the latest result of the
-stand, for a line's MES (:mod:`stand.opcua`)."""
+stand, for a line's MES (:mod:`stand.plant.opcua`)."""
 
 from __future__ import annotations
 
@@ -27,9 +27,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def read_access(args: argparse.Namespace) -> Any:
-    """The options' user and password (:class:`stand.opcua.Access`)."""
+    """The options' user and password (:class:`stand.plant.opcua.Access`)."""
     from stand.errors import UsageError
-    from stand.opcua import Access
+    from stand.plant.opcua import Access
 
     password = None
     if args.password_file:
@@ -47,13 +47,13 @@ def run(args: argparse.Namespace) -> int:
     import signal
 
     from stand.errors import UsageError
-    from stand.opcua import ResultServer
+    from stand.plant.opcua import ResultServer
 
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     cfg = None
     if args.config:
-        from stand.config import load_config
+        from stand.config.schema import load_config
 
         cfg = load_config(args.config)[0]
     stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)

@@ -81,8 +81,8 @@ def run(args: argparse.Namespace) -> int:
     from stand.cli.format import print_recording
     from stand.drivers.protocol import Frames
     from stand.drivers.recording import Recording
-    from stand.live_session import LiveSession
-    from stand.pipeline import load_config_text
+    from stand.live.session import LiveSession
+    from stand.solve.pipeline import load_config_text
 
     if args.seconds is not None and not args.seconds > 0:
         raise UsageError(f"stand record: --seconds must be > 0, got {args.seconds}")

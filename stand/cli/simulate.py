@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     job_from(args)  # bad job fields are refused before the work
     stored, believed = None, None
     if args.config:
-        from stand.pipeline import load_config_text
+        from stand.solve.pipeline import load_config_text
 
         believed, _, stored = load_config_text(args.config)
     scene, params, source = load_scene(args.scene)
@@ -102,7 +102,7 @@ def _write(
     source: str,
 ) -> None:
     """The run written to --out (a run file, or a python-can log by its extension)."""
-    from stand.config import config_toml
+    from stand.config.schema import config_toml
     from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
     from stand.drivers.streams import rebuild
 
@@ -146,7 +146,7 @@ def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
 def _series(args: argparse.Namespace) -> int:
     """``--series N``: a simulated production series into the archive."""
     from stand.archive import url_for
-    from stand.production import simulate_series
+    from stand.archive.production import simulate_series
 
     if args.series < 1 or not args.out_dir:
         raise UsageError("stand simulate: --series N (N >= 1) needs --out-dir DIR")

@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         return run_across_speeds(args)
     if len(args.runs) == 1 and not args.summary and args.runs[0].lower().endswith(".h5"):
         from stand.drivers.seal import seal_ahead
-        from stand.read_beside import read_beside
+        from stand.process.read_beside import read_beside
 
         # a long run read by a forked child, and its seal hashed in a thread (after the
         # fork), on the second core while the modules load
@@ -78,8 +78,8 @@ def _run(args: argparse.Namespace) -> int:
     if len(args.runs) > 1 or args.summary:
         return run_batch(args, options)
     from stand.cli.format import show
-    from stand.recordings import solve_recording
-    from stand.result_json import to_json
+    from stand.solve.recordings import solve_recording
+    from stand.solve.result_json import to_json
 
     show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
     return 0
@@ -125,9 +125,9 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
     from stand.cli.format import dump_json
-    from stand.recordings import solve_many
-    from stand.result import json_text
-    from stand.result_json import to_json
+    from stand.solve.recordings import solve_many
+    from stand.solve.result import json_text
+    from stand.solve.result_json import to_json
 
     runs = list(args.runs)
     results: dict[str, dict[str, Any]] = {}
@@ -182,7 +182,7 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
 def run_across_speeds(args: argparse.Namespace) -> int:
     """One correction in N planes for the runs at several speeds; per speed, what it leaves."""
     from stand.cli.format import dump_json, print_speeds
-    from stand.speeds import balance_speeds, speeds_json
+    from stand.field.speeds import balance_speeds, speeds_json
 
     if args.summary or args.jobs != 1:
         raise UsageError("stand solve: --across-speeds gives one answer: no --summary or --jobs")

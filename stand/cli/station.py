@@ -43,7 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
     from stand.errors import UsageError
-    from stand.station.safety import check_bind, read_token
+    from stand.plant.safety import check_bind, read_token
 
     token = read_token(args.token, args.token_file)
     check_bind(args.host, token)
@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--config-dir {config_dir}: not a folder")
     from stand.archive import url_for
     from stand.archive.store import data_folder
-    from stand.pipeline import precision_targets
+    from stand.solve.pipeline import precision_targets
     from stand.station.pages import serve
     from stand.station.service import Station
 
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
     station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
     if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
-        from stand.opcua import ResultServer
+        from stand.plant.opcua import ResultServer
 
         def state() -> str:
             return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"

@@ -51,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
         _text(out)
     if args.report and out["rotors"]:
         from stand.cli.common import write_text_output
-        from stand.report_pages import render_production
+        from stand.report.pages import render_production
 
         write_text_output(args.report, render_production(out), force=args.force)
         if not args.json:

@@ -45,7 +45,7 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
 
 
 def _where(args: argparse.Namespace, cfg: Any) -> Path:
-    from stand.tooling import folder
+    from stand.solve.tooling import folder
 
     if args.folder:
         return Path(args.folder)
@@ -58,7 +58,7 @@ def _where(args: argparse.Namespace, cfg: Any) -> Path:
 
 def _measure(args: argparse.Namespace) -> int:
     from stand.errors import UsageError
-    from stand.tooling import measure_tooling, save_tooling
+    from stand.solve.tooling import measure_tooling, save_tooling
 
     if len(args.runs) != 2:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
@@ -91,8 +91,8 @@ def _measure(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from stand.config import load_config
-    from stand.tooling import stored_toolings
+    from stand.config.schema import load_config
+    from stand.solve.tooling import stored_toolings
 
     cfg = load_config(args.config)[0] if args.config else None
     where = _where(args, cfg)

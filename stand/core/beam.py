@@ -16,7 +16,7 @@ rigid :func:`stand.core.model.forward` as ``1 / E`` (tested).  The forward is
 linear in ``U``: ``A = H(w) U``, and the inverse is ``U = H(w)^-1 A``.
 
 Used wherever a config or scene has a ``[rotor.shaft]`` table
-(:meth:`stand.config.RotorTable.beam`).  Pure numerics: arrays in, arrays out.
+(:meth:`stand.config.schema.RotorTable.beam`).  Pure numerics: arrays in, arrays out.
 """
 
 from __future__ import annotations

@@ -27,7 +27,8 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from stand.config import (
+from stand.config.correction import check_correction
+from stand.config.schema import (
     STRICT,
     Config,
     CorrectionTable,
@@ -39,7 +40,6 @@ from stand.config import (
     validate,
     with_shaft,
 )
-from stand.config_correction import check_correction
 from stand.core.model import StandParameters
 from stand.errors import ConfigError
 from stand.sim.tables import (

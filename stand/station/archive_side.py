@@ -33,8 +33,8 @@ class ArchiveSide:
         """A check after a confirmed correction into the archive as a calibration datum;
         what was done, for the screen."""
         from stand.archive import Archive, file_digest
-        from stand.health import datum_row
-        from stand.recordings import result_masses
+        from stand.health.monitor import datum_row
+        from stand.solve.recordings import result_masses
 
         prev = before.provenance.run_file
         if self._state.confirmed_run != prev:
@@ -56,8 +56,8 @@ class ArchiveSide:
         return "stored as a calibration datum (stand health)"
 
     def health(self) -> dict[str, Any]:
-        """What the archive's calibration data say (:func:`stand.health.health_json`)."""
-        from stand.health import health, health_json
+        """What the archive's calibration data say (:func:`stand.health.monitor.health_json`)."""
+        from stand.health.monitor import health, health_json
 
         return health_json(health(self.archive_url))
 
@@ -73,9 +73,9 @@ class ArchiveSide:
 
     def export_qdas(self, rotor_type: str) -> bytes:
         """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
-        (:mod:`stand.archive.qdas`; UsageError when there is none)."""
-        from stand.archive.qdas import export_qdas
+        (:mod:`stand.plant.qdas`; UsageError when there is none)."""
         from stand.archive.query import Filters
+        from stand.plant.qdas import export_qdas
 
         data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None)
         return data
@@ -96,11 +96,11 @@ class ArchiveSide:
 
     def speeds_page(self, run_ids: list[int]) -> str:
         """The correction across speeds of archived runs (one rotor at several speeds) as
-        an HTML page (:func:`stand.speeds.balance_speeds`,
-        :func:`stand.report_pages.render_speeds`)."""
+        an HTML page (:func:`stand.field.speeds.balance_speeds`,
+        :func:`stand.report.pages.render_speeds`)."""
         from stand.archive.query import run_file
-        from stand.report_pages import render_speeds
-        from stand.speeds import balance_speeds, speeds_json
+        from stand.field.speeds import balance_speeds, speeds_json
+        from stand.report.pages import render_speeds
 
         paths = []
         for run_id in run_ids:
@@ -116,13 +116,13 @@ class ArchiveSide:
     def certificate_pdf(self, run_id: int) -> Path:
         """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
         the first time it is asked for, and again if the report changed since
-        (:func:`stand.printing.write_pdf`, written safely)."""
+        (:func:`stand.report.printing.write_pdf`, written safely)."""
         report = self.report_file(run_id)
         pdf = report.with_suffix(".pdf")
         with self._printing:
             stale = pdf.is_file() and pdf.stat().st_mtime_ns < report.stat().st_mtime_ns
             if stale or not pdf.is_file():
-                from stand.printing import write_pdf
+                from stand.report.printing import write_pdf
 
                 text = report.read_text(encoding="utf-8")
                 write_pdf(text, pdf, force=stale, inputs=[str(report)])  # its own print only

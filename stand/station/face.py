@@ -4,7 +4,7 @@ The face is seen from the end where the rotor turns counter-clockwise: the
 reference mark at the top, angles counted clockwise from it (against the
 direction of rotation, the arrow), the holes or blades numbered 1..N when the
 correction uses positions, and each correction mass where it goes.  The
-convention is the report's polar plots' (:mod:`stand.plots`).
+convention is the report's polar plots' (:mod:`stand.report.plots`).
 """
 
 from __future__ import annotations

@@ -13,8 +13,8 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
+from stand.report.units import Display
 from stand.station.service import Station
-from stand.units import Display
 
 
 def _health_panel(station: Station) -> None:

@@ -15,8 +15,9 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError
-from stand.result import Job
-from stand.result_json import to_json
+from stand.report.units import Display
+from stand.solve.result import Job
+from stand.solve.result_json import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, history_screen
 from stand.station.service import BUS, Station
@@ -30,7 +31,6 @@ from stand.station.views import (
     planes_live,
     polar_chart,
 )
-from stand.units import Display
 
 REFRESH_S = 0.25
 """How often a live screen looks at the station's state [s]."""
@@ -315,7 +315,7 @@ def check_screen(station: Station) -> None:
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:
     """Serve the station until interrupted (the token, if any, on every request)."""
-    from stand.station.safety import TokenGate
+    from stand.plant.safety import TokenGate
 
     add_routes(station)
     if token:

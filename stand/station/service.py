@@ -1,11 +1,11 @@
 """The station's one measurement, shared by every screen (no interface code here).
 
 :class:`Station` runs the operator's loop on the application layer: a live
-run measured until precise (:func:`stand.live.measure_live`, in a thread),
+run measured until precise (:func:`stand.live.loop.measure_live`, in a thread),
 the report beside the run, the run archived; on a simulated stand the
-correction applied (:func:`stand.recordings.correction_masses`, as
+correction applied (:func:`stand.solve.recordings.correction_masses`, as
 ``--apply`` does) and the check run against the run before
-(:func:`stand.check.with_check`).  Screens read :meth:`Station.snapshot`, a
+(:func:`stand.solve.check.with_check`).  Screens read :meth:`Station.snapshot`, a
 frozen picture of the state; only one measurement runs at a time, whichever
 screen starts it (:class:`~stand.errors.StationBusyError`).
 """
@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.errors import StandError, StationBusyError, UsageError
-from stand.result import Job
+from stand.solve.result import Job
 from stand.station.archive_side import ArchiveSide
 
 log = logging.getLogger(__name__)
@@ -44,8 +44,8 @@ class Snapshot:
 
     ``phase`` is ``idle``, ``measuring``, ``done`` or ``failed``; ``kind`` is
     ``initial`` (the first run of a rotor) or ``check`` (after the correction).
-    ``progress`` is the latest live estimate (:class:`stand.live.Progress`),
-    ``result`` the finished run's :class:`stand.result.Result` and ``before`` the
+    ``progress`` is the latest live estimate (:class:`stand.live.loop.Progress`),
+    ``result`` the finished run's :class:`stand.solve.result.Result` and ``before`` the
     initial run's while a check is made.  ``seq`` grows with every change.
     """
 
@@ -67,7 +67,7 @@ class Snapshot:
     """The run whose correction was put on the simulated rotor last (once only)."""
     confirmed_run: str | None = None
     """The run whose correction the operator confirmed as put on as shown: its check is a
-    calibration datum (:mod:`stand.health`)."""
+    calibration datum (:mod:`stand.health.monitor`)."""
     run_id: int | None = None
     tolerance_kg_m: tuple[float, float] | None = None
 
@@ -135,7 +135,7 @@ class Station(ArchiveSide):
         folder, or its file no longer loads."""
         if rotor_type not in self.rotor_types():
             return "g", "mm"
-        from stand.pipeline import load_config_text
+        from stand.solve.pipeline import load_config_text
 
         try:
             cfg, _, _ = load_config_text(str(self.config_path(str(rotor_type))))
@@ -224,8 +224,8 @@ class Station(ArchiveSide):
     def apply_correction(self) -> tuple[Any, ...]:
         """On a simulated stand: put the prescribed correction on the rotor, as an operator
         would (the masses ``--apply`` puts on); returns every mass applied so far."""
-        from stand.recordings import correction_masses
         from stand.sim import Mass
+        from stand.solve.recordings import correction_masses
 
         s = self._state
         if s.phase != "done" or s.result is None or not s.simulated:
@@ -270,8 +270,8 @@ class Station(ArchiveSide):
         self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
-        from stand.live import live_source, measure_live
-        from stand.pipeline import SolveOptions, tolerance_of
+        from stand.live.loop import live_source, measure_live
+        from stand.solve.pipeline import SolveOptions, tolerance_of
 
         s = self._state
         scene = None if s.source == BUS else s.source
@@ -297,11 +297,11 @@ class Station(ArchiveSide):
             max_interval_s=UPDATE_S,
         )
         if kind == "check":
-            from stand.check import with_check
+            from stand.solve.check import with_check
 
             prev = before.provenance.run_file
             result = with_check(result, prev, src.cfg, src.params, strict=True)
-        from stand.health import with_drift
+        from stand.health.monitor import with_drift
 
         try:  # a stand that drifted from its calibration: the interval widened, and said
             result = with_drift(self.archive_url, result, src.cfg, src.params, SolveOptions())
@@ -314,7 +314,7 @@ class Station(ArchiveSide):
         run file is kept whatever happens)."""
         from stand.archive import archive_result
         from stand.drivers.files import output
-        from stand.report import render
+        from stand.report.certificate import render
 
         notes = []
         run = Path(result.provenance.run_file)
@@ -330,8 +330,8 @@ class Station(ArchiveSide):
         except StandError as exc:
             notes.append(f"not archived ({exc}); the run is kept in {run}")
             return run_id, tuple(notes)
-        from stand.mqtt import publish_archived
-        from stand.pipeline import load_config_text
+        from stand.plant.mqtt import publish_archived
+        from stand.solve.pipeline import load_config_text
 
         said = publish_archived(result, load_config_text(str(config))[0])
         if said and said.startswith("not"):

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.units import Display
+from stand.report.units import Display
 
 ANGLE_NOTE = "angles from the reference mark, against the direction of rotation"
 RING = np.linspace(0.0, 2.0 * math.pi, 73)
@@ -39,7 +39,7 @@ class PlaneLive:
 
 
 def planes_live(progress: Any, tolerance_kg_m: tuple[float, float] | None) -> list[PlaneLive]:
-    """Both planes of a live estimate (:class:`stand.live.Progress`)."""
+    """Both planes of a live estimate (:class:`stand.live.loop.Progress`)."""
     m = progress.measurement
     size, angle = unbalance_to_polar(m.solution.U_kg_m)
     return [

@@ -5,7 +5,7 @@
 The demo scene is simulated for ``--seconds`` and replayed, as fast as the
 machine goes, into the live path's :class:`~stand.drivers.streams.StreamBuilder`
 in blocks of 0.1 s (as a live session reads them); every ``--every`` seconds
-of the run (the station asks every 0.4 s) :class:`stand.live.Estimates` gives
+of the run (the station asks every 0.4 s) :class:`stand.live.loop.Estimates` gives
 the estimate of the run so far: a full pass on its schedule, an update in
 between.  Printed per window of the run: the updates' median and largest
 cost, the full passes' cost, and the CPU a second of run costs in estimates
@@ -27,9 +27,9 @@ WINDOWS = ((5.0, 15.0), (55.0, 65.0), (295.0, 305.0), (590.0, 610.0))
 
 def run(seconds: float, every: float) -> list[tuple[float, float, str, int]]:
     """The costs of every estimate: ``(run time [s], seconds, kind, frames read)``."""
-    from stand.live import replay_estimates
-    from stand.pipeline import SolveOptions
+    from stand.live.loop import replay_estimates
     from stand.sim import load_scene, simulate
+    from stand.solve.pipeline import SolveOptions
 
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()

@@ -34,7 +34,7 @@ import numpy as np
 from stand.core import forward
 from stand.drivers.streams import rebuild
 from stand.errors import StandError
-from stand.measure import measure
+from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
 
 STATS: list[tuple[float, list[tuple[float, float]]]] = []
@@ -61,9 +61,9 @@ def _recording_detect(p: Any, omega: float, A: Any, cov3: Any, U: Any) -> Any:
 def _case(args: tuple[str, dict[str, Any], int]) -> tuple[Any, ...]:
     """(label, error [deg], flagged, estimated error [deg], strong_3x only, the 95 % circles
     hold the truth, the detector's statistics) of one scene."""
-    import stand.measure
+    import stand.measuring.measure
 
-    stand.measure.detect = _recording_detect  # type: ignore[assignment]
+    stand.measuring.measure.detect = _recording_detect  # type: ignore[assignment]
     STATS.clear()
     label, effects, seed = args
     rng = np.random.default_rng(seed)

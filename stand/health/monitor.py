@@ -1,0 +1,388 @@
+"""The stand keeps itself honest: confirmed corrections as calibration data, drift, refits.
+
+A correction the software prescribed, confirmed as put on by the operator
+(``stand balance --check RUN --applied``, or ``--applied-masses`` with what
+was put on instead; the station's *applied as shown*), and the check run
+after it, make one datum (:class:`stand.core.drift.Datum`): the stand's
+response to a known unbalance.  Each is archived (the corrections table,
+with both runs' digests, the masses, who confirmed it).  :func:`health`
+reads a stand's and rotor type's data at one speed and one calibration,
+runs the CUSUMs and says which part moved; :func:`refit` re-identifies
+parameters from them (``stand calibrate --from-archive``).
+"""
+
+from __future__ import annotations
+
+import cmath
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from stand.config.matrix import SAME_SPEED
+from stand.core.drift import (
+    CUSUM_H,
+    FALSE_ALARM,
+    RUN_LENGTH,
+    Datum,
+    cusum,
+    fit,
+    scores,
+    single_fits,
+    whitened,
+)
+from stand.errors import ConfigError, UsageError
+
+SCATTER_PCT = 2.0
+"""The operator's placement scatter assumed: each mass off by 2 % ..."""
+SCATTER_DEG = 2.0
+"""... and its angle by 2 deg (one standard deviation)."""
+PART = {
+    "C1": "support 1 (its stiffness, or its mass: one speed cannot tell them apart)",
+    "M1": "support 1 (its mass, or its stiffness: one speed cannot tell them apart)",
+    "C2": "support 2 (its stiffness, or its mass: one speed cannot tell them apart)",
+    "M2": "support 2 (its mass, or its stiffness: one speed cannot tell them apart)",
+    "reference_angle": "the reference sensor (every angle turned)",
+    "gain1": "the accelerometer of support 1 (its gain)",
+    "gain2": "the accelerometer of support 2 (its gain)",
+}
+
+
+def applied_unbalance(masses: Sequence[tuple[int, float, float, float]]) -> np.ndarray:
+    """The unbalance put on per plane [kg m] from ``(plane, grams, angle_deg, radius_m)``
+    (grams < 0: material taken off), ``m r e^{-i angle}``."""
+    U = np.zeros(2, complex)
+    for plane, grams, angle, radius in masses:
+        U[plane - 1] += grams * 1e-3 * radius * cmath.exp(-1j * math.radians(angle))
+    return U
+
+
+def _pairs(z: np.ndarray) -> list[list[float]]:
+    return [[float(x.real), float(x.imag)] for x in np.asarray(z)]
+
+
+def datum_row(
+    initial: Any,
+    check: Any,
+    masses: Sequence[tuple[int, float, float, float]],
+    *,
+    initial_sha256: str,
+    check_sha256: str,
+    confirmed_by: str | None,
+    applied: str,
+) -> dict[str, Any]:
+    """The archive row of one correction datum: the initial run's and the check's results
+    (:class:`stand.solve.result.Result`), the masses put on, both runs' digests."""
+    m0, m1 = initial.measurement, check.measurement
+    if abs(m1.omega_rad_s / m0.omega_rad_s - 1) > SAME_SPEED:
+        raise UsageError(
+            "the check ran at another speed than the run it checks: not a calibration datum"
+        )
+    if m0.cov_A_m2_s4 is None or m1.cov_A_m2_s4 is None:
+        raise UsageError("a run without its noise estimate is not a calibration datum")
+    prov = check.provenance
+    if initial.provenance.config_sha256 != prov.config_sha256:
+        raise UsageError(
+            "the check was solved with another calibration than the run it checks: not a "
+            "calibration datum"
+        )
+    datum = {
+        "omega_rad_s": m0.omega_rad_s,
+        "A0": _pairs(np.array([ph.A_m_s2 for ph in m0.supports])),
+        "A1": _pairs(np.array([ph.A_m_s2 for ph in m1.supports])),
+        "cov0": np.asarray(m0.cov_A_m2_s4).tolist(),
+        "cov1": np.asarray(m1.cov_A_m2_s4).tolist(),
+        "dU_kg_m": _pairs(applied_unbalance(masses)),
+        "masses": [list(m) for m in masses],
+        "config_toml": prov.config_toml,
+    }
+    return {
+        "initial_sha256": initial_sha256,
+        "check_sha256": check_sha256,
+        "stand_id": prov.stand_id or None,
+        "rotor_type": prov.rotor_type or None,
+        "rpm": m1.omega_rad_s * 30 / math.pi,
+        "config_sha256": prov.config_sha256,
+        "confirmed_by": confirmed_by,
+        "applied": applied,
+        "start_time": prov.start_time,
+        "datum_json": json.dumps(datum, allow_nan=False),
+    }
+
+
+def _datum(row: Any) -> tuple[Datum, dict[str, Any]]:
+    d = json.loads(row["datum_json"])
+
+    def cx(pairs: list[list[float]]) -> np.ndarray:
+        return np.array([complex(a, b) for a, b in pairs])
+
+    return (
+        Datum(
+            d["omega_rad_s"],
+            cx(d["A0"]),
+            cx(d["A1"]),
+            np.array(d["cov0"]),
+            np.array(d["cov1"]),
+            cx(d["dU_kg_m"]),
+        ),
+        d,
+    )
+
+
+@dataclass(frozen=True)
+class Group:
+    """One stand's data for one rotor type, at one speed, with one calibration."""
+
+    stand_id: str | None
+    rotor_type: str | None
+    rpm: float
+    config_sha256: str
+    rows: tuple[Any, ...]
+
+
+def groups(rows: Sequence[Any]) -> list[Group]:
+    """The data split so that nothing is mixed: stand, rotor type, calibration, speed
+    (within 5 %); in order of each group's first datum."""
+    out: list[list[Any]] = []
+    for r in rows:
+        for g in out:
+            f = g[0]
+            same = (f["stand_id"], f["rotor_type"], f["config_sha256"]) == (
+                r["stand_id"],
+                r["rotor_type"],
+                r["config_sha256"],
+            )
+            if same and abs(r["rpm"] / f["rpm"] - 1) <= SAME_SPEED:
+                g.append(r)
+                break
+        else:
+            out.append([r])
+    return [
+        Group(g[0]["stand_id"], g[0]["rotor_type"], g[0]["rpm"], g[0]["config_sha256"], tuple(g))
+        for g in out
+    ]
+
+
+def _params(group: Group) -> Any:
+    import tomllib
+
+    from stand.config.schema import config_from_dict
+
+    text = json.loads(group.rows[0]["datum_json"])["config_toml"]
+    try:
+        return config_from_dict(
+            tomllib.loads(text), source="(the calibration stored with the data)"
+        )
+    except (tomllib.TOMLDecodeError, ConfigError) as exc:
+        raise ConfigError(f"the data's stored calibration cannot be read ({exc})") from None
+
+
+@dataclass(frozen=True)
+class GroupHealth:
+    """What one group's data say: the CUSUM, the alarm, what moved."""
+
+    group: Group
+    cusum: np.ndarray
+    alarm_at: int | None
+    change_at: int | None
+    moved: Any
+    fitted: tuple[Any, ...]
+    """The parameter that explains the data since the change, and those alike it, refitted
+    (a stiffness first)."""
+
+
+def judge(
+    group: Group, scatter_pct: float = SCATTER_PCT, scatter_deg: float = SCATTER_DEG
+) -> GroupHealth:
+    """The CUSUMs over the group's data; after an alarm, the single parameter that explains
+    the data since the change best, refitted with its interval."""
+    cfg, p = _params(group)
+    del cfg
+    data = [_datum(r)[0] for r in group.rows]
+    sc = (scatter_pct / 100, math.radians(scatter_deg))
+    zs, Js = whitened(p, data, *sc)  # the whole group at once
+    c = cusum(scores(zs, Js))
+    if c.alarm_at is None or c.change_at is None:
+        return GroupHealth(group, c.top, None, None, None, ())
+    start = c.change_at
+    best = single_fits(zs[start:], Js[start:])[0]
+    names = [best.name, *(n for n in best.alike if n in ("C1", "C2", "M1", "M2"))]
+    names.sort(key=lambda n: n not in ("C1", "C2"))  # a stiffness first: rubber ages
+    fits = tuple(fit(p, data[start:], n, *sc) for n in names)
+    return GroupHealth(group, c.top, c.alarm_at, start, best, fits)
+
+
+def _change(f: Any) -> dict[str, Any]:
+    angle = f.name == "reference_angle"
+    scale = math.degrees(1) if angle else 100.0
+    return {
+        "parameter": f.name,
+        "change": round(f.change * scale, 3),
+        "interval95": round(f.interval95 * scale, 3),
+        "unit": "deg" if angle else "%",
+    }
+
+
+def health_json(results: Sequence[GroupHealth]) -> dict[str, Any]:
+    """``stand health``'s JSON: ``alarm`` (any group), and per group what it says."""
+    out = []
+    for h in results:
+        g = h.group
+        entry: dict[str, Any] = {
+            "stand": g.stand_id,
+            "rotor_type": g.rotor_type,
+            "rpm": round(g.rpm, 1),
+            "config_sha256": g.config_sha256,
+            "data": len(g.rows),
+            "alarm": h.alarm_at is not None,
+            "alarm_at": None if h.alarm_at is None else h.alarm_at + 1,
+            "change_at": None if h.change_at is None else h.change_at + 1,
+            "cusum": round(float(h.cusum[-1]), 3) if len(h.cusum) else 0.0,
+            "cusum_max": round(float(h.cusum.max()), 3) if len(h.cusum) else 0.0,
+            "threshold": CUSUM_H,
+            "moved": None,
+        }
+        if h.fitted:
+            f = h.fitted[0]
+            entry["moved"] = {"part": PART[f.name], **_change(f)}
+            entry["or"] = [_change(x) for x in h.fitted[1:]]
+        out.append(entry)
+    return {
+        "alarm": any(e["alarm"] for e in out),
+        "false_alarm": f"at most {100 * FALSE_ALARM:g} % chance of an alarm within "
+        f"{RUN_LENGTH} corrected rotors of a stable stand",
+        "groups": out,
+    }
+
+
+def health(url: str, stand: str | None = None, rotor_type: str | None = None) -> list[GroupHealth]:
+    """Every group of the archive's correction data (of a stand, a rotor type) judged."""
+    from stand.archive import Archive
+
+    with Archive(url) as a:
+        rows = a.correction_rows(stand, rotor_type)
+    return [judge(g) for g in groups(rows)]
+
+
+@dataclass(frozen=True)
+class Refit:
+    """Parameters re-identified from production data: the fits, the parameters before and
+    after, and the data used (the group, from which datum)."""
+
+    fits: tuple[Any, ...]
+    before: Any
+    after: Any
+    group: Group
+    start: int
+
+
+def refit(
+    url: str,
+    params: Any,
+    names: Sequence[str] | None = None,
+    *,
+    stand: str | None = None,
+    rotor_type: str | None = None,
+) -> Refit:
+    """Re-identify ``names`` (default: what :func:`judge` says moved, else C1 and C2) from
+    the newest group of correction data made with these parameters, from the change on."""
+    import dataclasses
+
+    from stand.archive import Archive
+    from stand.core.drift import fit_many
+
+    with Archive(url) as a:
+        rows = a.correction_rows(stand, rotor_type)
+    mine = [g for g in groups(rows) if _params(g)[1] == params]
+    if not mine:
+        raise UsageError(
+            "no correction data made with this calibration in the archive (of this stand "
+            "and rotor type): nothing to recalibrate from"
+        )
+    group = mine[-1]
+    judged = judge(group)
+    start = judged.change_at or 0
+    if names is None:
+        names = [judged.fitted[0].name] if judged.fitted else ["C1", "C2"]
+    data = [_datum(r)[0] for r in group.rows[start:]]
+    if len(data) < 2 * len(names):
+        raise UsageError(f"{len(data)} data since the change: too few to fit {', '.join(names)}")
+    sc = (SCATTER_PCT / 100, math.radians(SCATTER_DEG))
+    fits = fit_many(params, data, list(names), *sc)
+    after = params
+    for f in fits:
+        if f.name in ("C1", "C2", "M1", "M2"):
+            after = dataclasses.replace(after, **{f.name: getattr(params, f.name) * (1 + f.change)})
+    return Refit(tuple(fits), params, after, group, start)
+
+
+def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
+    """The last rotors' initial unbalance with the old and the new calibration [g mm, deg]."""
+    from stand.core import solve_unbalance
+    from stand.core.model import unbalance_to_polar
+
+    out = []
+    for row in refit_.group.rows[-last:]:
+        d = _datum(row)[0]
+        entry = {"check_sha256": row["check_sha256"][:12]}
+        for key, p in (("old", refit_.before), ("new", refit_.after)):
+            U = solve_unbalance(p, d.omega_rad_s, d.A0, max_split_condition=math.inf).U_kg_m
+            q, phi = unbalance_to_polar(U)
+            entry[key] = [[round(float(q[i]) * 1e6, 1), round(float(phi[i]), 1)] for i in range(2)]
+        out.append(entry)
+    return out
+
+
+def drift_bands(url: str, result: Any) -> dict[str, float] | None:
+    """What the stand's health says of the stand a result comes from: when its data (this
+    stand, rotor type, calibration and speed) raised the alarm, each fitted part's change
+    and its interval, ``|change| + interval95`` (relative), to widen the calibration's
+    bands with until the stand is recalibrated; None when they did not (or there are none).
+    """
+    from stand.archive import Archive
+
+    prov = result.provenance
+    with Archive(url) as a:
+        rows = a.correction_rows(prov.stand_id or None, prov.rotor_type)
+    rpm = result.omega_rad_s * 30 / math.pi
+    mine = [
+        g
+        for g in groups(rows)
+        if g.config_sha256 == prov.config_sha256 and abs(g.rpm / rpm - 1) <= SAME_SPEED
+    ]
+    if not mine:
+        return None
+    judged = judge(mine[-1])
+    if judged.alarm_at is None:
+        return None
+    return {
+        f.name: abs(f.change) + f.interval95 for f in judged.fitted if f.name != "reference_angle"
+    }
+
+
+def with_drift(url: str, result: Any, cfg: Any, params: Any, options: Any) -> Any:
+    """``result`` with its calibration interval widened by what :func:`drift_bands` found,
+    and a warning saying so; ``result`` itself when the stand is as calibrated."""
+    import dataclasses
+
+    from stand.core import Diagnostic
+    from stand.solve.pipeline import calibration_radius
+
+    bands = drift_bands(url, result)
+    if not bands:
+        return result
+    radius = calibration_radius(result.measurement, cfg, params, options, drifted=bands)
+    parts = ", ".join(f"{k} {100 * v:.1f} %" for k, v in bands.items())
+    note = Diagnostic(
+        "stand_drifted",
+        f"stand health: this stand no longer matches its calibration ({parts}): the "
+        "calibration's interval is widened to hold it; recalibrate (stand calibrate "
+        "--from-archive)",
+        max(bands.values()),
+    )
+    return dataclasses.replace(
+        result, calibration_radius_kg_m=radius, warnings=(*result.warnings, note)
+    )

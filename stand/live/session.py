@@ -1,0 +1,192 @@
+"""One live session: the bus (or a scene played on a private virtual bus), the reader,
+the run file, the decoded streams and the signals, owned by one context manager.
+
+``stand record``, ``stand measure`` and ``stand balance`` all run through
+:class:`LiveSession`.  Frames are decoded once, as they arrive
+(:class:`~stand.drivers.streams.StreamBuilder`); the run file is written as
+they come; nothing is read back from it.  SIGINT and SIGTERM end the session
+cleanly (also when SIGINT was ignored when the process started, as under
+``nohup``): the run is kept and marked complete.  The measuring loop on it is
+:func:`stand.live.loop.measure_until_precise`.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import threading
+import time
+from types import FrameType
+from typing import Any
+
+from stand.core import Diagnostic
+from stand.errors import BusError
+from stand.solve.pipeline import SOFTWARE
+
+
+class LiveSession:
+    """A bus or a scene, read live into a run file and decoded streams.
+
+    Parameters
+    ----------
+    bus_kwargs
+        ``can.Bus`` options (for a scene: a private virtual channel).
+    run_path
+        The run file to create (an existing file is refused).
+    config_toml
+        The configuration text stored in the run.
+    scene_frames
+        Frames of a simulated run to play in real time on the bus, or None.
+    silence_timeout_s
+        No frame for this long ends the session (:class:`BusTimeoutError`) [s].
+    run_attrs
+        More text attributes stored in the run file (the influence matrix used).
+    """
+
+    def __init__(
+        self,
+        bus_kwargs: dict[str, Any],
+        run_path: str,
+        *,
+        config_toml: str = "",
+        scene_frames: Any = None,
+        silence_timeout_s: float = 2.0,
+        run_attrs: dict[str, str] | None = None,
+    ):
+        from stand.drivers.bus import describe_bus
+        from stand.drivers.streams import StreamBuilder
+
+        self.bus_kwargs = bus_kwargs
+        self.run_path = run_path
+        self.config_toml = config_toml
+        self.run_attrs = run_attrs or {}
+        self.where = describe_bus(bus_kwargs)
+        self.builder = StreamBuilder()
+        self.failure: BusError | None = None
+        self.stop_signal: int | None = None
+        self._scene_frames = scene_frames
+        self._timeout = silence_timeout_s
+        self._stop_player = threading.Event()
+        self._player: threading.Thread | None = None
+        self._saved: dict[int, Any] = {}
+        self._closed = False
+        self._streams: Any = None
+        self.start = time.monotonic()
+
+    # -- context -------------------------------------------------------------------------
+    def __enter__(self) -> LiveSession:
+        from stand.drivers.bus import BusReader, open_bus, play
+        from stand.drivers.run_writer import RunWriter
+
+        self.writer = RunWriter(
+            self.run_path,
+            source=json.dumps(self.bus_kwargs, default=str),
+            config_toml=self.config_toml,
+            software=SOFTWARE,
+            attrs=self.run_attrs,
+        )
+        try:
+            self.bus = open_bus(self.bus_kwargs)
+        except BusError:
+            self.writer.discard()  # nothing was received: leave no empty run behind
+            raise
+        if self._scene_frames is not None:
+            tx = open_bus(self.bus_kwargs)
+            frames, stop = self._scene_frames, self._stop_player
+            self._player = threading.Thread(
+                target=lambda: (play(tx, frames, stop=stop), tx.shutdown()), daemon=True
+            )
+        self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout)
+        self._install_signals()
+        if self._player is not None:
+            self._player.start()
+        self.start = time.monotonic()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _install_signals(self) -> None:
+        if threading.current_thread() is not threading.main_thread():
+            return  # signal handlers belong to the main thread; Ctrl-C then raises there
+
+        def stop(signum: int, frame: FrameType | None) -> None:
+            self.stop_signal = signum
+
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            self._saved[sig] = signal.signal(sig, stop)
+
+    def _restore_signals(self) -> None:
+        for sig, handler in self._saved.items():
+            signal.signal(sig, handler)
+        self._saved.clear()
+
+    # -- reading -------------------------------------------------------------------------
+    @property
+    def elapsed_s(self) -> float:
+        """Time since the session started [s]."""
+        return time.monotonic() - self.start
+
+    @property
+    def stopping(self) -> bool:
+        """A signal asked to stop, or the bus failed."""
+        return self.stop_signal is not None or self.failure is not None
+
+    @property
+    def frames_received(self) -> int:
+        return int(self.reader.frames_received)
+
+    def read(self, timeout_s: float = 0.1) -> int:
+        """Take the frames that came (waiting up to ``timeout_s``); return how many.
+
+        A bus failure is kept in :attr:`failure` (the frames before it are kept too).
+        """
+        try:
+            block = self.reader.read_block(timeout_s)
+        except BusError as exc:
+            self.failure = exc
+            return 0
+        self.writer.append(block)
+        self.builder.add(block)
+        return len(block)
+
+    def streams(self, *, strict_status: bool = False) -> Any:
+        """The decoded streams of everything received so far."""
+        return self.builder.streams(strict_status=strict_status)
+
+    # -- closing -------------------------------------------------------------------------
+    def close(self) -> Any:
+        """Stop the source, keep what came while stopping, close the run file (idempotent).
+
+        Returns the run's streams (None if nothing came).
+        """
+        if self._closed:
+            return self._streams
+        self._closed = True
+        try:
+            self._stop_player.set()
+            self.reader.close()
+            self.bus.shutdown()
+            try:
+                block = self.reader.read_block(0.0)
+                self.writer.append(block)
+                self.builder.add(block)
+            except BusError:
+                pass
+            notes = []
+            if self.reader.overruns:
+                notes.append(
+                    Diagnostic(
+                        "host_overrun",
+                        f"{self.reader.overruns} frames dropped: the host did not keep up",
+                        float(self.reader.overruns),
+                    )
+                )
+            if self.failure is not None:
+                notes.append(Diagnostic("bus_error", str(self.failure)))
+            self.writer.warn(notes)
+            self._streams = self.streams() if self.builder.frames else None
+            self.writer.close(self._streams)
+        finally:
+            self._restore_signals()
+        return self._streams

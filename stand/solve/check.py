@@ -1,0 +1,126 @@
+"""The check run: the run before a correction against the run after it, with the URR.
+
+A check compares like with like: the run before must be of the same stand
+and rotor (its stored config's physical values) and at the same speed
+(within :data:`stand.config.matrix.SAME_SPEED`), unless the operator says
+otherwise; it is solved with the config (and influence matrix) of the check
+run itself.  A plane whose unbalance grew says so, and what to suspect.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Any
+
+from stand.config.matrix import SAME_SPEED
+from stand.core import Diagnostic, StandParameters
+from stand.errors import UsageError
+from stand.measuring.measure import Measurement
+from stand.solve.pipeline import SolveOptions, measure_streams, stored_config
+from stand.solve.recordings import named_errors
+from stand.solve.result import Check, Result
+
+
+def check_against(
+    previous: str,
+    cfg: Any,
+    params: StandParameters,
+    after: Measurement,
+    *,
+    strict: bool = True,
+    matrix: Any = None,
+) -> Check:
+    """The run before the correction, measured with the same stand (this config).
+
+    ``strict``: refuse a previous run of another rotor or stand (its stored
+    config) or of another speed (beyond :data:`stand.config.matrix.SAME_SPEED`): its URR
+    would compare two different things.  ``matrix``: the influence matrix the
+    check run was solved with, if any (the run before is solved with it too).
+
+    Raises
+    ------
+    UsageError
+        The previous run is of another rotor, stand or speed (and ``strict``).
+    """
+    from stand.drivers.recording import read_streams
+
+    with named_errors(previous):
+        rec, streams = read_streams(previous)
+    if strict and rec.meta.get("config_toml"):
+        _same_rotor_and_stand(previous, stored_config(rec.meta, previous)[0], cfg)
+    with named_errors(previous):
+        before = measure_streams(streams, cfg, params, SolveOptions(matrix=matrix))
+    if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > SAME_SPEED:
+        raise UsageError(
+            f"--check {previous}: that run turned at {before.omega_rad_s * 30 / math.pi:.0f} rpm, "
+            f"this one at {after.omega_rad_s * 30 / math.pi:.0f} rpm: check at the same speed "
+            "(or say --check-any)"
+        )
+    b, a = before.solution.U_kg_m, after.solution.U_kg_m
+    said = tuple(
+        replace(w, message=f"the run before ({previous}): {w.message}")
+        for w in (*rec.warnings, *streams.warnings)
+    )
+    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])), said)
+
+
+SAME_STAND = ("M1", "M2", "C1", "C2", "H1", "H2")
+SAME_ROTOR = ("M3", "J3", "a", "b", "c", "d", "R1", "R2")
+"""What makes a check run's stand and rotor the same as the run before (names, dates and
+the sensors' calibration may change between them)."""
+
+
+def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
+    """Refuse a previous run whose stored rotor (or rotor type) or stand differs from this
+    config's."""
+    t, o = theirs.rotor.type, ours.rotor.type
+    if t and o and t != o:
+        raise UsageError(
+            f"--check {previous}: that run is of rotor type {t!r}, this one {o!r} "
+            "(or say --check-any)"
+        )
+    for table in ("rotor", "stand"):
+        a, b = getattr(theirs, table).model_dump(), getattr(ours, table).model_dump()
+        keys = SAME_STAND if table == "stand" else SAME_ROTOR
+        diff = [k for k in keys if not math.isclose(a.get(k, 0.0), b[k], rel_tol=1e-9)]
+        if diff:
+            k = diff[0]
+            raise UsageError(
+                f"--check {previous}: that run is of another {table} ({k} = {a.get(k):g} there, "
+                f"{b[k]:g} here): its unbalance is not this rotor's before the correction "
+                "(or say --check-any)"
+            )
+
+
+def check_notes(check: Check) -> list[Diagnostic]:
+    """What a check says beyond its numbers: a correction that made a plane worse."""
+    return [
+        Diagnostic(
+            "correction_made_worse",
+            f"plane {i + 1}: the unbalance grew after the correction (URR {100 * u:.0f} %): "
+            "was it added where material should have come off (or the other way round), at "
+            "the mirrored angle (the angle counts against the direction of rotation), or in "
+            "the other plane?",
+            float(u),
+        )
+        for i, u in enumerate(check.urr)
+        if u is not None and u < 0
+    ]
+
+
+def with_check(
+    result: Result,
+    previous: str,
+    cfg: Any,
+    params: StandParameters,
+    *,
+    strict: bool = True,
+    matrix: Any = None,
+) -> Result:
+    """``result`` as the check of ``previous``: before and after, URR, and what a worse
+    plane suggests (:func:`check_against`, :func:`check_notes`)."""
+    check = check_against(previous, cfg, params, result.measurement, strict=strict, matrix=matrix)
+    return replace(
+        result, check=check, warnings=(*result.warnings, *check.warnings, *check_notes(check))
+    )

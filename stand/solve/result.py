@@ -1,0 +1,229 @@
+"""The one result of a run, typed and frozen, and its one JSON form.
+
+Every command that measures (``solve``, ``report``, ``measure``,
+``balance``, the batch) gets a :class:`Result` from :mod:`stand.solve.pipeline`;
+the CLI, the report and the summary only format it.  Inside, SI units and
+complex numbers (amplitude and phase as one value); :func:`to_json` is the
+only place where g, mm, deg and rpm appear, and the only place that rounds,
+so the printed text, the JSON, the report and the batch summary of one run
+agree to the last digit they show.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from stand.core import Diagnostic
+from stand.core.balance import Correction
+from stand.errors import ModelError
+from stand.measuring.measure import Measurement
+
+RESULT_VERSION = 1
+"""Version of the JSON form; bumped when a key changes meaning."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a run was made for: the rotor's serial number, the order, who balanced it."""
+
+    serial: str | None = None
+    order: str | None = None
+    operator: str | None = None
+    note: str | None = None
+
+    def __bool__(self) -> bool:
+        return any(asdict(self).values())
+
+    def to_text(self) -> str:
+        """As a run file records it (JSON)."""
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_text(cls, text: str) -> Job:
+        """The job a run file records (ValueError if the attribute is not one)."""
+        data = json.loads(text)
+        if not isinstance(data, dict) or set(data) - set(cls.__dataclass_fields__):
+            raise ValueError("not a job record")
+        if not all(v is None or isinstance(v, str) for v in data.values()):
+            raise ValueError("a job field is not text")
+        return cls(**data)
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a result came from.
+
+    Attributes
+    ----------
+    software : str
+        This software and its version.
+    run_file : str or None
+        The recording solved (None: not recorded).
+    config_sha256 : str
+        SHA-256 of the configuration text used (the stored or given one).
+    config_source : str
+        Where the configuration came from (a file, or the run file's stored one).
+    start_time : str
+        When the run was recorded (ISO 8601, UTC), if known.
+    source : str
+        What the frames came from (the bus options), if known.
+    frames : int
+        Frames in the recording.
+    duration_s : float
+        Span of the frames' host timestamps [s].
+    config_toml : str
+        The configuration text itself (for the report; the JSON carries its digest).
+    matrix : str or None
+        The stored influence matrix used in place of the stand model, if any.
+    job : Job
+        Serial, order, operator, note (empty when not given).
+    rotor_type : str or None
+        The config's ``[rotor] type``.
+    stand_id : str
+        The stand that recorded the run (its ``[stand] id``, else its host name).
+    """
+
+    software: str
+    run_file: str | None
+    config_sha256: str
+    config_source: str
+    start_time: str = ""
+    source: str = ""
+    frames: int = 0
+    duration_s: float = 0.0
+    config_toml: str = field(default="", repr=False)
+    matrix: str | None = None
+    job: Job = Job()
+    rotor_type: str | None = None
+    stand_id: str = ""
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """ISO 21940-11 tolerance: ``U_per`` and its share per correction plane [kg m]."""
+
+    grade_m_s: float
+    max_speed_rad_s: float
+    U_per_kg_m: float
+    per_plane_kg_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Uncertainty:
+    """How the stand's parameter tolerances spread the unbalance (95 % radii [kg m])."""
+
+    tolerances: Any  # stand.calib.tolerance.Tolerances
+    radius95_linear_kg_m: tuple[float, float]
+    radius95_monte_carlo_kg_m: tuple[float, float]
+    shares: dict[str, tuple[float, float]]
+    draws: int
+
+
+@dataclass(frozen=True)
+class Check:
+    """A check run against the run before the correction: ``U`` before and after [kg m]."""
+
+    previous_run: str
+    before_kg_m: tuple[complex, complex]
+    after_kg_m: tuple[complex, complex]
+    warnings: tuple[Diagnostic, ...] = ()
+    """What reading the run before left to say (a cut line, a short log ...)."""
+
+    @property
+    def urr(self) -> tuple[float | None, float | None]:
+        """Unbalance reduction ratio ``(|U_before| - |U_after|) / |U_before|`` per plane."""
+        out = []
+        for b, a in zip(self.before_kg_m, self.after_kg_m, strict=True):
+            out.append((abs(b) - abs(a)) / abs(b) if abs(b) > 0 else None)
+        return out[0], out[1]
+
+
+@dataclass(frozen=True)
+class LiveInfo:
+    """How a live measurement ended."""
+
+    stopped_by: str
+    elapsed_s: float
+    targets_kg_m: tuple[float, float]
+
+
+@dataclass(frozen=True)
+class Traces:
+    """What the report plots besides the result: spectra and speed per node.
+
+    ``spectra``: node -> (frequency [Hz], amplitude [m/s^2]) up to 4x;
+    ``speeds``: node -> (time on the node's clock [s], speed [rad/s]).
+    """
+
+    spectra: dict[int, tuple[np.ndarray, np.ndarray]]
+    speeds: dict[int, tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Result:
+    """Everything one run says: measurement, corrections, verdict, provenance."""
+
+    measurement: Measurement
+    corrections: tuple[Correction, ...]
+    correction_mode: str
+    static_kg_m: complex
+    couple_kg_m: complex
+    tolerance: Tolerance | None
+    warnings: tuple[Diagnostic, ...]
+    provenance: Provenance
+    uncertainty: Uncertainty | None = None
+    check: Check | None = None
+    live: LiveInfo | None = None
+    within_noise: tuple[bool, bool] = (False, False)
+    """Per plane: the unbalance is inside its own 95 % interval (no correction prescribed)."""
+    within_tolerance: tuple[bool, bool] = (False, False)
+    """Per plane: the unbalance is within its permissible share (no correction needed)."""
+    traces: Traces | None = field(default=None, compare=False)
+    display: tuple[str, str] = ("g", "mm")
+    """The units the operator sees: mass (g or oz) and length (mm or in)."""
+    positions: tuple[int, float] = (0, 0.0)
+    """The correction's positions: how many (0: any angle), and the angle of the first [deg]."""
+    stand_name: str | None = None
+    calibrated: str | None = None
+    """The date of the stand's last calibration (YYYY-MM-DD), if the config says."""
+    calibration_radius_kg_m: tuple[float, float] | None = None
+    """Per plane: the 95 % radius the calibration's own uncertainty allows (the config's
+    ``[calibration]``), beside the measurement's; None where not the rigid model's."""
+
+    @property
+    def U_kg_m(self) -> np.ndarray:
+        """The unbalance of planes 1 and 2 [kg m] (the seed's ``q R e^{-i phi}``)."""
+        return np.asarray(self.measurement.solution.U_kg_m)
+
+    @property
+    def omega_rad_s(self) -> float:
+        """The speed the result refers to [rad/s]."""
+        return self.measurement.omega_rad_s
+
+
+def finite(obj: Any, where: str = "") -> Any:
+    """``obj`` if every number in it is finite; else :class:`ModelError` naming the key.
+
+    A NaN or an infinity in an answer means the inputs carry no physics (a speed
+    of 1e300 rpm, NaN timestamps): it is refused, never printed.
+    """
+    if isinstance(obj, float) and not math.isfinite(obj):
+        raise ModelError(f"the answer is not a finite number at {where or 'the top'} ({obj}): "
+                         "the inputs make no physical sense")  # fmt: skip
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            finite(v, f"{where}.{k}" if where else str(k))
+    elif isinstance(obj, (list, tuple)):
+        for i, v in enumerate(obj):
+            finite(v, f"{where}[{i}]")
+    return obj
+
+
+def json_text(obj: Any, **kwargs: Any) -> str:
+    """Strict JSON (no NaN or Infinity: :func:`finite` refuses them first)."""
+    return json.dumps(finite(obj), allow_nan=False, **kwargs)

@@ -1,0 +1,183 @@
+"""Tooling compensation (index balancing): the tooling's unbalance, measured once, subtracted
+from every later run of that tooling.
+
+A rotor that sits on an adapter, a mandrel or a drive coupling carries the tooling's
+unbalance into every answer.  Two runs separate them (:func:`stand.core.balance.index_split`):
+the rotor on its tooling as usual, then turned 180 deg on it.  The tooling's unbalance is
+kept per tooling (``[tooling] name``) as a small JSON file, with its date, the config's
+digest and both runs; every run whose config names the tooling has it subtracted, its
+covariance added to the run's (the 95 % intervals hold both).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from stand.core.balance import index_split
+from stand.errors import ConfigError, RecordingError
+
+TOOLING_VERSION = 1
+"""Version of the stored tooling file."""
+TOOLING_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+"""What a tooling may be called (its file's name): the config's ``[tooling] name`` rule."""
+
+
+@dataclass(frozen=True)
+class Tooling:
+    """A tooling's unbalance [kg m] per plane (at index 0), its covariance (real 4 x 4),
+    when it was measured (ISO 8601, UTC), the config's SHA-256, the two runs, the speed
+    [rad/s] and where it is kept."""
+
+    name: str
+    U_kg_m: tuple[complex, complex]
+    cov_U: np.ndarray
+    measured: str
+    config_sha256: str
+    runs: tuple[str, str]
+    omega_rad_s: float
+    path: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        """The stored form (SI units, complex numbers as ``[re, im]``)."""
+        return {
+            "tooling_version": TOOLING_VERSION,
+            "name": self.name,
+            "measured": self.measured,
+            "config_sha256": self.config_sha256,
+            "runs": list(self.runs),
+            "omega_rad_s": self.omega_rad_s,
+            "unbalance_kg_m": [[u.real, u.imag] for u in self.U_kg_m],
+            "cov_U": np.asarray(self.cov_U, dtype=float).tolist(),
+        }
+
+
+def folder(table: Any) -> Path:
+    """Where a ``[tooling]`` table's measurements are kept."""
+    if table.folder:
+        return Path(table.folder)
+    from stand.archive.store import data_folder
+
+    return data_folder() / "tooling"
+
+
+def tooling_file(name: str, where: Path) -> Path:
+    """The file of the tooling ``name`` in ``where``."""
+    return where / f"{name}.json"
+
+
+def load_tooling(name: str, where: Path) -> Tooling:
+    """The stored tooling ``name`` (ConfigError, naming ``[tooling.name]``, when it has not
+    been measured; RecordingError when its file is not a tooling)."""
+    path = tooling_file(name, where)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(
+            f"the tooling {name!r} has not been measured (no {path}): run `stand tooling "
+            "measure RUN_0 RUN_180` first",
+            key="tooling.name",
+        ) from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise RecordingError(f"not a tooling file ({exc})", path=str(path)) from None
+    try:
+        if data["tooling_version"] != TOOLING_VERSION or data["name"] != name:
+            raise ValueError("another version or another tooling's name")
+        U = [complex(float(re), float(im)) for re, im in data["unbalance_kg_m"]]
+        cov = np.asarray(data["cov_U"], dtype=float)
+        if len(U) != 2 or cov.shape != (4, 4) or not np.all(np.isfinite(cov)):
+            raise ValueError("two planes and a 4 x 4 covariance expected")
+        return Tooling(
+            name,
+            (U[0], U[1]),
+            cov,
+            str(data["measured"]),
+            str(data["config_sha256"]),
+            (str(data["runs"][0]), str(data["runs"][1])),
+            float(data["omega_rad_s"]),
+            str(path),
+        )
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise RecordingError(f"not a tooling file ({exc})", path=str(path)) from None
+
+
+def compensate(m: Any, t: Tooling) -> Any:
+    """The measurement ``m`` (:class:`stand.measuring.measure.Measurement`) with the tooling's
+    unbalance subtracted and its covariance added (the 95 % radii follow)."""
+    from stand.field.trials import with_unbalance_covariance
+
+    U = np.asarray(m.solution.U_kg_m) - np.asarray(t.U_kg_m)
+    cov = np.asarray(m.solution.cov_U).real + t.cov_U
+    sol = replace(m.solution, U_kg_m=U, static_kg_m=complex(U[0] + U[1]))
+    return replace(with_unbalance_covariance(replace(m, solution=sol), cov), tooling=t)
+
+
+def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | None) -> Any:
+    """The tooling's unbalance from its two index runs (the rotor at 0 deg, then turned
+    180 deg on the tooling), neither compensated; returns ``(Tooling, rotor U, rotor
+    covariance, config)``.  The name is ``name`` or the config's ``[tooling] name``."""
+    from stand.config.matrix import SAME_SPEED
+    from stand.drivers.recording import config_digest
+    from stand.solve.recordings import measure_recording
+
+    m0, cfg, _, text = measure_recording(run_0, config, compensate=False)
+    m180, _, _, text180 = measure_recording(run_180, config, compensate=False)
+    if config_digest(text) != config_digest(text180):
+        raise ConfigError(
+            "the two index runs were measured with different configurations", source=run_180
+        )
+    if abs(m180.omega_rad_s / m0.omega_rad_s - 1) > SAME_SPEED:
+        raise ConfigError(
+            f"the two index runs differ in speed by more than {100 * SAME_SPEED:g} % "
+            f"({m0.omega_rad_s * 30 / np.pi:.0f} and {m180.omega_rad_s * 30 / np.pi:.0f} rpm)",
+            source=run_180,
+        )
+    name = name or (cfg.tooling.name if cfg.tooling else None)
+    if not name:
+        raise ConfigError("name the tooling: --name NAME, or [tooling] name in the config")
+    if not TOOLING_NAME.fullmatch(name):
+        raise ConfigError(
+            f"a tooling's name is 1 to 64 letters, digits, '.', '_' or '-' (it names a file), "
+            f"got {name!r}",
+            key="tooling.name",
+        )
+    U_t, cov_t, U_r, cov_r = index_split(
+        m0.solution.U_kg_m,
+        np.asarray(m0.solution.cov_U).real,
+        m180.solution.U_kg_m,
+        np.asarray(m180.solution.cov_U).real,
+    )
+    when = datetime.now(UTC).isoformat(timespec="seconds")
+    tooling = Tooling(
+        name, (complex(U_t[0]), complex(U_t[1])), cov_t, when, config_digest(text),
+        (str(Path(run_0).resolve()), str(Path(run_180).resolve())), m0.omega_rad_s,
+    )  # fmt: skip
+    return tooling, U_r, cov_r, cfg
+
+
+def save_tooling(t: Tooling, where: Path, *, force: bool = False) -> Path:
+    """Keep the tooling's measurement (written safely; an existing one only with ``force``)."""
+    from stand.drivers.files import output
+
+    path = tooling_file(t.name, where)
+    where.mkdir(parents=True, exist_ok=True)
+    with output(path, force=force) as tmp:
+        tmp.write_text(json.dumps(t.to_json(), indent=1, allow_nan=False) + "\n")
+    return path
+
+
+def stored_toolings(where: Path) -> list[Tooling]:
+    """Every tooling kept in ``where`` (files that are not one are skipped)."""
+    found = []
+    for p in sorted(where.glob("*.json")) if where.is_dir() else []:
+        try:
+            found.append(load_tooling(p.stem, where))
+        except (ConfigError, RecordingError):
+            continue
+    return found
