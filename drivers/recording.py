@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import datetime as _dt
 from collections.abc import Callable, Iterable
-from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -57,7 +56,6 @@ from stand.drivers.files import (
     check_timestamps,
 )
 from stand.drivers.protocol import Frames
-from stand.drivers.read_ahead import read_ahead
 from stand.drivers.seal import read_in_child, seal_state
 from stand.drivers.streams import RunStreams
 from stand.errors import RecordingError
@@ -292,11 +290,10 @@ def _read_checked(
             # in blocks: the times read whole, once, so that the blocks' times are views of
             # one array, which the streams then take as it is (no copy of the run's length)
             t_s = f["frames"]["t_s"][:n].astype(np.float64, copy=False) if n > step else None
-            bounds = [(lo, min(lo + step, n)) for lo in range(0, n, step)]
-            with closing(read_ahead(lambda lo, hi: _frame_rows(f, lo, hi, t_s), bounds)) as got:
-                for (lo, _), block in zip(bounds, got, strict=True):
-                    check_timestamps(block.t_s, p, lo)
-                    take(block)
+            for lo in range(0, n, step):
+                block = _frame_rows(f, lo, min(lo + step, n), t_s)
+                check_timestamps(block.t_s, p, lo)
+                take(block)
     except RecordingError:
         raise
     except (
@@ -318,22 +315,18 @@ def read_run(path: str | Path, *, guard: bool = True) -> Recording:
     return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 
-def read_streams(
-    path: str | Path, *, strict_status: bool = True, guard: bool = True
-) -> tuple[Recording, RunStreams]:
+def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
     """A recording's per-node streams, read and decoded in blocks (bounded memory).
 
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
-    ``guard=False``: a run file's seal is not checked (:func:`read_run`); the
-    caller checks it (:mod:`stand.process.read_beside`).
     """
     from stand.drivers.budget import log_budget
     from stand.drivers.streams import StreamBuilder
 
     builder = StreamBuilder(merge=False)  # a few blocks of READ_ROWS: rebuilt once
     if is_run_file(path):
-        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS, guard=guard)
+        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
         rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:
         from stand.drivers.logs import iter_log

@@ -23,9 +23,7 @@ import hashlib
 import os
 import subprocess
 import sys
-import threading
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Literal
 
@@ -71,83 +69,14 @@ def seal(path: str | Path) -> None:
 def seal_state(path: str | Path) -> SealState:
     """``"intact"``: the bytes are those the writer sealed; ``"none"``: no seal (cut
     short by a crash, or not written by this software); ``"broken"``: a seal that the
-    bytes no longer match (altered or damaged since).
-
-    Taken from :func:`prefetch_seal` when it hashed this very file (same size,
-    modification time and inode) in the background.
-    """
+    bytes no longer match (altered or damaged since)."""
     p = Path(path)
-    key = _file_key(p)
-    found = _take_ahead(p, key)
-    return found if found is not None else _state(p)
-
-
-def _take_ahead(p: Path, key: tuple[str, int, int, int] | None) -> SealState | None:
-    """The state hashed ahead for ``key`` (None: none); every check of this file ahead,
-    stale or not, is joined and forgotten."""
-    found: SealState | None = None
-    name = os.path.realpath(p)  # never raises (a symlink loop stays as it is)
-    for k in [k for k in _AHEAD if k[0] == name]:
-        thread, box = _AHEAD.pop(k)
-        thread.join()
-        if k == key and box:
-            found = box[0]
-    return found
-
-
-def _state(p: Path) -> SealState:
     with p.open("rb") as f:
         head = f.read(USERBLOCK_BYTES)
     if not head.startswith(MAGIC):
         return "none"
     stored = head[len(MAGIC) : len(MAGIC) + 64]
     return "intact" if stored == _digest(p).encode("ascii") else "broken"
-
-
-_AHEAD: dict[tuple[str, int, int, int], tuple[threading.Thread, list[SealState]]] = {}
-"""Seals being checked ahead, by file (:func:`prefetch_seal`)."""
-
-
-def _file_key(p: Path) -> tuple[str, int, int, int]:
-    st = p.stat()
-    return (os.path.realpath(p), st.st_size, st.st_mtime_ns, st.st_ino)
-
-
-@contextmanager
-def seal_ahead(path: str | Path) -> Iterator[None]:
-    """:func:`prefetch_seal` for the time of the block; what was not taken up by then is
-    joined and forgotten (a command that ends before it reads leaves no thread)."""
-    prefetch_seal(path)
-    try:
-        yield
-    finally:
-        _take_ahead(Path(path), None)
-
-
-def prefetch_seal(path: str | Path) -> None:
-    """Start checking a run file's seal in a thread, for :func:`seal_state` to take up.
-
-    Hashing a one-hour run takes about 0.15 s; hashlib lets go of the
-    interpreter's lock while it hashes, so a command that starts it first
-    hashes on the second core while it imports its modules.  Nothing happens
-    for a path that cannot be read (the read itself says why, later).
-    """
-    p = Path(path)
-    try:
-        key = _file_key(p)
-    except OSError:
-        return
-    box: list[SealState] = []
-
-    def check() -> None:
-        try:
-            box.append(_state(p))
-        except OSError:
-            pass  # seal_state checks again, and says why
-
-    thread = threading.Thread(target=check, name="seal", daemon=True)
-    thread.start()
-    _AHEAD[key] = (thread, box)
 
 
 def read_in_child(

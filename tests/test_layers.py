@@ -14,8 +14,6 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 
 FLOORS: list[set[str]] = [
@@ -148,12 +146,10 @@ def test_every_package_sits_on_a_floor() -> None:
     assert names <= set(FLOOR), sorted(names - set(FLOOR))
 
 
-@pytest.mark.xfail(strict=True, reason="health, tooling, read_beside: opened next")
 def test_no_import_points_up_or_sideways() -> None:
     assert graph()[1] == []
 
 
-@pytest.mark.xfail(strict=True, reason="station service <-> archive_side: opened next")
 def test_no_import_cycle_between_files() -> None:
     assert cycles(graph()[0]) == []
 

@@ -166,35 +166,6 @@ def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.Monkey
     assert [w.message for w in forked.warnings] == [w.message for w in serial.warnings]
 
 
-def test_a_prefetched_seal_is_the_seal(tmp_path: Path) -> None:
-    from stand.drivers import seal
-    from stand.drivers.recording import Recording, write_recording
-    from stand.sim import load_scene, simulate
-
-    sc, p, _ = load_scene("demo")
-    run = tmp_path / "r.h5"
-    write_recording(Recording("t", simulate(sc, p).frames, {}), run)
-
-    def ahead() -> list[object]:
-        return [k for k in seal._AHEAD if k[0] == os.path.realpath(run)]
-
-    seal.prefetch_seal(run)
-    assert seal.seal_state(run) == "intact"
-    assert not ahead()
-    with seal.seal_ahead(run):  # not taken up: forgotten at the end, its thread joined
-        assert ahead()
-    assert not ahead()
-    seal.prefetch_seal(run)
-    with run.open("r+b") as f:  # altered after the prefetch: checked again, not taken
-        f.seek(-100, os.SEEK_END)
-        f.write(b"\x55" * 10)
-    assert seal.seal_state(run) == "broken"
-    assert not ahead()
-    n = len(seal._AHEAD)
-    seal.prefetch_seal(tmp_path / "missing.h5")  # nothing to read: nothing started
-    assert len(seal._AHEAD) == n
-
-
 def test_streams_released_are_the_streams() -> None:
     """A builder's blocks let go during the rebuild give the streams kept blocks give."""
     from stand.drivers.streams import StreamBuilder
@@ -284,32 +255,3 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
     apart = [frames.t_s[:10].copy(), frames.t_s[10:30].copy()]  # live blocks: joined, copied
     assert np.array_equal(_joined(apart), frames.t_s[:30]) and _joined(apart).base is None
     assert len(_joined([])) == 0
-
-
-def test_blocks_read_ahead_come_in_order_and_leave_no_thread() -> None:
-    """Each block read in a thread while the one before is taken: in order; an error
-    reading one is raised where it is taken; a consumer that stops early (a refused
-    block) waits for the read under way, so the file is never closed under it."""
-    import threading
-
-    from stand.drivers.read_ahead import read_ahead
-
-    bounds = [(k, k + 1) for k in range(6)]
-    threads = threading.active_count()
-
-    def read(lo: int, hi: int) -> object:
-        time.sleep(0.01)
-        if lo == 4:
-            raise OSError(f"block {lo} unreadable")
-        return lo
-
-    got: list[object] = []
-    with pytest.raises(OSError, match="block 4"):
-        for block in read_ahead(read, bounds):
-            got.append(block)
-    assert got == [0, 1, 2, 3] and threading.active_count() == threads
-    from contextlib import closing
-
-    with closing(read_ahead(read, bounds)) as blocks:
-        assert next(blocks) == 0  # block 1 is being read now
-    assert threading.active_count() == threads

@@ -23,7 +23,15 @@ from stand.errors import StandError
 from stand.solve.result import Result, json_text
 from stand.solve.result_json import to_json
 
-__all__ = ["Archive", "archive_result", "default_url", "file_digest", "url_for"]
+__all__ = [
+    "Archive",
+    "archive_result",
+    "correction_rows",
+    "default_url",
+    "drift_rows",
+    "file_digest",
+    "url_for",
+]
 
 READ_CHUNK = 1 << 20
 
@@ -36,6 +44,19 @@ def url_for(option: str | None, cfg: Any = None) -> str:
     if table is not None and table.url:
         return str(table.url)
     return default_url()
+
+
+def correction_rows(url: str, stand: str | None = None, rotor_type: str | None = None) -> Any:
+    """The calibration data (corrections and their checks) of a stand and a rotor type, in
+    the order they were archived: what :mod:`stand.health.monitor` judges."""
+    with Archive(url) as a:
+        return a.correction_rows(stand, rotor_type)
+
+
+def drift_rows(url: str, result: Result) -> Any:
+    """The calibration data of the stand and rotor type ``result`` was measured on."""
+    prov = result.provenance
+    return correction_rows(url, prov.stand_id or None, prov.rotor_type)
 
 
 def file_digest(path: str | Path) -> str:

@@ -17,19 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive.schema import planes, runs
+from stand.config.paths import data_folder
 from stand.errors import ArchiveError
 
 BUSY_TIMEOUT_S = 60.0
 """A writer waits this long for another to finish before giving up [s]."""
 MIGRATIONS = Path(__file__).resolve().parent / "migrations"
-
-
-def data_folder() -> Path:
-    """The user's data folder (``~/.local/share/stand`` on Linux): the default archive, and
-    the station's runs."""
-    import platformdirs
-
-    return platformdirs.user_data_path("stand", appauthor=False)
 
 
 def default_url() -> str:

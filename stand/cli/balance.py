@@ -7,6 +7,7 @@ import math
 import sys
 from pathlib import Path
 
+from stand.archive import drift_rows
 from stand.cli.common import (
     DEFAULT_TARGET_PCT,
     TOLERANCE_SHARE,
@@ -118,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
         from stand.health.monitor import with_drift
 
         try:
-            result = with_drift(archive_url(args, cfg), result, cfg, params, options)
+            result = with_drift(
+                drift_rows(archive_url(args, cfg), result), result, cfg, params, options
+            )
         except ArchiveError:  # an archive out of reach is said once, when the run goes in
             pass
         except StandError as exc:

@@ -10,6 +10,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.archive import correction_rows
 from stand.cli.common import (
     add_archive_argument,
     add_force_argument,
@@ -317,7 +318,8 @@ def _from_archive(args: argparse.Namespace) -> int:
                 f"--fit: {', '.join(bad) or 'nothing'}: choose from {', '.join(FITTABLE)}"
             )
     cfg, params = load_config(args.config)
-    r = refit(archive_url(args, cfg), params, names, stand=args.stand, rotor_type=args.rotor_type)
+    rows = correction_rows(archive_url(args, cfg), args.stand, args.rotor_type)
+    r = refit(rows, params, names)
     original, _ = read_toml(args.config)
     header, text = _refitted_config(cfg, r, original)
     write_text_output(out_path, text, force=args.force, inputs=[args.config])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from stand.archive import correction_rows
 from stand.cli.common import add_archive_argument, archive_url
 from stand.cli.format import dump_json
 
@@ -20,7 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from stand.health.monitor import health, health_json
 
-    out = health_json(health(archive_url(args), args.stand, args.rotor_type))
+    out = health_json(health(correction_rows(archive_url(args), args.stand, args.rotor_type)))
     if args.json:
         dump_json(out)
         return 0

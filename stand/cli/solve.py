@@ -53,14 +53,6 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"stand solve: --summary must end in .csv or .json, got {args.summary!r}")
     if args.across_speeds:
         return run_across_speeds(args)
-    if len(args.runs) == 1 and not args.summary and args.runs[0].lower().endswith(".h5"):
-        from stand.drivers.seal import seal_ahead
-        from stand.process.read_beside import read_beside
-
-        # a long run read by a forked child, and its seal hashed in a thread (after the
-        # fork), on the second core while the modules load
-        with read_beside(args.runs[0]), seal_ahead(args.runs[0]):
-            return _run(args)
     return _run(args)
 
 

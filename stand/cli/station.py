@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     if not config_dir.is_dir():
         raise UsageError(f"--config-dir {config_dir}: not a folder")
     from stand.archive import url_for
-    from stand.archive.store import data_folder
+    from stand.config.paths import data_folder
     from stand.solve.pipeline import precision_targets
     from stand.station.pages import serve
     from stand.station.service import Station

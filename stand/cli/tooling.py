@@ -51,14 +51,15 @@ def _where(args: argparse.Namespace, cfg: Any) -> Path:
         return Path(args.folder)
     if cfg is not None and cfg.tooling is not None:
         return folder(cfg.tooling)
-    from stand.archive.store import data_folder
+    from stand.config.paths import data_folder
 
     return data_folder() / "tooling"
 
 
 def _measure(args: argparse.Namespace) -> int:
     from stand.errors import UsageError
-    from stand.solve.tooling import measure_tooling, save_tooling
+    from stand.solve.index_runs import measure_tooling
+    from stand.solve.tooling import save_tooling
 
     if len(args.runs) != 2:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")

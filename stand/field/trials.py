@@ -15,25 +15,11 @@ from typing import Any
 import numpy as np
 
 from stand.core import StandParameters
+from stand.measuring.covariance import with_unbalance_covariance
 from stand.measuring.measure import Measurement
 from stand.solve.pipeline import SolveOptions, load_config_text
 from stand.solve.recordings import measure_recording, solve_recording
 from stand.solve.result import Result
-
-
-def with_unbalance_covariance(m: Measurement, cov_U: np.ndarray) -> Measurement:
-    """``m`` with another covariance of its unbalances (real 4x4): the 95 % radii follow
-    (a nonlinear support's widening is kept)."""
-    from stand.core.dsp import radius95
-
-    dof = min(ph.noise_dof for ph in m.supports)
-
-    def radii(c: np.ndarray) -> np.ndarray:
-        return np.array([radius95(c[2 * i : 2 * i + 2, 2 * i : 2 * i + 2], dof) for i in range(2)])
-
-    old = np.asarray(m.solution.cov_U).real
-    radius = m.radius95_kg_m - radii(old) + radii(cov_U)
-    return replace(m, solution=replace(m.solution, cov_U=cov_U), radius95_kg_m=radius)
 
 
 def influence_runs(

@@ -258,12 +258,9 @@ def health_json(results: Sequence[GroupHealth]) -> dict[str, Any]:
     }
 
 
-def health(url: str, stand: str | None = None, rotor_type: str | None = None) -> list[GroupHealth]:
-    """Every group of the archive's correction data (of a stand, a rotor type) judged."""
-    from stand.archive import Archive
-
-    with Archive(url) as a:
-        rows = a.correction_rows(stand, rotor_type)
+def health(rows: Sequence[Any]) -> list[GroupHealth]:
+    """Every group of correction data (the archive's rows of a stand, a rotor type:
+    :func:`stand.archive.correction_rows`) judged."""
     return [judge(g) for g in groups(rows)]
 
 
@@ -279,23 +276,14 @@ class Refit:
     start: int
 
 
-def refit(
-    url: str,
-    params: Any,
-    names: Sequence[str] | None = None,
-    *,
-    stand: str | None = None,
-    rotor_type: str | None = None,
-) -> Refit:
+def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) -> Refit:
     """Re-identify ``names`` (default: what :func:`judge` says moved, else C1 and C2) from
-    the newest group of correction data made with these parameters, from the change on."""
+    the newest group of correction data (the archive's rows of a stand and rotor type)
+    made with these parameters, from the change on."""
     import dataclasses
 
-    from stand.archive import Archive
     from stand.core.drift import fit_many
 
-    with Archive(url) as a:
-        rows = a.correction_rows(stand, rotor_type)
     mine = [g for g in groups(rows) if _params(g)[1] == params]
     if not mine:
         raise UsageError(
@@ -336,17 +324,15 @@ def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
     return out
 
 
-def drift_bands(url: str, result: Any) -> dict[str, float] | None:
+def drift_bands(rows: Sequence[Any], result: Any) -> dict[str, float] | None:
     """What the stand's health says of the stand a result comes from: when its data (this
     stand, rotor type, calibration and speed) raised the alarm, each fitted part's change
     and its interval, ``|change| + interval95`` (relative), to widen the calibration's
     bands with until the stand is recalibrated; None when they did not (or there are none).
+    ``rows``: the archive's correction data of the result's stand and rotor type
+    (:func:`stand.archive.drift_rows`).
     """
-    from stand.archive import Archive
-
     prov = result.provenance
-    with Archive(url) as a:
-        rows = a.correction_rows(prov.stand_id or None, prov.rotor_type)
     rpm = result.omega_rad_s * 30 / math.pi
     mine = [
         g
@@ -363,7 +349,7 @@ def drift_bands(url: str, result: Any) -> dict[str, float] | None:
     }
 
 
-def with_drift(url: str, result: Any, cfg: Any, params: Any, options: Any) -> Any:
+def with_drift(rows: Sequence[Any], result: Any, cfg: Any, params: Any, options: Any) -> Any:
     """``result`` with its calibration interval widened by what :func:`drift_bands` found,
     and a warning saying so; ``result`` itself when the stand is as calibrated."""
     import dataclasses
@@ -371,7 +357,7 @@ def with_drift(url: str, result: Any, cfg: Any, params: Any, options: Any) -> An
     from stand.core import Diagnostic
     from stand.solve.pipeline import calibration_radius
 
-    bands = drift_bands(url, result)
+    bands = drift_bands(rows, result)
     if not bands:
         return result
     radius = calibration_radius(result.measurement, cfg, params, options, drifted=bands)

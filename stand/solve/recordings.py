@@ -78,12 +78,10 @@ def solve_recording(
     StandError
         Bad input, naming the file and what is wrong.
     """
-    from stand.process import read_beside
+    from stand.drivers.recording import read_streams
 
-    if read_beside.reading(path):  # pydantic and the config's models load while it reads
-        import stand.config.schema  # noqa: F401
     with named_errors(path):
-        rec, streams = read_beside.take_streams(path)
+        rec, streams = read_streams(path)
     if config:
         cfg, params, text = load_config_text(config)
         source = config

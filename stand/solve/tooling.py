@@ -14,14 +14,14 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import dataclass, replace
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from stand.core.balance import index_split
+from stand.config.paths import data_folder
 from stand.errors import ConfigError, RecordingError
+from stand.measuring.covariance import with_unbalance_covariance
 
 TOOLING_VERSION = 1
 """Version of the stored tooling file."""
@@ -62,8 +62,6 @@ def folder(table: Any) -> Path:
     """Where a ``[tooling]`` table's measurements are kept."""
     if table.folder:
         return Path(table.folder)
-    from stand.archive.store import data_folder
-
     return data_folder() / "tooling"
 
 
@@ -110,55 +108,10 @@ def load_tooling(name: str, where: Path) -> Tooling:
 def compensate(m: Any, t: Tooling) -> Any:
     """The measurement ``m`` (:class:`stand.measuring.measure.Measurement`) with the tooling's
     unbalance subtracted and its covariance added (the 95 % radii follow)."""
-    from stand.field.trials import with_unbalance_covariance
-
     U = np.asarray(m.solution.U_kg_m) - np.asarray(t.U_kg_m)
     cov = np.asarray(m.solution.cov_U).real + t.cov_U
     sol = replace(m.solution, U_kg_m=U, static_kg_m=complex(U[0] + U[1]))
     return replace(with_unbalance_covariance(replace(m, solution=sol), cov), tooling=t)
-
-
-def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | None) -> Any:
-    """The tooling's unbalance from its two index runs (the rotor at 0 deg, then turned
-    180 deg on the tooling), neither compensated; returns ``(Tooling, rotor U, rotor
-    covariance, config)``.  The name is ``name`` or the config's ``[tooling] name``."""
-    from stand.config.matrix import SAME_SPEED
-    from stand.drivers.recording import config_digest
-    from stand.solve.recordings import measure_recording
-
-    m0, cfg, _, text = measure_recording(run_0, config, compensate=False)
-    m180, _, _, text180 = measure_recording(run_180, config, compensate=False)
-    if config_digest(text) != config_digest(text180):
-        raise ConfigError(
-            "the two index runs were measured with different configurations", source=run_180
-        )
-    if abs(m180.omega_rad_s / m0.omega_rad_s - 1) > SAME_SPEED:
-        raise ConfigError(
-            f"the two index runs differ in speed by more than {100 * SAME_SPEED:g} % "
-            f"({m0.omega_rad_s * 30 / np.pi:.0f} and {m180.omega_rad_s * 30 / np.pi:.0f} rpm)",
-            source=run_180,
-        )
-    name = name or (cfg.tooling.name if cfg.tooling else None)
-    if not name:
-        raise ConfigError("name the tooling: --name NAME, or [tooling] name in the config")
-    if not TOOLING_NAME.fullmatch(name):
-        raise ConfigError(
-            f"a tooling's name is 1 to 64 letters, digits, '.', '_' or '-' (it names a file), "
-            f"got {name!r}",
-            key="tooling.name",
-        )
-    U_t, cov_t, U_r, cov_r = index_split(
-        m0.solution.U_kg_m,
-        np.asarray(m0.solution.cov_U).real,
-        m180.solution.U_kg_m,
-        np.asarray(m180.solution.cov_U).real,
-    )
-    when = datetime.now(UTC).isoformat(timespec="seconds")
-    tooling = Tooling(
-        name, (complex(U_t[0]), complex(U_t[1])), cov_t, when, config_digest(text),
-        (str(Path(run_0).resolve()), str(Path(run_180).resolve())), m0.omega_rad_s,
-    )  # fmt: skip
-    return tooling, U_r, cov_r, cfg
 
 
 def save_tooling(t: Tooling, where: Path, *, force: bool = False) -> Path:

@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import threading
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from stand.archive import correction_rows
 from stand.errors import StandError, UsageError
-
-if TYPE_CHECKING:
-    from stand.station.service import Snapshot
+from stand.station.snapshot import Snapshot
 
 
 class ArchiveSide:
@@ -59,7 +58,7 @@ class ArchiveSide:
         """What the archive's calibration data say (:func:`stand.health.monitor.health_json`)."""
         from stand.health.monitor import health, health_json
 
-        return health_json(health(self.archive_url))
+        return health_json(health(correction_rows(self.archive_url)))
 
     # -- the archive ---------------------------------------------------------------------
     def history(

@@ -20,7 +20,8 @@ from stand.solve.result import Job
 from stand.solve.result_json import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, history_screen
-from stand.station.service import BUS, Station
+from stand.station.service import Station
+from stand.station.snapshot import BUS
 from stand.station.views import (
     ANGLE_NOTE,
     check_rows,

@@ -17,13 +17,15 @@ import logging
 import re
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from stand.archive import drift_rows
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.solve.result import Job
 from stand.station.archive_side import ArchiveSide
+from stand.station.snapshot import BUS, Snapshot
 
 log = logging.getLogger(__name__)
 
@@ -34,46 +36,6 @@ MAX_SECONDS = 120.0
 """A station run ends after this long even when not yet precise [s]."""
 SILENCE_S = 2.0
 """No frame for this long ends a run (the bus is gone) [s]."""
-BUS = "bus"
-"""The source that reads the stand's CAN bus (the rotor type's ``[bus]`` table)."""
-
-
-@dataclass(frozen=True)
-class Snapshot:
-    """What the screens show, at one moment.
-
-    ``phase`` is ``idle``, ``measuring``, ``done`` or ``failed``; ``kind`` is
-    ``initial`` (the first run of a rotor) or ``check`` (after the correction).
-    ``progress`` is the latest live estimate (:class:`stand.live.loop.Progress`),
-    ``result`` the finished run's :class:`stand.solve.result.Result` and ``before`` the
-    initial run's while a check is made.  ``seq`` grows with every change.
-    """
-
-    seq: int = 0
-    phase: str = "idle"
-    kind: str = "initial"
-    rotor_type: str | None = None
-    source: str | None = None
-    job: Job = field(default_factory=Job)
-    started_s: float = 0.0
-    progress: Any = None
-    waiting: str = ""
-    result: Any = None
-    before: Any = None
-    error: str = ""
-    notes: tuple[str, ...] = ()
-    applied: tuple[Any, ...] = ()
-    applied_run: str | None = None
-    """The run whose correction was put on the simulated rotor last (once only)."""
-    confirmed_run: str | None = None
-    """The run whose correction the operator confirmed as put on as shown: its check is a
-    calibration datum (:mod:`stand.health.monitor`)."""
-    run_id: int | None = None
-    tolerance_kg_m: tuple[float, float] | None = None
-
-    @property
-    def simulated(self) -> bool:
-        return self.source not in (None, BUS)
 
 
 def safe_name(text: str) -> str:
@@ -304,7 +266,9 @@ class Station(ArchiveSide):
         from stand.health.monitor import with_drift
 
         try:  # a stand that drifted from its calibration: the interval widened, and said
-            result = with_drift(self.archive_url, result, src.cfg, src.params, SolveOptions())
+            result = with_drift(
+                drift_rows(self.archive_url, result), result, src.cfg, src.params, SolveOptions()
+            )
         except StandError as exc:
             log.warning("stand health not checked: %s", exc)
         return result

@@ -1,0 +1,17 @@
+"""Where the product keeps its data on this machine: one home for the user's data folder.
+
+The default archive (``archive.sqlite``), the station's runs (``runs/``) and the
+measured toolings (``tooling/``) live in it unless the config or a flag says otherwise.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import platformdirs
+
+
+def data_folder() -> Path:
+    """The user's data folder (``~/.local/share/stand`` on Linux): the default archive, the
+    station's runs and the measured toolings."""
+    return platformdirs.user_data_path("stand", appauthor=False)
