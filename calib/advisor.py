@@ -41,6 +41,14 @@ from stand.core import (
     rpm_to_rad_s,
     solve_unbalance,
 )
+from stand.core.beam import (
+    forward_beam,
+    lumped_masses,
+    natural_frequencies_beam,
+    nodal_response,
+    receptance,
+)
+from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import RESONANCE_BAND
 
 C_ERROR = 0.05
@@ -79,22 +87,18 @@ class _Stand:
         """The natural frequencies [rad/s]: the two on the supports (then the bending one)."""
         if self.beam is None:
             return np.asarray(natural_frequencies(self.p), dtype=float)
-        from stand.core.beam import natural_frequencies_beam
 
         return np.asarray(natural_frequencies_beam(self.beam, self.p, 3), dtype=float)
 
     def solve(self, p: StandParameters, w: float, A: Any) -> Any:
         if self.beam is None:
             return solve_unbalance(p, w, A, max_split_condition=math.inf)
-        from stand.core.beam import receptance
-        from stand.core.influence import InfluenceMap, solve_influence
 
         return solve_influence(InfluenceMap(receptance(self.beam, p, w)), A)
 
     def forward(self, w: float, U: Any) -> Any:
         if self.beam is None:
             return forward(self.p, w, U)
-        from stand.core.beam import forward_beam
 
         return forward_beam(self.beam, self.p, w, U)
 
@@ -216,8 +220,6 @@ def plan_across_speeds(p: StandParameters, beam: Any, low_rpm: float, top_rpm: f
     through the beam model), plus one per bending mode below the top speed (N + 2 planes
     for N modes in the range)."""
     from scipy.linalg import eigh
-
-    from stand.core.beam import lumped_masses, nodal_response, receptance
 
     K, M = beam.K.copy(), beam.M.copy()
     for i, (m, c) in zip(beam.support_nodes, ((p.M1, p.C1), (p.M2, p.C2)), strict=True):

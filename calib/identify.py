@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import StandParameters, forward
+from stand.core.beam import forward_beam
 from stand.errors import ModelError
 
 STAND_NAMES = ("C1", "M1", "H1", "C2", "M2", "H2")
@@ -121,7 +122,7 @@ def _model(
 ) -> NDArray[np.complex128]:
     q = dataclasses.replace(p, **dict(zip(STAND_NAMES, z[:6].tolist(), strict=True)))
     if beam is not None:
-        from stand.core.beam import forward_beam
+        pass
     U_res = np.array([complex(z[6], z[7]), complex(z[8], z[9])])
     gain, delay, dgamma = z[10:12], z[12:14], z[14]
     # the reference sensor really sits dgamma further than the configuration says: the

@@ -21,6 +21,7 @@ import threading
 import time
 from typing import Any
 
+from stand.drivers.logs import messages_from_frames
 from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
 from stand.errors import BusError, BusTimeoutError
 
@@ -302,7 +303,6 @@ def play(
     int
         Frames sent.
     """
-    from stand.drivers.logs import messages_from_frames
 
     if len(frames) == 0:
         return 0

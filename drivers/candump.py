@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from stand.core import Diagnostic
+from stand.drivers.budget import log_budget, slow_text_budget
 from stand.drivers.protocol import (
     FLAG_ERROR,
     FLAG_EXTENDED,
@@ -212,7 +213,6 @@ def read_candump(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     TooLargeError
         More frames than this machine has memory for (by the file's size).
     """
-    from stand.drivers.budget import log_budget
 
     log_budget(path)
     return Frames.concat(list(iter_candump(path, warn)))
@@ -221,7 +221,6 @@ def read_candump(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
 def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """A candump log read whole by the regular expression (refused first when this machine
     has no memory for it: :func:`stand.drivers.budget.slow_text_budget`)."""
-    from stand.drivers.budget import slow_text_budget
 
     slow_text_budget(path)
     return _read_candump_whole(path, warn)

@@ -10,6 +10,9 @@ tests).  The layout, the constants and the record types are
 from __future__ import annotations
 
 import enum
+from collections.abc import Sequence
+from dataclasses import fields
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -254,3 +257,24 @@ def edge_fields(
     sample, frac = np.divmod(ticks, FRAC_SCALE)
     frame, slot = np.divmod(sample, SAMPLES_PER_FRAME)
     return frame, slot, frac
+
+
+def concat_decoded(parts: Sequence[Decoded]) -> Decoded:
+    """Decoded blocks one after the other (their ``frame`` indices already run on)."""
+
+    def cat(records: Sequence[Any]) -> Any:
+        kind = type(records[0])
+        return kind(
+            **{f.name: np.concatenate([getattr(r, f.name) for r in records]) for f in fields(kind)}
+        )
+
+    if not parts:
+        return decode(Frames.empty())
+    return Decoded(
+        samples=cat([p.samples for p in parts]),
+        status=cat([p.status for p in parts]),
+        marks=cat([p.marks for p in parts]),
+        unknown_frames=sum(p.unknown_frames for p in parts),
+        error_frames=sum(p.error_frames for p in parts),
+        bad=tuple(b for p in parts for b in p.bad),
+    )

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import errno
 import os
+import resource
 import stat
 import tempfile
 from collections.abc import Iterable, Iterator
@@ -19,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stand.errors import DiskFullError, WriteError
+from stand.errors import DiskFullError, RecordingError, WriteError
 
 HEADROOM_BYTES = 1 << 18
 """Room kept free beyond each write's own need (HDF5's metadata, the file system's)."""
@@ -83,7 +84,6 @@ def check_input(path: str | Path) -> Path:
     RecordingError
         Naming the file and what it is instead.
     """
-    from stand.errors import RecordingError
 
     p = Path(path)
     try:
@@ -110,7 +110,6 @@ def check_timestamps(t_s: np.ndarray, path: str | Path, first_frame: int = 0) ->
     ------
     RecordingError
     """
-    from stand.errors import RecordingError
 
     bad = np.flatnonzero(~np.isfinite(t_s))
     if len(bad):
@@ -211,7 +210,6 @@ def ensure_room(where: Path, need_bytes: int, path: Path | None = None) -> None:
     Asked before the bytes go: HDF5 does not survive a write that fails half way
     (its cache is left inconsistent, and h5py has crashed on it at exit).
     """
-    import resource
 
     need = int(need_bytes) + HEADROOM_BYTES
     target = str(path if path is not None else where)

@@ -14,6 +14,7 @@ field is not (a run is one bus).
 from __future__ import annotations
 
 import re
+import sqlite3
 import time
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -226,7 +227,6 @@ def write_log(frames: Frames, path: str | Path) -> None:
 
 def _check_db_rows(path: Path, expected: int) -> None:
     """Refuse a ``.db`` log that does not hold every frame written to it."""
-    import sqlite3
 
     with sqlite3.connect(path) as conn:
         (rows,) = conn.execute("SELECT COUNT(*) FROM messages").fetchone()

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.frame_index import FrameIndex
+from stand.drivers.node_stream import NodeStream
 from stand.drivers.protocol import (
     FRAC_SCALE,
     INVALID_COUNT,
@@ -23,7 +24,6 @@ from stand.drivers.protocol import (
     WRAP,
     Decoded,
 )
-from stand.drivers.streams import NodeStream
 from stand.errors import NoStatusError
 
 STATUS_WITHIN_S = 1.5

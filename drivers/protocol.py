@@ -312,26 +312,3 @@ def node_records(parts: Sequence[Decoded], node: int) -> Decoded:
         0,
         0,
     )
-
-
-def concat_decoded(parts: Sequence[Decoded]) -> Decoded:
-    """Decoded blocks one after the other (their ``frame`` indices already run on)."""
-
-    def cat(records: Sequence[Any]) -> Any:
-        kind = type(records[0])
-        return kind(
-            **{f.name: np.concatenate([getattr(r, f.name) for r in records]) for f in fields(kind)}
-        )
-
-    if not parts:
-        from stand.drivers.codec import decode  # it decodes into the records defined here
-
-        return decode(Frames.empty())
-    return Decoded(
-        samples=cat([p.samples for p in parts]),
-        status=cat([p.status for p in parts]),
-        marks=cat([p.marks for p in parts]),
-        unknown_frames=sum(p.unknown_frames for p in parts),
-        error_frames=sum(p.error_frames for p in parts),
-        bad=tuple(b for p in parts for b in p.bad),
-    )

@@ -41,9 +41,7 @@ HDF5 would never finish reading is refused instead of hanging the command.
 
 from __future__ import annotations
 
-import datetime as _dt
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -51,66 +49,49 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
+from stand.drivers.budget import frames_budget, log_budget
 from stand.drivers.files import (
     check_input,
     check_timestamps,
+    output,
 )
+from stand.drivers.logs import iter_log, read_log, write_log
 from stand.drivers.protocol import Frames
+from stand.drivers.run_format import (
+    CARRIED_ATTRS,
+    FRAME_FIELDS,
+    JOB_ATTR,
+    MATRIX_ATTR,
+    RUN_FORMAT,
+    RUN_FORMAT_VERSION,
+    RUN_SUFFIXES,
+    STAND_ATTR,
+    Recording,
+    config_digest,
+    h5py_module,
+)
+from stand.drivers.run_writer import RunWriter
 from stand.drivers.seal import read_in_child, seal_state
-from stand.drivers.streams import RunStreams
-from stand.errors import RecordingError
+from stand.drivers.streams import RunStreams, StreamBuilder
+from stand.errors import RecordingError, UnusualLogError
 
-RUN_FORMAT = "rotor-stand-run"
-RUN_FORMAT_VERSION = 1
-RUN_SUFFIXES = (".h5", ".hdf5")
-JOB_ATTR = "job_json"
-"""Run file attribute: the job the run was made for (JSON: serial, order, operator, note)."""
-MATRIX_ATTR = "influence_matrix_json"
-"""Run file attribute: the stored influence matrix the run was measured with (its JSON)."""
-STAND_ATTR = "stand_id"
-"""Run file attribute: the id of the stand that recorded the run (``[stand] id``, else its
-host name), so a plant's shared archive knows where each run was made."""
-CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR)
-"""Text attributes a converted or rewritten run keeps."""
-_FRAME_FIELDS = {
-    "t_s": np.float64,
-    "can_id": np.uint32,
-    "dlc": np.uint8,
-    "flags": np.uint8,
-}
-
-
-@dataclass(frozen=True)
-class Recording:
-    """The frames of a run and what is known about it.
-
-    ``meta`` holds the run file's attributes (``software``, ``start_time``,
-    ``source``, ``config_toml``, ``complete`` ...); it is empty for a plain
-    CAN log.  ``warnings`` are those recorded during the run.
-    """
-
-    path: str
-    frames: Frames
-    meta: dict[str, Any] = field(default_factory=dict)
-    warnings: tuple[Diagnostic, ...] = ()
-
-
-def _h5py() -> Any:
-    import h5py
-
-    return h5py
-
-
-def config_digest(text: str) -> str:
-    """SHA-256 of a configuration's text (hex): stored beside it, checked on every read."""
-    import hashlib
-
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
-def _utc_now() -> str:
-    return _dt.datetime.now(_dt.UTC).isoformat(timespec="milliseconds")
-
+__all__ = [  # the run file's names (stand.drivers.run_format) are read here too
+    "CARRIED_ATTRS",
+    "JOB_ATTR",
+    "MATRIX_ATTR",
+    "READ_ROWS",
+    "RUN_FORMAT",
+    "RUN_FORMAT_VERSION",
+    "RUN_SUFFIXES",
+    "STAND_ATTR",
+    "Recording",
+    "config_digest",
+    "is_run_file",
+    "read_recording",
+    "read_run",
+    "read_streams",
+    "write_recording",
+]
 
 READ_ROWS = 1 << 20
 """Frames read from a run file at a time by :func:`read_streams` (bounded memory)."""
@@ -135,7 +116,7 @@ def _attr(f: Any, name: str, kind: type, path: Path, default: Any = None) -> Any
 
 def _member(group: Any, name: str, path: Path, where: str) -> Any:
     """A member stored in this file: links (soft, external) and external storage refused."""
-    h5py = _h5py()
+    h5py = h5py_module()
     link = group.get(name, getlink=True)
     if link is None:
         raise RecordingError(f"{where}/{name} is missing", path=str(path))
@@ -156,7 +137,7 @@ def _member(group: Any, name: str, path: Path, where: str) -> Any:
 
 def _frame_dataset(g: Any, name: str, rows: int, path: Path) -> Any:
     """One /frames dataset, checked: its shape, its kind, and that it holds its rows."""
-    h5py = _h5py()
+    h5py = h5py_module()
     d = _member(g, name, path, "/frames")
     ndim = 2 if name == "data" else 1
     if not isinstance(d, h5py.Dataset) or d.ndim != ndim:
@@ -177,7 +158,7 @@ def _frame_dataset(g: Any, name: str, rows: int, path: Path) -> Any:
 
 def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic, ...]]:
     """Check an open run file; its committed frame count, attributes and warnings."""
-    h5py = _h5py()
+    h5py = h5py_module()
     if f.attrs.get("format") != RUN_FORMAT:
         raise RecordingError(
             f"an HDF5 file but not a run file (format attribute "
@@ -204,7 +185,7 @@ def _open_run(f: Any, path: Path) -> tuple[int, dict[str, Any], tuple[Diagnostic
     g = _member(f, "frames", path, "")
     if not isinstance(g, h5py.Group):
         raise RecordingError("/frames is not a group", path=str(path))
-    shapes = [_frame_dataset(g, k, committed, path).shape[0] for k in (*_FRAME_FIELDS, "data")]
+    shapes = [_frame_dataset(g, k, committed, path).shape[0] for k in (*FRAME_FIELDS, "data")]
     n = min([committed, *shapes])
     meta = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in f.attrs.items()}
     w = _member(f, "warnings", path, "")
@@ -230,7 +211,7 @@ def _unreadable(exc: Exception, path: Path) -> RecordingError:
 def _frame_rows(f: Any, lo: int, hi: int, t_s: NDArray[np.float64] | None = None) -> Frames:
     """Frames ``lo:hi`` of the file (their times cut from ``t_s`` if given: all of them)."""
     g = f["frames"]
-    cols = {k: g[k][lo:hi] for k in _FRAME_FIELDS if k != "t_s" or t_s is None}
+    cols = {k: g[k][lo:hi] for k in FRAME_FIELDS if k != "t_s" or t_s is None}
     times = t_s[lo:hi] if t_s is not None else cols["t_s"].astype(np.float64, copy=False)
     return Frames(  # each column as stored: a copy only where the file's type differs
         times,
@@ -281,9 +262,8 @@ def _read_checked(
 ) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
-        with _h5py().File(p, "r", locking=False) as f:
+        with h5py_module().File(p, "r", locking=False) as f:
             n, meta, warnings = _open_run(f, p)
-            from stand.drivers.budget import frames_budget
 
             frames_budget(n, str(p))
             step = max(n, 1) if rows is None else rows
@@ -321,17 +301,12 @@ def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recor
     The returned :class:`Recording` has the file's attributes and warnings but
     no frames: they went into the streams block by block and were let go.
     """
-    from stand.drivers.budget import log_budget
-    from stand.drivers.streams import StreamBuilder
 
     builder = StreamBuilder(merge=False)  # a few blocks of READ_ROWS: rebuilt once
     if is_run_file(path):
         meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
         rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:
-        from stand.drivers.logs import iter_log
-        from stand.errors import UnusualLogError
-
         warn: list[Diagnostic] = []
         if Path(path).suffix.lower() == ".log" and Path(path).is_file():
             log_budget(Path(path))
@@ -361,7 +336,6 @@ def read_recording(path: str | Path) -> Recording:
     """
     if is_run_file(path):
         return read_run(path)
-    from stand.drivers.logs import read_log
 
     warnings: list[Diagnostic] = []
     frames = read_log(path, warnings)
@@ -379,14 +353,10 @@ def write_recording(
     """Write frames as a run file (.h5) or a python-can log (by extension), whole: under a
     temporary name, published at ``path`` when complete (:func:`stand.drivers.files.output`).
     """
-    from stand.drivers.files import output
-    from stand.drivers.run_writer import RunWriter
 
     need = len(recording.frames) * (2 * (14 + recording.frames.data.shape[1]) + 16)
     with output(path, force=force, inputs=inputs, need_bytes=need) as tmp:
         if not is_run_file(path):
-            from stand.drivers.logs import write_log
-
             write_log(recording.frames, tmp)
             return
         meta = recording.meta

@@ -25,13 +25,13 @@ from stand.drivers.files import (
     write_error,
 )
 from stand.drivers.protocol import FRAME_DLC, MAX_PAYLOAD, Frames
-from stand.drivers.recording import (
-    _FRAME_FIELDS,
+from stand.drivers.run_format import (
+    FRAME_FIELDS,
     RUN_FORMAT,
     RUN_FORMAT_VERSION,
-    _h5py,
-    _utc_now,
     config_digest,
+    h5py_module,
+    utc_now,
 )
 from stand.drivers.seal import USERBLOCK_BYTES, seal
 from stand.drivers.streams import RunStreams
@@ -52,7 +52,7 @@ def _empty_datasets(f: Any, h5py: Any) -> None:
     """The run file's datasets, empty and growable: ``/frames`` (chunked, Fletcher32; the
     payload widens to CAN FD's 64 bytes when one comes) and ``/warnings``."""
     g = f.create_group("frames")
-    for name, dtype in _FRAME_FIELDS.items():
+    for name, dtype in FRAME_FIELDS.items():
         g.create_dataset(
             name, shape=(0,), maxshape=(None,), dtype=dtype, chunks=(_CHUNK_ROWS,), fletcher32=True
         )
@@ -120,8 +120,8 @@ class RunWriter:
         self._broken = False
         check_output(self.path, force=force, exists="exists already: a run is never overwritten")
         ensure_room(self.path.parent, 0, self.path)
-        h5py = _h5py()
-        self.start_time = _utc_now()
+        h5py = h5py_module()
+        self.start_time = utc_now()
         tmp: Path | None = None
         try:
             tmp = temporary_beside(self.path)
@@ -187,10 +187,10 @@ class RunWriter:
         width = max(self._width, block.data.shape[1])
         ensure_room(self.path.parent, (k + 2 * _CHUNK_ROWS) * (14 + width), self.path)
         try:
-            with _h5py().File(self.path, "a") as f:
+            with h5py_module().File(self.path, "a") as f:
                 g = f["frames"]
                 if k:
-                    for name in _FRAME_FIELDS:
+                    for name in FRAME_FIELDS:
                         g[name].resize((n + k,))
                         g[name][n:] = getattr(block, name)
                     width = max(self._width, block.data.shape[1])
@@ -231,10 +231,10 @@ class RunWriter:
         need = 0 if streams is None else sum(_stream_bytes(s) for s in streams.nodes.values())
         ensure_room(self.path.parent, need, self.path)
         try:
-            with _h5py().File(self.path, "a") as f:
+            with h5py_module().File(self.path, "a") as f:
                 if streams is not None:
                     write_streams(f, streams)
-                self.end_time = _utc_now()
+                self.end_time = utc_now()
                 f.attrs["end_time"] = self.end_time
                 f.attrs["complete"] = True
             seal(self.path)

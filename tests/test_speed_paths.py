@@ -225,7 +225,6 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
     """Read in blocks, a run file's times are views of the one array read whole: the
     streams take that array itself (and what live blocks bring is still joined); the
     streams are those of the run read whole."""
-    import stand.drivers.streams as streams_module
     from stand.drivers import recording
     from stand.drivers.recording import Recording, read_streams, write_recording
     from stand.drivers.streams import StreamBuilder, _joined
@@ -244,7 +243,7 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
 
     whole = read_streams(run)[1]
     monkeypatch.setattr(recording, "READ_ROWS", 7000)
-    monkeypatch.setattr(streams_module, "StreamBuilder", Watch)
+    monkeypatch.setattr(recording, "StreamBuilder", Watch)
     blocks = read_streams(run)[1]
     assert len(seen) > 1 and seen[0].base is not None
     assert all(t.base is seen[0].base for t in seen)

@@ -18,8 +18,11 @@ import json
 from pathlib import Path
 from typing import Any
 
+from stand.archive.schema import runs
 from stand.archive.store import Archive, default_url
-from stand.errors import StandError
+from stand.drivers.files import check_input
+from stand.errors import RecordingError, StandError
+from stand.solve.recordings import solve_recording
 from stand.solve.result import Result, json_text
 from stand.solve.result_json import to_json
 
@@ -61,8 +64,6 @@ def drift_rows(url: str, result: Result) -> Any:
 
 def file_digest(path: str | Path) -> str:
     """SHA-256 of a file, read in 1 MiB chunks (RecordingError naming it if unreadable)."""
-    from stand.drivers.files import check_input
-    from stand.errors import RecordingError
 
     check_input(path)
     h = hashlib.sha256()
@@ -147,8 +148,6 @@ def add_result(archive: Archive, result: Result, *, config: str | None = None) -
         prev = result.check.previous_run
         checks = archive.run_id(file_digest(prev))
         if checks is None:
-            from stand.solve.recordings import solve_recording
-
             before = solve_recording(prev, config)
             checks = archive.add(*rows(before, file_digest(prev), None))
     return archive.add(*rows(result, file_digest(run_file), checks))
@@ -163,7 +162,6 @@ def result_of(row: Any) -> dict[str, Any]:
 def import_runs(paths: list[str], url: str, config: str | None = None) -> list[tuple[str, int]]:
     """Archive runs recorded before (solved with their stored config, or ``config``):
     ``(path, id)`` each; a run already archived keeps its id."""
-    from stand.solve.recordings import solve_recording
 
     done = []
     with Archive(url) as archive:
@@ -180,8 +178,6 @@ def verify(url: str) -> tuple[int, list[dict[str, Any]]]:
     """Every archived run's file against its digest: (runs checked, problems), a problem
     being ``{"id", "run_file", "problem"}`` with problem ``missing`` or ``altered``."""
     import sqlalchemy as sa
-
-    from stand.archive.schema import runs
 
     with Archive(url) as archive, archive.transaction() as conn:
         listed = conn.execute(sa.select(runs.c.id, runs.c.run_file, runs.c.file_sha256)).all()

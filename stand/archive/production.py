@@ -22,12 +22,18 @@ from typing import Any
 import numpy as np
 
 from stand import __version__
+from stand.archive import Archive, add_result, file_digest
+from stand.config.schema import config_toml
+from stand.drivers.recording import STAND_ATTR, Recording, write_recording
+from stand.drivers.streams import rebuild
+from stand.errors import UsageError
+from stand.health.monitor import datum_row
+from stand.sim import Mass, load_scene, simulate, with_masses
+from stand.sim.tables import PlaneUnbalance
+from stand.solve.recordings import result_masses, solve_recording
 
 
 def _write(scene: Any, params: Any, path: Path, believed: str, force: bool) -> None:
-    from stand.drivers.recording import STAND_ATTR, Recording, write_recording
-    from stand.drivers.streams import rebuild
-    from stand.sim import simulate
 
     sim = simulate(scene, params)
     rec = Recording(
@@ -45,7 +51,6 @@ def _write(scene: Any, params: Any, path: Path, believed: str, force: bool) -> N
 
 def _rotor(scene: Any, rng: np.random.Generator, index: int) -> Any:
     """The scene with this rotor's random initial unbalance, its own noise seed."""
-    from stand.sim.tables import PlaneUnbalance
 
     u = scene.unbalance
     planes = {
@@ -71,12 +76,6 @@ def simulate_series(
 ) -> int:
     """Simulate ``count`` rotors (see the module docstring); the data stored.  A run file
     already in ``out_dir`` is refused before the first rotor (replaced with ``force``)."""
-    from stand.archive import Archive, add_result, file_digest
-    from stand.config.schema import config_toml
-    from stand.errors import UsageError
-    from stand.health.monitor import datum_row
-    from stand.sim import Mass, load_scene, with_masses
-    from stand.solve.recordings import result_masses, solve_recording
 
     scene, params, _ = load_scene(scene_name)
     believed = config_toml(scene.config())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import cmath
 import datetime as dt
+import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -159,7 +160,6 @@ def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
     """The latest run in an open archive (of one stand, or of any) as :func:`history` gives
     it, with ``initial``, the planes of the run it checks (its own when it checks none), and
     ``result``, its whole JSON form; None in an empty archive."""
-    import json
 
     import sqlalchemy as sa
 

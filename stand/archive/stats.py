@@ -20,6 +20,9 @@ from typing import Any
 
 import numpy as np
 
+from stand.archive.query import Filters, plane_rows, select_runs
+from stand.archive.store import Archive
+
 CONFIDENCE = 0.95
 """Confidence of the mean's region and level of the test (5 % false alarms by design)."""
 MIN_ROTORS = 3
@@ -164,8 +167,6 @@ def _first_pass(rows: list[Any], rotors: list[Any]) -> tuple[int, int, int]:
 
 def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]:
     """The statistics of one rotor type's archived runs (JSON-ready, g mm and degrees)."""
-    from stand.archive.query import Filters, plane_rows, select_runs
-    from stand.archive.store import Archive
 
     f = filters or Filters()
     f = Filters(**{**f.__dict__, "rotor_type": rotor_type, "limit": None})

@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from stand.archive.schema import planes, runs
+from stand.archive.schema import corrections, planes, runs
 from stand.config.paths import data_folder
 from stand.errors import ArchiveError
 
@@ -166,15 +166,12 @@ class Archive:
     def add_correction(self, row: dict[str, Any]) -> int:
         """Write one correction datum (:mod:`stand.health.monitor`); a check already stored (the
         same digest) is not written again: its id is returned."""
-        from stand.archive.schema import corrections
 
         return self._insert_once(corrections, "check_sha256", row, "calibration datum")
 
     def correction_rows(self, stand: str | None = None, rotor_type: str | None = None) -> list[Any]:
         """The correction data, oldest first, of a stand and a rotor type (None: any)."""
         import sqlalchemy as sa
-
-        from stand.archive.schema import corrections
 
         q = sa.select(corrections).order_by(corrections.c.start_time, corrections.c.id)
         if stand is not None:

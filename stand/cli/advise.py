@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from stand.calib.advisor import advise, plan_across_speeds
 from stand.cli.format import dump_json
+from stand.config.schema import load_config
 from stand.config.typed import parse_rpm
+from stand.core.flexible import rigid_limit_rpm
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -20,8 +23,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.calib.advisor import advise
-    from stand.config.schema import load_config
 
     cfg, params = load_config(args.config)
     top = args.max_rpm or (cfg.tolerance.max_speed_rpm if cfg.tolerance else None)
@@ -29,13 +30,9 @@ def run(args: argparse.Namespace) -> int:
     a = advise(params, top, beam=beam)
     limit = None
     if cfg.rotor.bending_hz is not None:
-        from stand.core.flexible import rigid_limit_rpm
-
         limit = rigid_limit_rpm(cfg.rotor.bending_hz)
     plan = None
     if beam is not None and a.recommended_rpm and top:
-        from stand.calib.advisor import plan_across_speeds
-
         plan = plan_across_speeds(params, beam, a.recommended_rpm[0], top)
     if args.json:
         dump_json(_json(a, cfg, limit, plan))

@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from stand.cli.common import add_archive_argument, archive_url
+from stand.archive import import_runs, verify
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
+from stand.errors import UsageError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -25,8 +28,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.archive import import_runs, verify
-    from stand.errors import UsageError
 
     url = archive_url(args)
     if args.action == "import":

@@ -3,23 +3,40 @@
 from __future__ import annotations
 
 import argparse
+import copy
 import math
 import sys
 from pathlib import Path
 
-from stand.archive import drift_rows
+from stand.archive import Archive, drift_rows, file_digest
+from stand.cli.archiving import archive_live, archive_url
 from stand.cli.common import (
     DEFAULT_TARGET_PCT,
     TOLERANCE_SHARE,
     add_across_speeds_arguments,
     add_live_measure_arguments,
+    run_path,
+    solve_options,
+    targets_from,
+    write_text_output,
 )
-from stand.config.typed import parse_rpm
+from stand.cli.format import dump_json, print_speeds, show
+from stand.cli.panel import measure_live_from_args
+from stand.config.matrix import SAME_SPEED
+from stand.config.typed import parse_mass, parse_rpm
+from stand.drivers.files import check_output
+from stand.errors import ArchiveError, StandError, UsageError
+from stand.field.speeds import balance_speeds, speeds_json
+from stand.health.monitor import datum_row, with_drift
+from stand.report.certificate import render
+from stand.report.pages import render_speeds
+from stand.solve.check import with_check
+from stand.solve.recordings import result_masses, solve_recording
+from stand.solve.result_json import to_json
 
 
 def parse_masses(text: str) -> list[tuple[int, float, float, float | None]]:
     """``1:55.5@30,2:-12@200:80``: the masses put on, as ``--add`` takes each."""
-    from stand.config.typed import parse_mass
 
     return [parse_mass(x) for x in text.split(",")]
 
@@ -83,25 +100,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import (
-        archive_live,
-        solve_options,
-        targets_from,
-    )
-    from stand.cli.format import show
-    from stand.cli.panel import measure_live_from_args
-    from stand.solve.check import with_check
-    from stand.solve.result_json import to_json
 
     if args.speeds:
         return _across_speeds(args)
     if (args.applied or args.applied_masses) and not args.check:
-        from stand.errors import UsageError
-
         raise UsageError("stand balance: --applied and --applied-masses go with --check")
     if args.report:  # refuse a report path that cannot be written before measuring
-        from stand.drivers.files import check_output
-
         check_output(
             args.report, force=args.force, inputs=[i for i in (args.check, args.config) if i]
         )
@@ -114,10 +118,6 @@ def run(args: argparse.Namespace) -> int:
             result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
         )
     if not args.no_archive:  # a stand that drifted from its calibration says so, widened
-        from stand.cli.common import archive_url
-        from stand.errors import ArchiveError, StandError
-        from stand.health.monitor import with_drift
-
         try:
             result = with_drift(
                 drift_rows(archive_url(args, cfg), result), result, cfg, params, options
@@ -131,8 +131,6 @@ def run(args: argparse.Namespace) -> int:
     out["report"] = report
     show(out, args.json)  # the answer first: the report takes a moment
     sys.stdout.flush()
-    from stand.cli.common import write_text_output
-    from stand.report.certificate import render
 
     inputs = [i for i in (result.provenance.run_file, args.check, args.config) if i]
     write_text_output(report, render(result), force=args.force, inputs=inputs)
@@ -146,10 +144,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: object) -> None:
     """A check after a confirmed correction: the pair into the archive (stand health)."""
-    from stand.archive import Archive, file_digest
-    from stand.cli.common import archive_url
-    from stand.health.monitor import datum_row
-    from stand.solve.recordings import result_masses, solve_recording
 
     if not (args.applied or args.applied_masses):
         print(
@@ -188,15 +182,6 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
 def _across_speeds(args: argparse.Namespace) -> int:
     """A run at each of ``--speeds`` (recorded as RUN-<rpm>rpm.h5), then the correction
     across them, its report beside the runs."""
-    import copy
-
-    from stand.cli.common import archive_live, run_path, solve_options, targets_from
-    from stand.cli.format import dump_json, print_speeds
-    from stand.cli.panel import measure_live_from_args
-    from stand.config.matrix import SAME_SPEED
-    from stand.errors import UsageError
-    from stand.field.speeds import balance_speeds, speeds_json
-    from stand.report.pages import render_speeds
 
     if args.check or args.rpm:
         raise UsageError("stand balance: --speeds sets the speeds: no --check or --rpm")
@@ -232,7 +217,6 @@ def _across_speeds(args: argparse.Namespace) -> int:
     else:
         print_speeds(out)
         print(f"report: {report}")
-    from stand.cli.common import write_text_output
 
     write_text_output(report, render_speeds(out), force=args.force, inputs=runs)
     return 0

@@ -4,22 +4,24 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import difflib
 import math
 from pathlib import Path
 from typing import Annotated, Any
 
+import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.archive import correction_rows
-from stand.cli.common import (
-    add_archive_argument,
-    add_force_argument,
-    archive_url,
-    write_text_output,
-)
+from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
 from stand.cli.format import dump_json
-from stand.config.schema import STRICT
-from stand.errors import ConfigError
+from stand.config.schema import STRICT, load_config, read_toml, updated_toml, validate
+from stand.drivers.files import check_output
+from stand.errors import ConfigError, ModelError, UsageError
+from stand.health.monitor import answers, refit
+from stand.solve.recordings import measure_recording
 
 
 class MassTable(BaseModel):
@@ -93,14 +95,7 @@ def run(args: argparse.Namespace) -> int:
     if args.from_archive:
         return _from_archive(args)
     if not args.runs or not args.out:
-        from stand.errors import UsageError
-
         raise UsageError("stand calibrate: give RUNS.toml and --out (or --from-archive)")
-
-    from stand.calib.identify import NAMES, identify
-    from stand.config.schema import load_config
-    from stand.drivers.files import check_output
-    from stand.errors import ModelError, UsageError
 
     check_output(args.out, force=args.force, inputs=[args.config, args.runs])  # before the work
     cfg, params = load_config(args.config)
@@ -163,11 +158,6 @@ def _identified_config(cfg: Any, v: dict[str, float]) -> Any:
 def _calibration_runs(args: argparse.Namespace, params: Any) -> list[Any]:
     """The runs file's runs, measured raw (the configured reference angle, no sensor
     correction), each with the test masses it carried as unbalance per plane [kg m]."""
-    import numpy as np
-
-    from stand.calib.identify import CalibrationRun
-    from stand.config.schema import read_toml, validate
-    from stand.solve.recordings import measure_recording
 
     _, data = read_toml(args.runs)
     spec = validate(CalibFile, data, args.runs)
@@ -187,9 +177,6 @@ def _calibration_runs(args: argparse.Namespace, params: Any) -> list[Any]:
 
 def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
     """``--rotor``: M3, J3 and the centre of mass on the configured (identified) stand."""
-
-    from stand.calib.identify import ROTOR_NAMES, identify_rotor
-    from stand.errors import ModelError
 
     try:
         res = identify_rotor(params, runs, tuple(cfg.sensors.gain), tuple(cfg.sensors.delay_s))
@@ -234,9 +221,6 @@ def _write(
     args: argparse.Namespace, title: str, res: Any, names: list[str], whose: str, cfg: Any
 ) -> list[str]:
     """The calibrated configuration, its fit and standard errors as comments on top."""
-    import numpy as np
-
-    from stand.config.schema import read_toml, updated_toml
 
     v, se = res.values, res.std_errors
     header = [
@@ -269,7 +253,6 @@ FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
 def _refitted_config(cfg: Any, r: Any, original: str) -> tuple[list[str], str]:
     """The config with the refitted values (stiffnesses, masses, gains; today's date), its
     header of comments with the fits, and its text (the user's comments kept)."""
-    from stand.config.schema import updated_toml
 
     stand = cfg.stand.model_copy(
         update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
@@ -296,12 +279,6 @@ def _refitted_config(cfg: Any, r: Any, original: str) -> tuple[list[str], str]:
 def _from_archive(args: argparse.Namespace) -> int:
     """``--from-archive``: the stand re-identified from production data; the new config
     written beside the old (with a diff), the last rotors' answers old and new."""
-    import difflib
-
-    from stand.config.schema import load_config, read_toml
-    from stand.drivers.files import check_output
-    from stand.errors import UsageError
-    from stand.health.monitor import answers, refit
 
     out_path = args.out or str(
         Path(args.config).with_name(Path(args.config).stem + "-recalibrated.toml")

@@ -5,12 +5,20 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import math
-import sys
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
+from stand.calib.tolerance import Tolerances
+from stand.config.matrix import read_matrix
 from stand.config.typed import parse_angle, parse_mass, parse_rpm, positive_float
+from stand.drivers.bus import ALLOW_URL
+from stand.drivers.files import output
 from stand.errors import UsageError
+from stand.field.speeds import correction_masses_across_speeds
+from stand.sim import Mass
+from stand.solve.pipeline import SolveOptions, precision_targets
+from stand.solve.recordings import correction_masses
+from stand.solve.result import Job
 
 if TYPE_CHECKING:
     pass
@@ -26,7 +34,6 @@ def write_text_output(
 ) -> None:
     """Write a whole text file safely (a temporary name, published when complete; never
     over an input, a special file, or an existing file without ``force``)."""
-    from stand.drivers.files import output
 
     data = text.encode("utf-8")
     with output(path, force=force, inputs=[i for i in inputs if i], need_bytes=len(data)) as tmp:
@@ -71,17 +78,12 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
 
 def scene_masses(args: argparse.Namespace) -> list[Any]:
     """The masses ``--add`` and ``--apply`` put on the simulated rotor."""
-    from stand.sim import Mass
 
     masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
     runs = getattr(args, "apply", None) or []
     if len(runs) == 1:
-        from stand.solve.recordings import correction_masses
-
         masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
     elif runs:
-        from stand.field.speeds import correction_masses_across_speeds
-
         slow = getattr(args, "apply_slow_roll", None)
         masses += [
             Mass(p, g, a, r, x)
@@ -147,7 +149,6 @@ def add_bus_arguments(p: argparse.ArgumentParser) -> None:
 def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> dict[str, object]:
     """The ``[bus]`` table with the command-line options applied (what goes to ``can.Bus``;
     without an interface anywhere, python-can's own config file and environment)."""
-    from stand.drivers.bus import ALLOW_URL
 
     kwargs = dict(table or {})
     if ALLOW_URL in kwargs:
@@ -226,12 +227,9 @@ def add_uncertainty_arguments(p: argparse.ArgumentParser) -> None:
 
 def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
     """The :class:`stand.solve.pipeline.SolveOptions` the arguments ask for (validated)."""
-    from stand.solve.pipeline import SolveOptions
 
     tolerances = None
     if getattr(args, "uncertainty", False):
-        from stand.calib.tolerance import Tolerances
-
         for name in ("tol_c", "tol_m", "tol_length_mm", "tol_gain"):
             value = getattr(args, name)
             if not (math.isfinite(value) and value >= 0):
@@ -247,8 +245,6 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
         )
     matrix = None
     if getattr(args, "matrix", None):
-        from stand.config.matrix import read_matrix
-
         matrix = read_matrix(args.matrix)
     return SolveOptions(
         matrix=matrix,
@@ -324,38 +320,6 @@ def add_archive_argument(p: argparse.ArgumentParser | argparse._ArgumentGroup) -
     )
 
 
-def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
-    """Archive a live run (unless ``--no-archive``); say where on stderr."""
-    if args.no_archive or not result.provenance.run_file:
-        return
-    from stand.archive import archive_result
-    from stand.errors import ArchiveError
-
-    url = archive_url(args, cfg)
-    try:
-        run_id = archive_result(result, url, config=args.config)
-    except ArchiveError as exc:
-        raise ArchiveError(
-            f"{str(exc).split(': ', 1)[1]} (the run is kept in {result.provenance.run_file}: "
-            "stand archive import it later)",
-            url=exc.url,
-        ) from exc
-    if not args.quiet:
-        print(f"archived as run {run_id}", file=sys.stderr)
-    from stand.plant.mqtt import publish_archived
-
-    said = publish_archived(result, cfg)
-    if said and (not args.quiet or said.startswith("not")):
-        print(said, file=sys.stderr)
-
-
-def archive_url(args: argparse.Namespace, cfg: Any = None) -> str:
-    """The archive the options (or the config) name."""
-    from stand.archive import url_for
-
-    return url_for(getattr(args, "archive", None), cfg)
-
-
 JOB_FIELDS = ("serial", "order", "operator", "note")
 
 
@@ -370,7 +334,6 @@ def add_job_arguments(p: argparse.ArgumentParser) -> None:
 
 def job_from(args: argparse.Namespace) -> Any:
     """The :class:`stand.solve.result.Job` the options give (UsageError for unusable text)."""
-    from stand.solve.result import Job
 
     values = {}
     for name in JOB_FIELDS:
@@ -395,7 +358,6 @@ def check_live_arguments(args: argparse.Namespace, command: str) -> None:
 
 def targets_from(args: argparse.Namespace, tolerance_share: float | None = None) -> Any:
     """``targets(cfg, params, U) -> (kg m, kg m)``: the precision the options ask for."""
-    from stand.solve.pipeline import precision_targets
 
     abs_kg_m = None if args.target_g_mm is None else args.target_g_mm * 1e-6
 

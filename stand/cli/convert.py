@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from stand.drivers.files import check_output
+from stand.drivers.recording import read_recording, write_recording
+from stand.drivers.streams import rebuild
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", metavar="IN", help="run file (.h5) or python-can log")
@@ -12,9 +16,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.drivers.files import check_output
-    from stand.drivers.recording import read_recording, write_recording
-    from stand.drivers.streams import rebuild
 
     check_output(args.dest, force=args.force, inputs=[args.source])  # before reading
     rec = read_recording(args.source)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 
 from stand.cli.format import dump_json
+from stand.health.evaluate import POSITIONS, SPREAD_LIMIT, evaluate
+from stand.sim import load_scene
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -18,8 +20,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.health.evaluate import POSITIONS, SPREAD_LIMIT, evaluate
-    from stand.sim import load_scene
 
     scene, params, _ = load_scene(args.scene)
     e = evaluate(scene, params)

@@ -5,8 +5,11 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 
-from stand.cli.common import add_archive_argument, archive_url
+from stand.archive.query import Filters
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument
 from stand.errors import UsageError
+from stand.plant.qdas import export_qdas
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -30,8 +33,6 @@ def _date(text: str | None, flag: str) -> dt.date | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.archive.query import Filters
-    from stand.plant.qdas import export_qdas
 
     f = Filters(
         since=_date(args.since, "--since"), until=_date(args.until, "--until"), stand=args.stand

@@ -11,6 +11,7 @@ from collections.abc import Iterable
 from typing import Any, TextIO
 
 from stand.report.units import Display
+from stand.solve.recordings import recording_summary
 from stand.solve.result import json_text
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
@@ -270,7 +271,6 @@ def print_summary(out: dict[str, Any]) -> None:
 
 def print_recording(rec: Any, streams: Any, *, as_json: bool) -> None:
     """What a recording holds: one JSON object, or the table (and the warnings on stderr)."""
-    from stand.solve.recordings import recording_summary
 
     out = recording_summary(rec, streams)
     if as_json:

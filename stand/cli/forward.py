@@ -17,8 +17,10 @@ from stand.core import (
     rpm_to_rad_s,
     unbalance_from_polar,
 )
+from stand.core.beam import forward_beam, natural_frequencies_beam, solve_beam
 from stand.core.inverse import speed_diagnostics
 from stand.errors import UsageError
+from stand.solve.pipeline import rigid_note
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,8 +48,6 @@ def run(args: argparse.Namespace) -> int:
     omega = float(rpm_to_rad_s(args.rpm))
     beam = cfg.rotor.beam()
     if beam is None:  # the rigid rotor
-        from stand.solve.pipeline import rigid_note
-
         A = forward(params, omega, U)
         fn_hz = natural_frequencies(params) / (2 * math.pi)
         warnings = speed_diagnostics(params, omega)
@@ -55,8 +55,6 @@ def run(args: argparse.Namespace) -> int:
         if bends is not None:
             warnings.append(bends)
     else:  # [rotor.shaft]: the rotor bends
-        from stand.core.beam import forward_beam, natural_frequencies_beam, solve_beam
-
         A = forward_beam(beam, params, omega, U)
         fn_hz = natural_frequencies_beam(beam, params, 3) / (2 * math.pi)
         warnings = solve_beam(beam, params, omega, A).diagnostics

@@ -5,8 +5,10 @@ from __future__ import annotations
 import argparse
 
 from stand.archive import correction_rows
-from stand.cli.common import add_archive_argument, archive_url
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
+from stand.health.monitor import health, health_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -19,7 +21,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.health.monitor import health, health_json
 
     out = health_json(health(correction_rows(archive_url(args), args.stand, args.rotor_type)))
     if args.json:

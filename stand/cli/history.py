@@ -3,10 +3,15 @@
 from __future__ import annotations
 
 import argparse
+import csv
 import datetime as dt
+import io
+import sys
 from typing import Any
 
-from stand.cli.common import add_archive_argument, archive_url, write_text_output
+from stand.archive.query import Filters, history
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument, write_text_output
 from stand.cli.format import dump_json
 from stand.errors import UsageError
 
@@ -44,7 +49,6 @@ def _date(text: str | None, flag: str) -> dt.date | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.archive.query import Filters, history
 
     if args.limit is not None and args.limit < 1:
         raise UsageError(f"--limit must be >= 1, got {args.limit}")
@@ -80,9 +84,6 @@ def _row(r: dict[str, Any]) -> list[Any]:
 
 
 def _csv(found: list[dict[str, Any]], path: str, force: bool) -> None:
-    import csv
-    import io
-    import sys
 
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")

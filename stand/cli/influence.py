@@ -9,13 +9,29 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.calib.influence import (
+    TRIAL_CHANGE,
+    Trial,
+    influence_covariance,
+    influence_matrix,
+    phasors,
+    suggested_trials,
+)
 from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
-from stand.config.matrix import Pair
-from stand.config.schema import STRICT
+from stand.config.matrix import Pair, matrix_document, parse_matrix, read_matrix
+from stand.config.schema import STRICT, read_toml, validate
 from stand.config.typed import positive_float
+from stand.core.influence import InfluenceMap
+from stand.drivers.recording import config_digest
 from stand.errors import ConfigError, ModelError, UsageError
+from stand.field.planes import field_json
+from stand.field.runs import field_from_runs
+from stand.field.trials import influence_runs, solve_initial_run
+from stand.solve.pipeline import SolveOptions
+from stand.solve.recordings import solve_recording
 from stand.solve.result import json_text
+from stand.solve.result_json import to_json
 
 PLANES = 2
 """The planes of the stand's own answer (a run solved through the matrix)."""
@@ -94,8 +110,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _entries(path: str) -> tuple[RunsFile, list[Any]]:
     """The runs file and ``(file(s) or None, typed readings, Trial, left_on)`` per run."""
-    from stand.calib.influence import Trial, phasors
-    from stand.config.schema import read_toml, validate
 
     _, data = read_toml(path)
     spec = validate(RunsFile, data, path)
@@ -147,7 +161,6 @@ def _is_field(spec: RunsFile, entries: list[Any], args: argparse.Namespace) -> b
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.field.trials import influence_runs
 
     spec, entries = _entries(args.runs)
     if _is_field(spec, entries, args):
@@ -162,8 +175,6 @@ def run(args: argparse.Namespace) -> int:
     runs, cfg, params, text, omega = influence_runs(entries, args.config)
     tried = {r.trial.plane for r in runs[1:] if r.trial is not None}
     if args.matrix:
-        from stand.config.matrix import read_matrix
-
         matrix = read_matrix(args.matrix)
         matrix.check(None if cfg is None else cfg.rotor.type, live=True)
     elif len(tried) < PLANES and len(runs) == 1 + len(tried) and omega:
@@ -182,10 +193,6 @@ def _measured_matrix(
     omega: float | None,
 ) -> Any:
     """The matrix the trial runs measure (stored with --save)."""
-    from stand.calib.influence import influence_covariance, influence_matrix
-    from stand.config.matrix import matrix_document, parse_matrix
-    from stand.core.influence import InfluenceMap
-    from stand.drivers.recording import config_digest
 
     try:
         alpha, notes = influence_matrix(runs)
@@ -209,10 +216,6 @@ def _measured_matrix(
 
 def _recorded(args: argparse.Namespace, first: str, runs: list[Any], matrix: Any) -> int:
     """The initial run solved through the matrix: the same result as any run."""
-    from stand.field.trials import solve_initial_run
-    from stand.solve.pipeline import SolveOptions
-    from stand.solve.recordings import solve_recording
-    from stand.solve.result_json import to_json
 
     if args.matrix:
         result = solve_recording(first, args.config, SolveOptions(matrix=matrix))
@@ -237,7 +240,6 @@ def _suggest(
     args: argparse.Namespace, runs: list[Any], params: Any, omega: float, planes: list[int]
 ) -> int:
     """Before a trial run: the trial mass that moves the 1x by about 30 %."""
-    from stand.calib.influence import TRIAL_CHANGE, suggested_trials
 
     if args.save:
         raise UsageError("--save: no trial run yet, so no matrix to store")
@@ -274,8 +276,6 @@ def _suggest(
 
 def run_field(args: argparse.Namespace, spec: Any, entries: list[Any]) -> int:
     """`stand influence` for N planes, several speeds, another method or a mass cap."""
-    from stand.field.planes import field_json
-    from stand.field.runs import field_from_runs
 
     result, notes, cfg = field_from_runs(
         spec,
@@ -298,8 +298,6 @@ def run_field(args: argparse.Namespace, spec: Any, entries: list[Any]) -> int:
 
 
 def _save(args: argparse.Namespace, result: Any, cfg: Any, entries: list[Any]) -> None:
-    from stand.config.matrix import matrix_document
-    from stand.core.influence import InfluenceMap
 
     try:
         imap = InfluenceMap(result.alpha)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 
 from stand.cli.format import print_recording
+from stand.drivers.recording import read_recording
+from stand.drivers.streams import rebuild
 from stand.errors import RecordingError
 
 
@@ -16,8 +18,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.drivers.recording import read_recording
-    from stand.drivers.streams import rebuild
 
     rec = read_recording(args.path)
     if len(rec.frames) == 0:

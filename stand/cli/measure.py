@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from stand.cli.common import DEFAULT_TARGET_PCT, add_live_measure_arguments
+from stand.cli.archiving import archive_live
+from stand.cli.common import (
+    DEFAULT_TARGET_PCT,
+    add_live_measure_arguments,
+    solve_options,
+    targets_from,
+)
+from stand.cli.format import show
+from stand.cli.panel import measure_live_from_args
+from stand.solve.result_json import to_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -12,14 +21,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import (
-        archive_live,
-        solve_options,
-        targets_from,
-    )
-    from stand.cli.format import show
-    from stand.cli.panel import measure_live_from_args
-    from stand.solve.result_json import to_json
 
     result, cfg, _ = measure_live_from_args(
         args, "measure", targets_from(args), solve_options(args)

@@ -4,11 +4,17 @@ stand, for a line's MES (:mod:`stand.plant.opcua`)."""
 from __future__ import annotations
 
 import argparse
+import asyncio
+import signal
 import sys
 from pathlib import Path
 from typing import Any
 
-from stand.cli.common import add_archive_argument, archive_url
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument
+from stand.config.schema import load_config
+from stand.errors import UsageError
+from stand.plant.opcua import Access, ResultServer
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -28,8 +34,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def read_access(args: argparse.Namespace) -> Any:
     """The options' user and password (:class:`stand.plant.opcua.Access`)."""
-    from stand.errors import UsageError
-    from stand.plant.opcua import Access
 
     password = None
     if args.password_file:
@@ -43,18 +47,11 @@ def read_access(args: argparse.Namespace) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    import asyncio
-    import signal
-
-    from stand.errors import UsageError
-    from stand.plant.opcua import ResultServer
 
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     cfg = None
     if args.config:
-        from stand.config.schema import load_config
-
         cfg = load_config(args.config)[0]
     stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)
     server = ResultServer(

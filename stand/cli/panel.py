@@ -15,8 +15,11 @@ import argparse
 import sys
 from typing import Any
 
+from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path, scene_masses
 from stand.core import rad_s_to_rpm, unbalance_to_polar
+from stand.live.loop import live_source, measure_live
 from stand.report.units import Display
+from stand.solve.pipeline import tolerance_of
 
 ANGLE_HELP = "angles from the reference mark, against the direction of rotation"
 
@@ -111,8 +114,6 @@ class LiveDisplay:
     one line per solve elsewhere, nothing with ``--quiet``."""
 
     def __init__(self, source: Any, path: str, *, quiet: bool) -> None:
-        from stand.report.units import Display
-        from stand.solve.pipeline import tolerance_of
 
         tol = tolerance_of(source.cfg, source.params)
         self.tolerance = None if tol is None else tol.per_plane_kg_m
@@ -171,8 +172,6 @@ def measure_live_from_args(
     """``stand measure`` and ``stand balance``: the live run the options ask for, with its
     progress on stderr (a fixed panel on a terminal, else a line per solve); returns the
     :class:`stand.solve.result.Result`, config and parameters."""
-    from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path, scene_masses
-    from stand.live.loop import live_source, measure_live
 
     check_live_arguments(args, command)
     source = live_source(

@@ -5,10 +5,17 @@ from __future__ import annotations
 import argparse
 import collections
 import sys
+import time
 from typing import Any
 
 from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs
+from stand.cli.format import print_recording
+from stand.drivers.protocol import Frames
+from stand.drivers.recording import Recording
+from stand.drivers.streams import rebuild
 from stand.errors import BusError, BusTimeoutError, UsageError
+from stand.live.session import LiveSession
+from stand.solve.pipeline import load_config_text
 
 STATUS_EVERY_S = 1.0
 SPEED_WINDOW_S = 2.0
@@ -29,8 +36,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def speed_line(window: collections.deque[Any], elapsed: float, frames: int) -> str:
     """The speed each node saw over the last seconds (from the blocks in ``window``)."""
-    from stand.drivers.protocol import Frames
-    from stand.drivers.streams import rebuild
 
     recent = rebuild(Frames.concat([b for _, b in window]), strict_status=False)
     nodes = []
@@ -57,7 +62,6 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
 def _record(args: argparse.Namespace, session: Any) -> None:
     """Read the bus until stopped (Ctrl-C, --seconds, a failure), a speed line every
     :data:`STATUS_EVERY_S` on stderr."""
-    import time
 
     next_status = STATUS_EVERY_S
     window: collections.deque[tuple[float, Any]] = collections.deque()
@@ -77,12 +81,6 @@ def _record(args: argparse.Namespace, session: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-
-    from stand.cli.format import print_recording
-    from stand.drivers.protocol import Frames
-    from stand.drivers.recording import Recording
-    from stand.live.session import LiveSession
-    from stand.solve.pipeline import load_config_text
 
     if args.seconds is not None and not args.seconds > 0:
         raise UsageError(f"stand record: --seconds must be > 0, got {args.seconds}")

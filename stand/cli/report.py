@@ -12,6 +12,16 @@ from stand.cli.common import (
     solve_options,
     write_text_output,
 )
+from stand.drivers.files import check_output
+from stand.drivers.recording import read_recording
+from stand.errors import UsageError
+from stand.field.speeds import balance_speeds, speeds_json
+from stand.report.certificate import render
+from stand.report.pages import render_speeds
+from stand.report.printing import write_pdf
+from stand.solve.check import with_check
+from stand.solve.pipeline import load_config_text, stored_config
+from stand.solve.recordings import solve_recording
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,12 +56,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
-    from stand.drivers.files import check_output
-    from stand.errors import UsageError
-    from stand.report.certificate import render
-    from stand.solve.pipeline import load_config_text
-    from stand.solve.recordings import solve_recording
-
     if not args.out and not args.pdf:
         raise UsageError("stand report: give -o REPORT.html, --pdf REPORT.pdf, or both")
     if len(args.run) > 1 and not args.across_speeds:
@@ -61,9 +65,6 @@ def run(args: argparse.Namespace) -> int:
         if out:
             check_output(out, force=args.force, inputs=inputs)  # before the work
     if args.across_speeds:
-        from stand.field.speeds import balance_speeds, speeds_json
-        from stand.report.pages import render_speeds
-
         if args.check:
             raise UsageError("stand report: --check is for one run, not --across-speeds")
         speeds = balance_speeds(
@@ -78,15 +79,10 @@ def run(args: argparse.Namespace) -> int:
     run = args.run[0]
     result = solve_recording(run, args.config, options)
     if args.check:
-        from stand.solve.pipeline import stored_config
-
         if args.config:
             cfg, params, _ = load_config_text(args.config)
         else:
-            from stand.drivers.recording import read_recording
-
             cfg, params, _ = stored_config(read_recording(run).meta, run)
-        from stand.solve.check import with_check
 
         result = with_check(
             result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
@@ -100,8 +96,6 @@ def _write(args: argparse.Namespace, page: str, inputs: list[str]) -> int:
         write_text_output(args.out, page, force=args.force, inputs=inputs)
         print(f"wrote {args.out}")
     if args.pdf:
-        from stand.report.printing import write_pdf
-
         write_pdf(page, args.pdf, force=args.force, inputs=inputs)
         print(f"wrote {args.pdf}")
     return 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from stand.cli.format import dump_json
+from stand.sim.scene import describe, load_scene, shipped_scenes
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -12,7 +13,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.sim.scene import describe, load_scene, shipped_scenes
 
     out = {}
     for name in shipped_scenes():

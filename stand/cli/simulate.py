@@ -8,6 +8,8 @@ from pathlib import Path
 from typing import Any
 
 from stand import __version__
+from stand.archive import url_for
+from stand.archive.production import simulate_series
 from stand.cli.common import (
     add_archive_argument,
     add_bus_arguments,
@@ -17,7 +19,14 @@ from stand.cli.common import (
     job_from,
     scene_masses,
 )
+from stand.config.schema import config_toml
+from stand.drivers.bus import describe_bus, open_bus, play
+from stand.drivers.files import check_output
+from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
+from stand.drivers.streams import rebuild
 from stand.errors import UsageError
+from stand.sim import load_scene, shipped_scenes, simulate, with_masses
+from stand.solve.pipeline import load_config_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -58,21 +67,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 
     if args.series is not None:
         return _series(args)
     if not args.out and not args.bus:
         raise UsageError("stand simulate: give --out FILE, --bus, or both")
     if args.out:
-        from stand.drivers.files import check_output
-
         check_output(args.out, force=args.force)  # before the work, and again when written
     job_from(args)  # bad job fields are refused before the work
     stored, believed = None, None
     if args.config:
-        from stand.solve.pipeline import load_config_text
-
         believed, _, stored = load_config_text(args.config)
     scene, params, source = load_scene(args.scene)
     scene = with_masses(scene, scene_masses(args), args.rpm, args.index)
@@ -102,9 +106,6 @@ def _write(
     source: str,
 ) -> None:
     """The run written to --out (a run file, or a python-can log by its extension)."""
-    from stand.config.schema import config_toml
-    from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
-    from stand.drivers.streams import rebuild
 
     job = job_from(args)
     rec = Recording(
@@ -130,7 +131,6 @@ def _write(
 
 def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
     """The run played on a python-can bus in real time."""
-    from stand.drivers.bus import describe_bus, open_bus, play
 
     table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
     kwargs = bus_kwargs(args, table)
@@ -145,8 +145,6 @@ def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
 
 def _series(args: argparse.Namespace) -> int:
     """``--series N``: a simulated production series into the archive."""
-    from stand.archive import url_for
-    from stand.archive.production import simulate_series
 
     if args.series < 1 or not args.out_dir:
         raise UsageError("stand simulate: --series N (N >= 1) needs --out-dir DIR")

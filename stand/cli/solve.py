@@ -21,7 +21,13 @@ from stand.cli.common import (
     solve_options,
     write_text_output,
 )
+from stand.cli.format import dump_json, print_speeds, show
+from stand.drivers.files import check_output
 from stand.errors import StandError, UsageError
+from stand.field.speeds import balance_speeds, speeds_json
+from stand.solve.recordings import solve_many, solve_recording
+from stand.solve.result import json_text
+from stand.solve.result_json import to_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -62,16 +68,11 @@ def _run(args: argparse.Namespace) -> int:
         raise UsageError("stand solve: --method and --max-mass-g go with --across-speeds")
     options = solve_options(args)
     if args.summary:  # refuse a summary that cannot be written before solving
-        from stand.drivers.files import check_output
-
         check_output(
             args.summary, force=args.force, inputs=[*args.runs, *filter(None, [args.config])]
         )
     if len(args.runs) > 1 or args.summary:
         return run_batch(args, options)
-    from stand.cli.format import show
-    from stand.solve.recordings import solve_recording
-    from stand.solve.result_json import to_json
 
     show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
     return 0
@@ -115,11 +116,6 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
     """Solve every run; a progress bar on stderr; a table on stdout; the summary file."""
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-    from stand.cli.format import dump_json
-    from stand.solve.recordings import solve_many
-    from stand.solve.result import json_text
-    from stand.solve.result_json import to_json
 
     runs = list(args.runs)
     results: dict[str, dict[str, Any]] = {}
@@ -173,8 +169,6 @@ def run_batch(args: argparse.Namespace, options: Any) -> int:
 
 def run_across_speeds(args: argparse.Namespace) -> int:
     """One correction in N planes for the runs at several speeds; per speed, what it leaves."""
-    from stand.cli.format import dump_json, print_speeds
-    from stand.field.speeds import balance_speeds, speeds_json
 
     if args.summary or args.jobs != 1:
         raise UsageError("stand solve: --across-speeds gives one answer: no --summary or --jobs")

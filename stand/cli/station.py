@@ -6,6 +6,16 @@ import argparse
 import sys
 from pathlib import Path
 
+from stand.archive import url_for
+from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
+from stand.config.paths import data_folder
+from stand.errors import UsageError
+from stand.plant.opcua import ResultServer
+from stand.plant.safety import check_bind, read_token
+from stand.solve.pipeline import precision_targets
+from stand.station.pages import serve
+from stand.station.service import Station
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
@@ -41,9 +51,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
-    from stand.errors import UsageError
-    from stand.plant.safety import check_bind, read_token
 
     token = read_token(args.token, args.token_file)
     check_bind(args.host, token)
@@ -54,11 +61,6 @@ def run(args: argparse.Namespace) -> int:
     config_dir = Path(args.config_dir or Path(__file__).parents[1] / "data" / "rotors")
     if not config_dir.is_dir():
         raise UsageError(f"--config-dir {config_dir}: not a folder")
-    from stand.archive import url_for
-    from stand.config.paths import data_folder
-    from stand.solve.pipeline import precision_targets
-    from stand.station.pages import serve
-    from stand.station.service import Station
 
     url = url_for(args.archive)
     runs = Path(args.runs_dir) if args.runs_dir else data_folder() / "runs"
@@ -71,7 +73,6 @@ def run(args: argparse.Namespace) -> int:
 
     station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
     if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
-        from stand.plant.opcua import ResultServer
 
         def state() -> str:
             return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"

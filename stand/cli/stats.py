@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 from typing import Any
 
-from stand.cli.common import add_archive_argument, archive_url
+from stand.archive.query import Filters
+from stand.archive.stats import production
+from stand.cli.archiving import archive_url
+from stand.cli.common import add_archive_argument, write_text_output
 from stand.cli.format import dump_json
+from stand.errors import UsageError
+from stand.report.pages import render_production
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -27,11 +33,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import datetime as dt
-
-    from stand.archive.query import Filters
-    from stand.archive.stats import production
-    from stand.errors import UsageError
 
     dates = {}
     for name in ("since", "until"):
@@ -50,9 +51,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         _text(out)
     if args.report and out["rotors"]:
-        from stand.cli.common import write_text_output
-        from stand.report.pages import render_production
-
         write_text_output(args.report, render_production(out), force=args.force)
         if not args.json:
             print(f"wrote {args.report}")

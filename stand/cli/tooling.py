@@ -7,6 +7,13 @@ from pathlib import Path
 from typing import Any
 
 from stand.cli.format import ANGLE_NOTE, dump_json
+from stand.config.paths import data_folder
+from stand.config.schema import load_config
+from stand.core import unbalance_to_polar
+from stand.core.dsp import radius95
+from stand.errors import UsageError
+from stand.solve.index_runs import measure_tooling
+from stand.solve.tooling import folder, save_tooling, stored_toolings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,8 +39,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
-    from stand.core import unbalance_to_polar
-    from stand.core.dsp import radius95
 
     q, phi = unbalance_to_polar(U)
     return [
@@ -45,21 +50,16 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
 
 
 def _where(args: argparse.Namespace, cfg: Any) -> Path:
-    from stand.solve.tooling import folder
 
     if args.folder:
         return Path(args.folder)
     if cfg is not None and cfg.tooling is not None:
         return folder(cfg.tooling)
-    from stand.config.paths import data_folder
 
     return data_folder() / "tooling"
 
 
 def _measure(args: argparse.Namespace) -> int:
-    from stand.errors import UsageError
-    from stand.solve.index_runs import measure_tooling
-    from stand.solve.tooling import save_tooling
 
     if len(args.runs) != 2:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
@@ -92,15 +92,11 @@ def _measure(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from stand.config.schema import load_config
-    from stand.solve.tooling import stored_toolings
 
     cfg = load_config(args.config)[0] if args.config else None
     where = _where(args, cfg)
     found = [t for t in stored_toolings(where) if not args.name or t.name == args.name]
     if args.name and not found:
-        from stand.errors import UsageError
-
         raise UsageError(f"no tooling {args.name!r} in {where}")
     doc: dict[str, Any] = {
         "folder": str(where),
@@ -129,7 +125,5 @@ def run(args: argparse.Namespace) -> int:
     if args.action == "measure":
         return _measure(args)
     if args.runs:
-        from stand.errors import UsageError
-
         raise UsageError("stand tooling show: takes no runs")
     return _show(args)

@@ -24,6 +24,8 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, Field, FiniteFloat, NonNegativeFloat, NonNegativeInt, PositiveFloat
 
 from stand.config.tables import STRICT
+from stand.core.drill import Drill, min_depth
+from stand.core.holes import Plane
 from stand.errors import ConfigError
 
 Mm = Annotated[FiniteFloat, Field(gt=0.0, le=1e5)]
@@ -105,7 +107,6 @@ class CorrectionTable(BaseModel):
 
     def core_drills(self) -> list[Any]:
         """The drill table as :class:`stand.core.drill.Drill` (SI units)."""
-        from stand.core.drill import Drill
 
         return [
             Drill(d.diameter_mm * 1e-3, d.point_angle_deg, d.max_depth_mm * 1e-3)
@@ -115,7 +116,6 @@ class CorrectionTable(BaseModel):
     def core_plane(self, i: int, R_m: float) -> Any:
         """Plane ``i`` (0 or 1) as :class:`stand.core.holes.Plane`, ``R_m`` the plane's
         correction radius (the entry radius unless given) [m]."""
-        from stand.core.holes import Plane
 
         p = self.plane(i)
         return Plane(
@@ -174,7 +174,6 @@ def _check_plane(c: CorrectionTable, i: int, R_mm: float, source: str) -> None:
                 "mill.depth_mm",
             )
         return
-    from stand.core.drill import min_depth
 
     for j, d in enumerate(c.drills):
         if d.diameter_mm >= 2 * entry:

@@ -23,7 +23,9 @@ from pydantic import BaseModel, Field, FiniteFloat
 from stand.config.schema import STRICT, validate
 from stand.core import Diagnostic
 from stand.core.influence import InfluenceMap
-from stand.errors import ConfigError, ModelError
+from stand.drivers.files import check_input
+from stand.drivers.recording import MATRIX_ATTR
+from stand.errors import ConfigError, ModelError, RecordingError
 
 KIND = "stand influence matrix"
 SAME_SPEED = 0.05
@@ -135,15 +137,12 @@ class LoadedMatrix:
 
     def run_attrs(self) -> dict[str, str]:
         """What a run solved with it stores, so that it is reprocessed with it."""
-        from stand.drivers.recording import MATRIX_ATTR
 
         return {MATRIX_ATTR: self.text}
 
 
 def read_matrix(path: str) -> LoadedMatrix:
     """A stored matrix (:class:`ConfigError` naming the file and key if it is not one)."""
-    from stand.drivers.files import check_input
-    from stand.errors import RecordingError
 
     try:
         check_input(path)

@@ -14,6 +14,8 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config.tables import STRICT, Inertia, Length, Mass, Name
+from stand.core.beam import beam_rotor
+from stand.core.shaft import PointMass, Section
 
 Positive = Annotated[FiniteFloat, Field(gt=0.0, le=1e12)]
 Pair = Annotated[list[Length], Field(min_length=2, max_length=2)]
@@ -57,7 +59,6 @@ class ShaftTable(BaseModel):
         """The table as :func:`stand.core.shaft.shaft_rotor` and
         :func:`stand.core.beam.beam_rotor` take it: sections, E, density, support and plane
         positions, point masses."""
-        from stand.core.shaft import PointMass, Section
 
         return (
             [Section(**x.model_dump()) for x in self.sections],
@@ -131,7 +132,6 @@ class RotorTable(BaseModel):
         ``[rotor.shaft]`` table (a rigid rotor); the ``[[rotor.planes]]`` get nodes."""
         if self.shaft is None:
             return None
-        from stand.core.beam import beam_rotor
 
         return beam_rotor(
             *self.shaft.core_args(), extra_positions_m=[pl.position_m for pl in self.planes]

@@ -27,6 +27,7 @@ reported here with the file and the key.
 from __future__ import annotations
 
 import json
+import socket
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
@@ -40,6 +41,7 @@ from stand.config.rotor import RotorTable as RotorTable  # re-exported
 from stand.config.tables import STRICT as STRICT  # re-exported: every table's model config
 from stand.config.tables import Angle, Mass, Name, Stiffness
 from stand.core.model import STAND_KEYS, StandParameters
+from stand.core.shaft import shaft_rotor
 from stand.errors import ConfigError, ModelError, ParameterError
 
 
@@ -64,7 +66,6 @@ class StandTable(BaseModel):
 
     def stand_id(self) -> str:
         """``id``, else this computer's host name."""
-        import socket
 
         return self.id or socket.gethostname()[:64] or "stand"
 
@@ -273,7 +274,6 @@ def with_shaft(cfg: Config, source: str) -> Config:
                 key=f"rotor.{missing[0]}",
             )
         return cfg
-    from stand.core.shaft import shaft_rotor  # here: a rigid rotor's config needs none of it
 
     s = r.shaft
     try:

@@ -10,10 +10,11 @@ from __future__ import annotations
 import argparse
 import math
 
+from stand.core.model import MAX_SPEED_RPM
+
 
 def parse_rpm(text: str) -> float:
     """``--rpm`` value: a finite speed > 0 [rpm], at most the model's ``MAX_SPEED_RPM``."""
-    from stand.core.model import MAX_SPEED_RPM
 
     try:
         rpm = float(text)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import RESONANCE_BAND, Diagnostic, UnbalanceSolution, speed_diagnostics
 from stand.core.model import ComplexArray, StandParameters
 from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
@@ -231,7 +232,6 @@ def solve_beam(
     """The unbalances from the support phasors through the flexible stand: ``U = H^-1 A``,
     the covariance propagated as for the rigid model, the speed judged against the flexible
     stand's natural frequencies (:func:`natural_frequencies_beam`)."""
-    from stand.core.influence import InfluenceMap, solve_influence
 
     sol = solve_influence(InfluenceMap(receptance(rotor, p, omega_rad_s)), A, cov_A)
     wn = natural_frequencies_beam(rotor, p, 3)

@@ -18,8 +18,10 @@ from typing import Any
 
 import numpy as np
 
+from stand.core.model import phasor_to_polar, unbalance_to_polar
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.errors import ConfigError, ModelError
+from stand.solve.correct import weight_entries, weights_correction
 
 
 @dataclass(frozen=True)
@@ -126,7 +128,6 @@ def reading_weights(cov: Any) -> np.ndarray | None:
 def _polar(z: complex, typed: bool) -> list[float]:
     """``[amplitude, phase_deg]`` as the reading was given: typed in (conjugated back) or as
     the stand's phasor."""
-    from stand.core.model import phasor_to_polar, unbalance_to_polar
 
     amp, ph = (unbalance_to_polar if typed else phasor_to_polar)([z])
     return [float(amp[0]), round(float(ph[0]), 2)]
@@ -135,8 +136,6 @@ def _polar(z: complex, typed: bool) -> list[float]:
 def _plane_json(result: FieldResult, j: int, cfg: Any) -> dict[str, Any]:
     """Plane ``j``: the weights to put on as the config's ``[correction]`` says (else masses
     to add at any angle), what it cancels, Darlow's factor, the cap."""
-    from stand.core.model import unbalance_to_polar
-    from stand.solve.correct import weight_entries, weights_correction
 
     sol, U, R = result.solution, result.U_kg_m[j], result.radius_m[j]
     corr = weights_correction(complex(U), R, None if cfg is None else cfg.correction)

@@ -16,8 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from stand.calib.influence import InfluenceRun, influence_matrix, phasors
+from stand.config.matrix import SAME_SPEED
 from stand.errors import ConfigError, ModelError
 from stand.field.planes import FieldResult, label_readings, reading_weights, solve_field
+from stand.solve.pipeline import load_config_text
+from stand.solve.recordings import measure_recording
 
 
 def _typed_readings(spec: Any, entries: list[Any], source: str) -> tuple[list[Any], list[Any]]:
@@ -49,8 +53,6 @@ def _recorded_readings(
 ) -> tuple[list[Any], list[Any], list[Any], Any]:
     """Each run's support phasors over its files (one per speed), their covariance, the
     speeds, and the first run's config."""
-    from stand.config.matrix import SAME_SPEED
-    from stand.solve.recordings import measure_recording
 
     readings, covs, first_speeds, cfg = [], [], None, None
     for k, (files, *_) in enumerate(entries):
@@ -99,7 +101,6 @@ def _block_diag(blocks: list[Any]) -> np.ndarray:
 
 def _matrix(spec: Any, runs: list[Any], source: str) -> tuple[np.ndarray, list[Any]]:
     """The influence matrix: typed in (per g at the trial radius) or from the trial runs."""
-    from stand.calib.influence import influence_matrix, phasors
 
     if spec.matrix is None:
         try:
@@ -168,7 +169,6 @@ def field_from_runs(
     """The runs file's runs (``stand influence``: its validated table and its entries
     ``(files or None, typed readings, Trial, left_on)``) to one :class:`FieldResult`, the
     matrix's own warnings, and the config (None without one)."""
-    from stand.calib.influence import InfluenceRun
 
     typed = entries[0][0] is None
     cfg = None
@@ -176,8 +176,6 @@ def field_from_runs(
         readings, labels = _typed_readings(spec, entries, source)
         covs: list[Any] = [None] * len(readings)
         if config:
-            from stand.solve.pipeline import load_config_text
-
             cfg = load_config_text(config)[0]
     else:
         readings, covs, labels, cfg = _recorded_readings(entries, config, source)

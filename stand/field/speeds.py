@@ -31,9 +31,14 @@ from typing import Any
 import numpy as np
 
 from stand.config.matrix import SAME_SPEED
+from stand.core.beam import receptance, receptance_at
+from stand.core.model import unbalance_to_polar
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
-from stand.core.multiplane_interval import correction_covariance, plane_radii
+from stand.core.multiplane_interval import complex_block, correction_covariance, plane_radii
 from stand.errors import ConfigError, ModelError
+from stand.solve.correct import weight_entries, weights_correction
+from stand.solve.pipeline import load_config_text, stored_config
+from stand.solve.recordings import solve_recording
 
 
 @dataclass(frozen=True)
@@ -102,8 +107,6 @@ class SpeedsResult:
 
 def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any, str]:
     """Each run's own result, in order of speed, and the config that solves them."""
-    from stand.solve.pipeline import load_config_text, stored_config
-    from stand.solve.recordings import solve_recording
 
     if len(paths) < 2:
         raise ConfigError("balancing across speeds takes runs at two speeds or more")
@@ -161,7 +164,6 @@ SLOW_ROLL_BELOW = 3.0
 
 def slow_roll_of(path: str, config: str | None, runs: list[Any]) -> SlowRoll:
     """The slow-roll run measured (refused unless well below every speed)."""
-    from stand.solve.recordings import solve_recording
 
     res = solve_recording(path, config)
     w_s = res.omega_rad_s
@@ -183,7 +185,6 @@ def slow_roll_of(path: str, config: str | None, runs: list[Any]) -> SlowRoll:
 def _real_cov(cov: Any) -> np.ndarray:
     """An unbalance covariance as the real 4 x 4 on ``[Re U1, Im U1, Re U2, Im U2]`` (a
     complex 2 x 2 one is circular: half of it on each part)."""
-    from stand.core.multiplane_interval import complex_block
 
     c = np.asarray(cov)
     return np.asarray(c.real if c.shape == (4, 4) else complex_block(c) / 2, dtype=float)
@@ -195,7 +196,6 @@ def _readings_covariance(
     """The real covariance of the stacked readings (2 per speed, as shares of the permissible
     unbalance): each run's own, and the slow roll's taken out of every speed (one reading
     subtracted from all: they covary)."""
-    from stand.core.multiplane_interval import complex_block
 
     n = len(runs)
     cov = np.zeros((4 * n, 4 * n))
@@ -221,7 +221,6 @@ def _readings(
     influence of each correction plane on it, as shares of the permissible unbalance (rows
     of the solver's readings and matrix), each reading's weight (one over its noise), the
     permissible values and the unbalances per speed."""
-    from stand.core.beam import receptance, receptance_at
 
     rows_A, rows_alpha, weights, per, unbalances, Es, scales = [], [], [], [], [], [], []
     for _, res in runs:
@@ -252,7 +251,6 @@ def _plane_corrections(
 ) -> tuple[PlaneCorrection, ...]:
     """Each plane's correction as the config's ``[correction]`` makes it (weights, stock),
     with its 95 % radius [kg m]."""
-    from stand.solve.correct import weights_correction
 
     return tuple(
         PlaneCorrection(
@@ -341,7 +339,6 @@ def correction_masses_across_speeds(
 
 
 def _pair(U: np.ndarray) -> list[dict[str, Any]]:
-    from stand.core.model import unbalance_to_polar
 
     q, phi = unbalance_to_polar(U)
     return [
@@ -356,8 +353,6 @@ def _pair(U: np.ndarray) -> list[dict[str, Any]]:
 
 def speeds_json(result: SpeedsResult) -> dict[str, Any]:
     """The result as one strict-JSON object (g, mm, deg, rpm at this edge)."""
-    from stand.core.model import unbalance_to_polar
-    from stand.solve.correct import weight_entries
 
     planes = []
     for p in result.planes:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.calib.influence import InfluenceRun, initial_covariance
 from stand.core import StandParameters
 from stand.measuring.covariance import with_unbalance_covariance
 from stand.measuring.measure import Measurement
@@ -35,7 +36,6 @@ def influence_runs(
     parameters (None without any), the config text, and the first run's speed
     [rad/s] (None when typed in).
     """
-    from stand.calib.influence import InfluenceRun
 
     cfg = params = None
     text = ""
@@ -65,7 +65,6 @@ def influence_runs(
 def solve_initial_run(path: str, config: str | None, runs: list[Any], matrix: Any) -> Result:
     """The initial run of trial runs solved through the matrix they measured: its interval
     holds the run's noise and the matrix's, taken together (they share the initial run)."""
-    from stand.calib.influence import initial_covariance
 
     def joint(m: Measurement) -> Measurement:
         cov = initial_covariance(runs, matrix.imap.alpha, m.solution.U_kg_m)

@@ -14,8 +14,10 @@ parameters from them (``stand calibrate --from-archive``).
 from __future__ import annotations
 
 import cmath
+import dataclasses
 import json
 import math
+import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -23,6 +25,8 @@ from typing import Any
 import numpy as np
 
 from stand.config.matrix import SAME_SPEED
+from stand.config.schema import config_from_dict
+from stand.core import Diagnostic, solve_unbalance
 from stand.core.drift import (
     CUSUM_H,
     FALSE_ALARM,
@@ -30,11 +34,14 @@ from stand.core.drift import (
     Datum,
     cusum,
     fit,
+    fit_many,
     scores,
     single_fits,
     whitened,
 )
+from stand.core.model import unbalance_to_polar
 from stand.errors import ConfigError, UsageError
+from stand.solve.pipeline import calibration_radius
 
 SCATTER_PCT = 2.0
 """The operator's placement scatter assumed: each mass off by 2 % ..."""
@@ -167,9 +174,6 @@ def groups(rows: Sequence[Any]) -> list[Group]:
 
 
 def _params(group: Group) -> Any:
-    import tomllib
-
-    from stand.config.schema import config_from_dict
 
     text = json.loads(group.rows[0]["datum_json"])["config_toml"]
     try:
@@ -280,9 +284,6 @@ def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) 
     """Re-identify ``names`` (default: what :func:`judge` says moved, else C1 and C2) from
     the newest group of correction data (the archive's rows of a stand and rotor type)
     made with these parameters, from the change on."""
-    import dataclasses
-
-    from stand.core.drift import fit_many
 
     mine = [g for g in groups(rows) if _params(g)[1] == params]
     if not mine:
@@ -309,8 +310,6 @@ def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) 
 
 def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
     """The last rotors' initial unbalance with the old and the new calibration [g mm, deg]."""
-    from stand.core import solve_unbalance
-    from stand.core.model import unbalance_to_polar
 
     out = []
     for row in refit_.group.rows[-last:]:
@@ -352,10 +351,6 @@ def drift_bands(rows: Sequence[Any], result: Any) -> dict[str, float] | None:
 def with_drift(rows: Sequence[Any], result: Any, cfg: Any, params: Any, options: Any) -> Any:
     """``result`` with its calibration interval widened by what :func:`drift_bands` found,
     and a warning saying so; ``result`` itself when the stand is as calibrated."""
-    import dataclasses
-
-    from stand.core import Diagnostic
-    from stand.solve.pipeline import calibration_radius
 
     bands = drift_bands(rows, result)
     if not bands:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -24,8 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from stand.config.schema import config_toml
 from stand.core import Diagnostic
-from stand.drivers.recording import config_digest
+from stand.drivers.recording import JOB_ATTR, STAND_ATTR, config_digest
+from stand.drivers.streams import StreamBuilder
 from stand.errors import (
     BusError,
     MeasurementError,
@@ -35,11 +38,14 @@ from stand.errors import (
     UsageError,
 )
 from stand.live.session import LiveSession
+from stand.measuring.measure import MIN_REVS
+from stand.sim import load_scene, simulate, with_masses
 from stand.solve.pipeline import (
     SOFTWARE,
     SolveOptions,
     build_result,
     check_matrix,
+    load_config_text,
     measure_streams,
     remeasure_streams,
 )
@@ -107,7 +113,6 @@ def measure_until_precise(
     ``max_interval_s`` caps the time between solves (a screen that wants an
     estimate at least so often) [s].
     """
-    from stand.measuring.measure import MIN_REVS
 
     stopped_by = "time limit"
     next_check = FIRST_CHECK_S
@@ -207,7 +212,6 @@ class _Replay:
     """What :class:`Estimates` reads of a live session, fed from frames by hand."""
 
     def __init__(self) -> None:
-        from stand.drivers.streams import StreamBuilder
 
         self.builder = StreamBuilder()
 
@@ -329,14 +333,8 @@ def live_source(
     are honoured.  ``masses`` (:class:`stand.sim.Mass`) and ``rpm`` change the
     simulated rotor and its speed.
     """
-    import os
-
-    from stand.solve.pipeline import load_config_text
 
     if scene:
-        from stand.config.schema import config_toml
-        from stand.sim import load_scene, simulate, with_masses
-
         sc, physical, _ = load_scene(scene)
         sc = with_masses(sc, masses, rpm, index_deg)
         if config:
@@ -381,7 +379,6 @@ def measure_live(
     """One live session measured until precise: the result, and the session (closed).
     ``job`` (serial, order, operator, note) is recorded with the run; ``stop`` and
     ``max_interval_s`` as in :func:`measure_until_precise`."""
-    from stand.drivers.recording import JOB_ATTR, STAND_ATTR
 
     cfg, params = source.cfg, source.params
     check_matrix(options, cfg, live=True)

@@ -20,6 +20,9 @@ from types import FrameType
 from typing import Any
 
 from stand.core import Diagnostic
+from stand.drivers.bus import BusReader, describe_bus, open_bus, play
+from stand.drivers.run_writer import RunWriter
+from stand.drivers.streams import StreamBuilder
 from stand.errors import BusError
 from stand.solve.pipeline import SOFTWARE
 
@@ -53,8 +56,6 @@ class LiveSession:
         silence_timeout_s: float = 2.0,
         run_attrs: dict[str, str] | None = None,
     ):
-        from stand.drivers.bus import describe_bus
-        from stand.drivers.streams import StreamBuilder
 
         self.bus_kwargs = bus_kwargs
         self.run_path = run_path
@@ -75,8 +76,6 @@ class LiveSession:
 
     # -- context -------------------------------------------------------------------------
     def __enter__(self) -> LiveSession:
-        from stand.drivers.bus import BusReader, open_bus, play
-        from stand.drivers.run_writer import RunWriter
 
         self.writer = RunWriter(
             self.run_path,

@@ -24,7 +24,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from stand.core import Diagnostic, StandParameters, solve_unbalance
+from stand.core.beam import solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
+from stand.core.influence import solve_influence
 from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
@@ -368,12 +370,8 @@ def combine(
     warnings.extend(jitter_notes)
     A = np.array([supports[0].A_m_s2, supports[1].A_m_s2])
     if influence is not None:
-        from stand.core.influence import solve_influence
-
         sol = solve_influence(influence, A, cov)
     elif beam is not None:
-        from stand.core.beam import solve_beam
-
         sol = solve_beam(beam, p, omega, A, cov)
     else:
         sol = solve_unbalance(p, omega, A, cov)

@@ -26,14 +26,20 @@ read-only; a bind beyond this machine needs a user and a password (no anonymous 
 from __future__ import annotations
 
 import asyncio
+import errno
+import hmac
 import json
+import logging
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 from stand import __version__
-from stand.errors import UsageError
+from stand.archive import Archive
+from stand.archive.query import latest, latest_id
+from stand.errors import ArchiveError, UsageError
+from stand.plant.safety import is_local
 
 NAMESPACE = "urn:rotor-stand:balancing-stand"
 """The stand's OPC UA namespace URI."""
@@ -55,7 +61,6 @@ class Access:
 
 def check_bind(host: str, access: Access) -> None:
     """A bind beyond this machine without a user and a password is refused."""
-    from stand.plant.safety import is_local
 
     if not is_local(host) and not (access.user and access.password):
         raise UsageError(
@@ -162,9 +167,6 @@ class ResultServer:
         return [ua.Variant(self._json, ua.VariantType.String)]
 
     async def _poll(self, nodes: dict[str, Any], events: Any) -> None:
-        from stand.archive import Archive
-        from stand.archive.query import latest, latest_id
-        from stand.errors import ArchiveError
 
         archive: Any = None
         seen: int | None = -1
@@ -213,8 +215,6 @@ class ResultServer:
         self._stop = asyncio.Event()
         self._json = "{}"
         server, nodes, events, _ = await self._build()
-        import errno
-        import logging
 
         quiet = logging.getLogger("asyncua")
         level = quiet.level
@@ -268,7 +268,6 @@ class _Users:
 
     def get_user(self, iserver: Any, username: Any = None, password: Any = None,
                  certificate: Any = None) -> Any:  # fmt: skip
-        import hmac
 
         from asyncua.crypto.permission_rules import User, UserRole
 

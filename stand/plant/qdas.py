@@ -25,6 +25,11 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from stand.archive.query import Filters, plane_rows, select_runs
+from stand.archive.store import Archive
+from stand.drivers.files import output
+from stand.errors import UsageError
+
 VALUE_SEP, FIELD_SEP = "\x0f", "\x14"
 """Between the value sets of one line, and between the fields of one value set."""
 UNBALANCE_GROUP = 18
@@ -155,8 +160,6 @@ def value_line(part: dict[str, Any]) -> list[str]:
 def parts(url: str, rotor_type: str, filters: Any) -> tuple[list[dict[str, Any]], list[Any]]:
     """The archived runs of a rotor type as export parts (oldest first), and each plane's
     permissible unbalance in force (the latest run's) [g mm]."""
-    from stand.archive.query import Filters, plane_rows, select_runs
-    from stand.archive.store import Archive
 
     f = Filters(**{**filters.__dict__, "rotor_type": rotor_type, "limit": None})
     with Archive(url) as archive, archive.transaction() as conn:
@@ -200,7 +203,6 @@ def export_qdas(
 ) -> tuple[bytes, int]:
     """The ``.dfq`` of a rotor type's archived runs (written safely to ``path`` when given);
     its bytes and the number of runs.  Nothing matching is refused, naming what was asked."""
-    from stand.errors import UsageError
 
     found, per = parts(url, rotor_type, filters)
     if not found:
@@ -213,8 +215,6 @@ def export_qdas(
         )
     data = dfq_text(rotor_type, found, per).encode("cp1252", errors="replace")
     if path is not None:
-        from stand.drivers.files import output
-
         with output(path, force=force, need_bytes=len(data)) as tmp:
             tmp.write_bytes(data)
     return data, len(found)

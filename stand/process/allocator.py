@@ -9,6 +9,7 @@ fork hands what it holds free back first, so that the child does not share it
 
 from __future__ import annotations
 
+import ctypes
 import sys
 from typing import Any
 
@@ -18,8 +19,6 @@ def _glibc() -> Any:
     if not sys.platform.startswith("linux"):
         return None
     try:
-        import ctypes
-
         return ctypes.CDLL("libc.so.6")
     except OSError:
         return None

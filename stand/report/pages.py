@@ -10,6 +10,7 @@ import html
 from typing import Any
 
 from stand.report.certificate import CSS
+from stand.report.plots import production, speed_bars
 
 
 def _p(p: float) -> str:
@@ -19,7 +20,6 @@ def _p(p: float) -> str:
 
 def render_production(out: dict[str, Any]) -> str:
     """A rotor type's production statistics (``stand stats --report``) as one HTML page."""
-    from stand.report.plots import production
 
     e = html.escape
     polar_png, trend_png = production(out)
@@ -68,7 +68,6 @@ def render_speeds(out: dict[str, Any]) -> str:
     """A correction across speeds (``stand report --across-speeds``, the station's
     History) as one HTML page: the corrections in N planes, and per speed what each
     measuring plane keeps, before and after, against its permissible value."""
-    from stand.report.plots import speed_bars
 
     e = html.escape
     planes = "".join(

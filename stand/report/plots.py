@@ -11,6 +11,7 @@ legend below each plot and on the angular grid, so that nothing collides.
 from __future__ import annotations
 
 import base64
+import datetime as dt
 import io
 import math
 from typing import Any
@@ -206,8 +207,6 @@ def production(out: dict[str, Any]) -> tuple[str, str]:
         ax.set_title(title, pad=14)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), fontsize=7, frameon=False)
     polar_png = png(fig)
-
-    import datetime as dt
 
     import matplotlib.dates as mdates
 

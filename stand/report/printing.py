@@ -17,6 +17,7 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
+from stand.drivers.files import output
 from stand.errors import UsageError, WriteError
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
@@ -47,7 +48,6 @@ def write_pdf(
     html_text: str, path: str | Path, *, force: bool = False, inputs: Iterable[str] = ()
 ) -> None:
     """Print ``html_text`` to the PDF ``path`` (safely: complete or not at all)."""
-    from stand.drivers.files import output
 
     exe = browser()
     with (

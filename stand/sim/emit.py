@@ -22,8 +22,10 @@ from numpy.typing import NDArray
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
+from stand.drivers.budget import frames_budget
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.drivers.protocol import Frames
+from stand.errors import ConfigError
 from stand.sim.physics import (
     SceneSpeed,
     closed_form,
@@ -130,7 +132,6 @@ def scene_frames(scene: Scene) -> float:
 
 def scene_budget(scene: Scene) -> None:
     """Refuse a scene whose frames this machine has no memory for (before any is made)."""
-    from stand.drivers.budget import frames_budget
 
     frames_budget(scene_frames(scene), f"the scene ({scene.run.seconds:g} s at "
                   f"{scene.run.rpm:g} rpm)", "to simulate")  # fmt: skip
@@ -258,8 +259,6 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     U = unbalance_from_polar(*unbalance_kg_m(scene))
     beam = scene_beam(scene)  # a [rotor.shaft] table: the rotor bends
     if beam is not None and scene.needs_integration:
-        from stand.errors import ConfigError
-
         raise ConfigError(
             "a bending rotor ([rotor.shaft]) is simulated in the closed form only: no "
             "run-up from standstill, nonlinear supports or integrated physics",

@@ -28,8 +28,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.core import forward
+from stand.core.beam import forward_beam
 from stand.core.model import FloatArray, StandParameters
-from stand.core.transient import SupportForce, integrate, smooth_sign
+from stand.core.transient import SupportForce, integrate, smooth_sign, steady_state_initial
+from stand.errors import ModelError
 
 
 @dataclass(frozen=True)
@@ -155,7 +157,6 @@ def steady_forward(
     distributed unbalance, if any)."""
     if beam is None:
         return forward(p, omega_rad_s, U_kg_m)
-    from stand.core.beam import forward_beam
 
     return forward_beam(beam, p, omega_rad_s, U_kg_m, U_nodes_kg_m)
 
@@ -205,8 +206,6 @@ def beam_phasors(exact: Any, omega_rad_s: FloatArray, rtol: float = BEAM_INTERPO
         if err <= rtol * np.max(np.abs(values)):
             return CubicSpline(grid, values)(omega_rad_s)
         if len(grid) > 4096:
-            from stand.errors import ModelError
-
             raise ModelError(
                 f"the bending stand's phasors could not be interpolated to {rtol:g} over "
                 f"{lo:.6g}..{hi:.6g} rad/s (error {err:.3g} m/s^2 with {len(grid)} speeds): "
@@ -261,7 +260,6 @@ def integrated(
 
     ``from_steady`` starts on the linear steady orbit (no run-up), else at rest.
     """
-    from stand.core.transient import steady_state_initial
 
     t_unique, back = np.unique(np.maximum(t_s, 0.0), return_inverse=True)  # solve_ivp: increasing
     method = "LSODA" if force is not None else "DOP853"

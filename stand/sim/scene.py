@@ -25,6 +25,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from pydantic import BaseModel
 
 from stand.config.correction import check_correction
@@ -40,6 +41,7 @@ from stand.config.schema import (
     validate,
     with_shaft,
 )
+from stand.core.beam import beam_rotor, distributed_unbalance, node_at
 from stand.core.model import StandParameters
 from stand.errors import ConfigError
 from stand.sim.tables import (
@@ -249,9 +251,6 @@ def node_unbalance(scene: Scene, beam: Any) -> Any:
     d = scene.unbalance.distributed
     if (d is None and not scene.unbalance.axial) or beam is None:
         return None
-    import numpy as np
-
-    from stand.core.beam import distributed_unbalance, node_at
 
     x = beam.x_m
     out = np.zeros(len(x), complex)
@@ -272,7 +271,6 @@ def scene_beam(scene: Scene) -> Any:
     rigid rotor)."""
     if scene.rotor.shaft is None:
         return None
-    from stand.core.beam import beam_rotor
 
     at = [pl.position_m for pl in scene.rotor.planes] + [
         a.position_m for a in scene.unbalance.axial

@@ -15,6 +15,7 @@ from typing import Any
 
 from stand.config.matrix import SAME_SPEED
 from stand.core import Diagnostic, StandParameters
+from stand.drivers.recording import read_streams
 from stand.errors import UsageError
 from stand.measuring.measure import Measurement
 from stand.solve.pipeline import SolveOptions, measure_streams, stored_config
@@ -43,7 +44,6 @@ def check_against(
     UsageError
         The previous run is of another rotor, stand or speed (and ``strict``).
     """
-    from stand.drivers.recording import read_streams
 
     with named_errors(previous):
         rec, streams = read_streams(previous)

@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from stand.core.balance import Correction, correction
+from stand.core.holes import plan_holes, plan_slot
 
 HOLE_GOAL_SHARE = 0.1
 """A split over holes counts as done when it leaves at most this share of the plane's
@@ -27,8 +28,6 @@ def plane_correction(
     """Plane ``i``'s (0 or 1) correction of ``U_kg_m`` [kg m] at radius ``R_m`` [m] by the
     ``[correction]`` table ``c``; ``permissible_kg_m`` the plane's tolerance, if any."""
     if c.mode == "drill":
-        from stand.core.holes import plan_holes
-
         goal = (
             HOLE_GOAL_SHARE * permissible_kg_m
             if permissible_kg_m is not None
@@ -45,8 +44,6 @@ def plane_correction(
         )
         return Correction((), True, left, holes=holes)
     if c.mode == "mill":
-        from stand.core.holes import plan_slot
-
         slot, left = plan_slot(
             U_kg_m,
             c.core_plane(i, R_m),

@@ -25,9 +25,14 @@ from typing import Any
 import numpy as np
 
 from stand import __version__
-from stand.core import Diagnostic, StandParameters, rpm_to_rad_s
+from stand.calib.tolerance import Tolerances, parameter_uncertainty
+from stand.config.schema import config_from_dict, read_toml
+from stand.core import Diagnostic, StandParameters, natural_frequencies, rpm_to_rad_s
 from stand.core.balance import permissible_unbalance, plane_tolerances, static_couple
+from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
+from stand.core.inverse import RESONANCE_BAND
 from stand.errors import ConfigError
+from stand.measuring.live_fit import remeasure
 from stand.measuring.measure import Measurement, measure
 from stand.solve.correct import corrections as plane_corrections
 from stand.solve.result import (
@@ -39,6 +44,7 @@ from stand.solve.result import (
     Traces,
     Uncertainty,
 )
+from stand.solve.tooling import compensate, folder, load_tooling, tooling_file
 
 SOFTWARE = f"stand {__version__}"
 SPECTRUM_MAX_SAMPLES = 1 << 18
@@ -79,7 +85,6 @@ class SolveOptions:
 
 def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:
     """The configuration a run file carries: (config, parameters, text)."""
-    from stand.config.schema import config_from_dict
 
     text = str(meta.get("config_toml", ""))
     if not text:
@@ -95,7 +100,6 @@ def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters
 
 def load_config_text(path: str) -> tuple[Any, StandParameters, str]:
     """A configuration file: (config, parameters, text)."""
-    from stand.config.schema import config_from_dict, read_toml
 
     text, data = read_toml(path)
     cfg, params = config_from_dict(data, source=path)
@@ -140,7 +144,6 @@ def precision_targets(
 
 
 def _uncertainty(m: Measurement, params: StandParameters, options: SolveOptions) -> Uncertainty:
-    from stand.calib.tolerance import parameter_uncertainty
 
     A = np.array([ph.A_m_s2 for ph in m.supports])
     r = parameter_uncertainty(params, m.omega_rad_s, A, options.tolerances, draws=options.draws)
@@ -167,7 +170,6 @@ def calibration_radius(
     stand's health found (``{"C1": 0.2, ...}``, :func:`stand.health.monitor.drift_bands`); each
     widens its class's band to at least that.  None where the answer is not the rigid
     model's (an influence matrix, a bending shaft)."""
-    from stand.calib.tolerance import Tolerances, parameter_uncertainty
 
     if options.matrix is not None or cfg.rotor.shaft is not None:
         return None
@@ -297,7 +299,6 @@ def remeasure_streams(
     """:func:`measure_streams` of a live run from its last measurement ``prev`` and the
     streams of its last frames (:func:`stand.measuring.live_fit.remeasure`); None when a full pass
     is due."""
-    from stand.measuring.live_fit import remeasure
 
     m = remeasure(
         prev, tails, params, **cfg.measure_options(),
@@ -316,8 +317,6 @@ def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) ->
     if any(notes):
         m = replace(m, warnings=[*m.warnings, *(n for n in notes if n is not None)])
     if cfg.tooling is not None and options.compensate:
-        from stand.solve.tooling import compensate, folder, load_tooling, tooling_file
-
         where = folder(cfg.tooling)
         if tooling_file(cfg.tooling.name, where).exists():
             m = compensate(m, load_tooling(cfg.tooling.name, where))
@@ -334,9 +333,6 @@ def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) ->
 def rigid_note(cfg: Any, params: StandParameters, omega_rad_s: float) -> Diagnostic | None:
     """A warning when a rotor bending at ``[rotor] bending_hz`` would put the rigid model's
     answer more than 1 % off at this speed (:mod:`stand.core.flexible`)."""
-    from stand.core import natural_frequencies
-    from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
-    from stand.core.inverse import RESONANCE_BAND
 
     f_ff = cfg.rotor.bending_hz
     if f_ff is None:

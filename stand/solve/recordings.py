@@ -14,14 +14,18 @@ from __future__ import annotations
 
 import copy
 import math
+import multiprocessing
+import os
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any
 
+from stand.config.matrix import parse_matrix
 from stand.core import StandParameters
-from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest
-from stand.errors import MeasurementError, NoStatusError, StandError
+from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest, read_streams
+from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
 from stand.measuring.measure import Measurement, measure
 from stand.solve.correct import removed_masses
 from stand.solve.pipeline import (
@@ -38,7 +42,6 @@ from stand.solve.result import Job, Provenance, Result
 
 def job_of(meta: dict[str, Any], path: str) -> Job:
     """The job a run file records (an empty one if none; RecordingError if damaged)."""
-    from stand.errors import RecordingError
 
     text = meta.get(JOB_ATTR)
     if not text:
@@ -78,7 +81,6 @@ def solve_recording(
     StandError
         Bad input, naming the file and what is wrong.
     """
-    from stand.drivers.recording import read_streams
 
     with named_errors(path):
         rec, streams = read_streams(path)
@@ -90,8 +92,6 @@ def solve_recording(
         source = f"{rec.path} (stored)"
     stored = rec.meta.get(MATRIX_ATTR)
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
-        from stand.config.matrix import parse_matrix  # only a run that stores a matrix
-
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
     check_matrix(options, cfg, live=True)
     with named_errors(path):
@@ -141,9 +141,6 @@ def solve_many(
             if progress:
                 progress()
         return
-    import multiprocessing
-    import os
-    from concurrent.futures import ProcessPoolExecutor, as_completed
 
     # fresh interpreters with one BLAS thread each: N processes, not N x cores threads
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -167,7 +164,6 @@ def measure_recording(
     without the ``[tooling]`` compensation (the tooling's own runs).  Returns the
     measurement, the config, its parameters and its text.
     """
-    from stand.drivers.recording import read_streams
 
     with named_errors(path):
         rec, streams = read_streams(path)

@@ -14,6 +14,7 @@ from typing import Any
 
 from stand.core import phasor_to_polar, rad_s_to_rpm, unbalance_to_polar
 from stand.core.balance import Correction
+from stand.core.dsp import radius95
 from stand.measuring.measure import Measurement
 from stand.solve.result import RESULT_VERSION, Check, Result
 
@@ -197,7 +198,6 @@ def _uncertainty(r: Result) -> dict[str, Any]:
 
 
 def _tooling(t: Any) -> dict[str, Any]:
-    from stand.core.dsp import radius95
 
     planes = []
     for i, U in enumerate(t.U_kg_m):

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from stand.config.paths import data_folder
+from stand.drivers.files import output
 from stand.errors import ConfigError, RecordingError
 from stand.measuring.covariance import with_unbalance_covariance
 
@@ -116,7 +117,6 @@ def compensate(m: Any, t: Tooling) -> Any:
 
 def save_tooling(t: Tooling, where: Path, *, force: bool = False) -> Path:
     """Keep the tooling's measurement (written safely; an existing one only with ``force``)."""
-    from stand.drivers.files import output
 
     path = tooling_file(t.name, where)
     where.mkdir(parents=True, exist_ok=True)

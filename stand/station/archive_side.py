@@ -14,8 +14,15 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from stand.archive import correction_rows
+from stand.archive import Archive, correction_rows, file_digest
+from stand.archive.query import Filters, history, run_file
 from stand.errors import StandError, UsageError
+from stand.field.speeds import balance_speeds, speeds_json
+from stand.health.monitor import datum_row, health, health_json
+from stand.plant.qdas import export_qdas
+from stand.report.pages import render_speeds
+from stand.report.printing import write_pdf
+from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
 
@@ -31,9 +38,6 @@ class ArchiveSide:
     def _datum(self, before: Any, result: Any) -> str:
         """A check after a confirmed correction into the archive as a calibration datum;
         what was done, for the screen."""
-        from stand.archive import Archive, file_digest
-        from stand.health.monitor import datum_row
-        from stand.solve.recordings import result_masses
 
         prev = before.provenance.run_file
         if self._state.confirmed_run != prev:
@@ -56,7 +60,6 @@ class ArchiveSide:
 
     def health(self) -> dict[str, Any]:
         """What the archive's calibration data say (:func:`stand.health.monitor.health_json`)."""
-        from stand.health.monitor import health, health_json
 
         return health_json(health(correction_rows(self.archive_url)))
 
@@ -65,7 +68,6 @@ class ArchiveSide:
         self, serial: str | None = None, rotor_type: str | None = None, limit: int = 50
     ) -> list[dict[str, Any]]:
         """The archive's latest runs (newest first), by serial and rotor type."""
-        from stand.archive.query import Filters, history
 
         rows = history(self.archive_url, Filters(serial=serial or None, rotor_type=rotor_type))
         return rows[::-1][:limit]
@@ -73,15 +75,12 @@ class ArchiveSide:
     def export_qdas(self, rotor_type: str) -> bytes:
         """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
         (:mod:`stand.plant.qdas`; UsageError when there is none)."""
-        from stand.archive.query import Filters
-        from stand.plant.qdas import export_qdas
 
         data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None)
         return data
 
     def report_file(self, run_id: int) -> Path:
         """The report of archived run ``run_id``, if it lies inside the runs folder."""
-        from stand.archive.query import run_file
 
         found = run_file(self.archive_url, run_id)
         if found is None:
@@ -97,9 +96,6 @@ class ArchiveSide:
         """The correction across speeds of archived runs (one rotor at several speeds) as
         an HTML page (:func:`stand.field.speeds.balance_speeds`,
         :func:`stand.report.pages.render_speeds`)."""
-        from stand.archive.query import run_file
-        from stand.field.speeds import balance_speeds, speeds_json
-        from stand.report.pages import render_speeds
 
         paths = []
         for run_id in run_ids:
@@ -121,8 +117,6 @@ class ArchiveSide:
         with self._printing:
             stale = pdf.is_file() and pdf.stat().st_mtime_ns < report.stat().st_mtime_ns
             if stale or not pdf.is_file():
-                from stand.report.printing import write_pdf
-
                 text = report.read_text(encoding="utf-8")
                 write_pdf(text, pdf, force=stale, inputs=[str(report)])  # its own print only
         return pdf

@@ -8,6 +8,7 @@ comes from :class:`stand.station.service.Station`.
 
 from __future__ import annotations
 
+import datetime as dt
 from typing import Any
 
 from nicegui import app, ui
@@ -119,7 +120,6 @@ def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
 
 def _local(iso: str) -> str:
     """An archived start time (UTC) in the station's local time, to the second."""
-    import datetime as dt
 
     try:
         return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S")

@@ -15,6 +15,7 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError
+from stand.plant.safety import TokenGate
 from stand.report.units import Display
 from stand.solve.result import Job
 from stand.solve.result_json import to_json
@@ -316,7 +317,6 @@ def check_screen(station: Station) -> None:
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:
     """Serve the station until interrupted (the token, if any, on every request)."""
-    from stand.plant.safety import TokenGate
 
     add_routes(station)
     if token:

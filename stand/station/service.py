@@ -16,13 +16,25 @@ import datetime as dt
 import logging
 import re
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from stand.archive import drift_rows
+from stand.archive import archive_result, drift_rows
+from stand.drivers.bus import ALLOW_URL
+from stand.drivers.files import output
 from stand.errors import StandError, StationBusyError, UsageError
+from stand.health.monitor import with_drift
+from stand.live.loop import live_source, measure_live
+from stand.plant.mqtt import publish_archived
+from stand.report.certificate import render
+from stand.sim import Mass
+from stand.sim.scene import shipped_scenes
+from stand.solve.check import with_check
+from stand.solve.pipeline import SolveOptions, load_config_text, tolerance_of
+from stand.solve.recordings import correction_masses
 from stand.solve.result import Job
 from stand.station.archive_side import ArchiveSide
 from stand.station.snapshot import BUS, Snapshot
@@ -97,7 +109,6 @@ class Station(ArchiveSide):
         folder, or its file no longer loads."""
         if rotor_type not in self.rotor_types():
             return "g", "mm"
-        from stand.solve.pipeline import load_config_text
 
         try:
             cfg, _, _ = load_config_text(str(self.config_path(str(rotor_type))))
@@ -108,7 +119,6 @@ class Station(ArchiveSide):
     @staticmethod
     def sources() -> list[str]:
         """The stand's CAN bus, and the simulated scenes (training and demonstrations)."""
-        from stand.sim.scene import shipped_scenes
 
         return [BUS, *shipped_scenes()]
 
@@ -186,8 +196,6 @@ class Station(ArchiveSide):
     def apply_correction(self) -> tuple[Any, ...]:
         """On a simulated stand: put the prescribed correction on the rotor, as an operator
         would (the masses ``--apply`` puts on); returns every mass applied so far."""
-        from stand.sim import Mass
-        from stand.solve.recordings import correction_masses
 
         s = self._state
         if s.phase != "done" or s.result is None or not s.simulated:
@@ -232,8 +240,6 @@ class Station(ArchiveSide):
         self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
-        from stand.live.loop import live_source, measure_live
-        from stand.solve.pipeline import SolveOptions, tolerance_of
 
         s = self._state
         scene = None if s.source == BUS else s.source
@@ -259,11 +265,8 @@ class Station(ArchiveSide):
             max_interval_s=UPDATE_S,
         )
         if kind == "check":
-            from stand.solve.check import with_check
-
             prev = before.provenance.run_file
             result = with_check(result, prev, src.cfg, src.params, strict=True)
-        from stand.health.monitor import with_drift
 
         try:  # a stand that drifted from its calibration: the interval widened, and said
             result = with_drift(
@@ -276,9 +279,6 @@ class Station(ArchiveSide):
     def _file(self, result: Any, config: Path) -> tuple[int | None, tuple[str, ...]]:
         """The report beside the run, then the archive (a failure of either is noted: the
         run file is kept whatever happens)."""
-        from stand.archive import archive_result
-        from stand.drivers.files import output
-        from stand.report.certificate import render
 
         notes = []
         run = Path(result.provenance.run_file)
@@ -294,8 +294,6 @@ class Station(ArchiveSide):
         except StandError as exc:
             notes.append(f"not archived ({exc}); the run is kept in {run}")
             return run_id, tuple(notes)
-        from stand.plant.mqtt import publish_archived
-        from stand.solve.pipeline import load_config_text
 
         said = publish_archived(result, load_config_text(str(config))[0])
         if said and said.startswith("not"):
@@ -306,7 +304,6 @@ class Station(ArchiveSide):
 def _bus(table: dict[str, Any] | None) -> dict[str, Any]:
     """The rotor type's ``[bus]`` table as ``can.Bus`` options (a file cannot allow URL
     channels, as for ``stand measure``)."""
-    from stand.drivers.bus import ALLOW_URL
 
     kwargs = dict(table or {})
     if ALLOW_URL in kwargs:
@@ -315,6 +312,5 @@ def _bus(table: dict[str, Any] | None) -> dict[str, Any]:
 
 
 def _now() -> float:
-    import time
 
     return time.monotonic()
