@@ -152,14 +152,14 @@ def advise(
     ]
     reasons = [
         f"natural frequencies of stand + rotor: {wn[0] / (2 * math.pi):.2f} Hz "
-        f"({wn[0] * 30 / math.pi:.0f} rpm) and {wn[1] / (2 * math.pi):.2f} Hz "
-        f"({wn[1] * 30 / math.pi:.0f} rpm): keep clear of both by a factor "
+        f"({rad_s_to_rpm(wn[0]):.0f} rpm) and {wn[1] / (2 * math.pi):.2f} Hz "
+        f"({rad_s_to_rpm(wn[1]):.0f} rpm): keep clear of both by a factor "
         f"{RESONANCE_BAND:g}, and run above them (soft-bearing)",
     ]
     if bend is not None:
         reasons.append(
             f"the rotor's first bending mode in the stand: {bend / (2 * math.pi):.2f} Hz "
-            f"({bend * 30 / math.pi:.0f} rpm): stay a factor {RESONANCE_BAND:g} below it, "
+            f"({rad_s_to_rpm(bend):.0f} rpm): stay a factor {RESONANCE_BAND:g} below it, "
             f"under {below:.0f} rpm (the flexible model answers there; near the mode the "
             "answer rests on the shaft's description)"
         )

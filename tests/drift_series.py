@@ -9,8 +9,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from stand.core import StandParameters, forward
 from stand.core.drift import Datum
-from stand.core.model import StandParameters, forward
 
 NOISE_M_S2 = 0.7e-3
 """Each 1x phasor's standard deviation per part [m/s^2] (an 8 s demo run)."""

@@ -13,7 +13,7 @@ from fractions import Fraction as Fr
 
 import numpy as np
 
-from stand.core.model import StandParameters
+from stand.core import StandParameters
 
 
 def seed_forward(p: StandParameters, w: float, U: np.ndarray) -> np.ndarray:

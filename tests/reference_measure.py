@@ -23,9 +23,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from stand.core import Diagnostic, StandParameters, solve_unbalance
+from stand.core import Diagnostic, StandParameters, UnbalanceSolution, solve_unbalance
 from stand.core.dsp import Phasor, fit_1x, radius_factor, shaft_angle
-from stand.core.inverse import UnbalanceSolution
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.errors import MeasurementError
 

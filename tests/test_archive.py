@@ -243,8 +243,7 @@ def _batch_results(n: int, systematic: complex, spread_kg_m: float, seed: int):
     (2 s runs)."""
     from stand.drivers.streams import rebuild
     from stand.sim import load_scene, simulate
-    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
-    from stand.solve.result import Job, Provenance
+    from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 
     sc, p, _ = load_scene("demo")
     cfg = sc.config()

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from stand.core import StandParameters, forward, inverse_matrix, unbalance_from_polar
 from stand.core.beam import beam_rotor, forward_beam, receptance
-from stand.core.model import StandParameters, forward, inverse_matrix, unbalance_from_polar
 from stand.core.shaft import Section, shaft_rotor
 
 E, RHO = 2.11e11, 7810.0

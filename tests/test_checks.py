@@ -124,9 +124,7 @@ def test_3x_is_judged_only_against_a_1x_that_is_there(unbalanced: bool) -> None:
 @pytest.mark.parametrize("g_mm", [0.0, 5000.0])
 def test_at_the_noise_floor_no_correction_is_prescribed(g_mm: float) -> None:
     """A plane whose unbalance is inside its own interval gets no weight and no angle."""
-    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
-    from stand.solve.result import Provenance
-    from stand.solve.result_json import to_json
+    from stand.solve import Provenance, SolveOptions, build_result, measure_streams, to_json
 
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from stand.cli import main
-from stand.config.schema import config_toml
+from stand.config import config_toml
 from stand.drivers.logs import write_log
 from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.recording import Recording, write_recording

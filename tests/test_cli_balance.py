@@ -138,7 +138,7 @@ def test_an_answer_kept_from_the_last_estimate_says_so(
     silence."""
     import stand.live.loop
     from stand.errors import MeasurementError
-    from stand.live.session import LiveSession
+    from stand.live import LiveSession
 
     closed = []
     real_close, real_measure = LiveSession.close, stand.live.loop.measure_streams

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from stand.cli import main
-from stand.config.schema import config_from_dict
+from stand.config import config_from_dict
 from stand.drivers.recording import read_recording, read_run
 from stand.sim import load_scene, shipped_scenes, simulate
 

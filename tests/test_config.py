@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.errors import ConfigError, StandError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -171,7 +171,7 @@ def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path)
 
     from stand.cli import build_parser
     from stand.cli.common import bus_kwargs
-    from stand.config.schema import config_toml
+    from stand.config import config_toml
 
     text = (
         MINIMAL

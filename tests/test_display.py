@@ -85,9 +85,9 @@ def test_the_live_panel_shows_each_plane_against_its_goal_and_tolerance() -> Non
 
     from stand.cli.panel import panel
     from stand.drivers.streams import rebuild
-    from stand.live.loop import Progress
+    from stand.live import Progress
     from stand.sim import load_scene, simulate
-    from stand.solve.pipeline import SolveOptions, measure_streams
+    from stand.solve import SolveOptions, measure_streams
 
     sc, p, _ = load_scene("demo")
     m = measure_streams(rebuild(simulate(sc, p).frames), sc.config(), p, SolveOptions())

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.core.drift import (
     CUSUM_H,
     CUSUM_K,

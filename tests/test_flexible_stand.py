@@ -185,7 +185,7 @@ def test_two_planes_cancel_a_bow_at_their_speed_only(
     supports still at 900 rpm (within the run's own interval), not at 1500 rpm (24 % of the
     uncorrected 1x there, 643 g mm equivalent per plane); the shaft bends more than before."""
     from stand.core.beam import nodal_response, plane_loads
-    from stand.solve.recordings import solve_recording
+    from stand.solve import solve_recording
 
     first = str(tmp_path / "bow.h5")
     assert main(["simulate", "auger-bow", "--out", first]) == 0

@@ -56,7 +56,7 @@ def test_recalibration_from_production_recovers_c1_and_the_answers(
     without --force) with C1 within 1 % of the true 41400 N/m; a run on the softened stand
     solved with it holds the scene's 5000 and 3000 g mm within its interval, where the old
     calibration is off by more than its interval."""
-    from stand.config.schema import config_toml
+    from stand.config import config_toml
     from stand.sim import load_scene
 
     _, url = series
@@ -70,7 +70,7 @@ def test_recalibration_from_production_recovers_c1_and_the_answers(
     out = run_json(["calibrate", "--from-archive", "--config", str(cfg), "--archive", url], capsys)
     new = tmp_path / "stand-recalibrated.toml"
     assert out["config"] == str(new) and new.is_file()
-    from stand.config.schema import load_config
+    from stand.config import load_config
 
     C1 = load_config(str(new))[1].C1
     assert C1 == pytest.approx(45000 * 0.92, rel=0.01), C1
@@ -194,7 +194,7 @@ def test_after_the_alarm_every_answer_s_calibration_interval_covers_the_truth(
     rotor balanced on the aged stand (C1 -10 %, M1 +5 %) with the old calibration reads
     plane 1 about 5 % off, and its calibration interval, widened by what stand health
     fitted, holds the truth; the answer says why."""
-    from stand.config.schema import config_toml
+    from stand.config import config_toml
     from stand.sim import load_scene
 
     series_scene = tmp_path / "aged-series.toml"

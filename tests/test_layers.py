@@ -154,6 +154,39 @@ def test_no_import_cycle_between_files() -> None:
     assert cycles(graph()[0]) == []
 
 
+def test_no_module_imports_its_own_packages_face() -> None:
+    """Inside a package, modules import each other by their full names: a package's
+    ``__init__`` (its face, which imports them) is for the packages above."""
+    faces = {name for path, name in sources() if path.name == "__init__.py"} - {"stand.cli"}
+    wrong = [
+        f"{path.relative_to(ROOT)}:{line}"
+        for path, name in sources()
+        if path.name != "__init__.py"
+        for imported, line, _ in imports(path, name)
+        if package_of(name) in faces
+        and imported.rsplit(".", 1)[0] == package_of(name)
+        and imported not in faces
+    ]
+    assert wrong == []
+
+
+def test_no_face_names_a_value_after_one_of_its_modules() -> None:
+    """``stand.measuring.measure`` must stay the module: a face exporting a function of
+    that name would hide it from ``import a.b as m``, mock's paths and readers."""
+    clash = []
+    for path, name in sources():
+        if path.name != "__init__.py":
+            continue
+        modules = {p.stem for p in path.parent.glob("*.py")} | {
+            p.name for p in path.parent.iterdir() if (p / "__init__.py").exists()
+        }
+        for imported, _, _ in imports(path, name):
+            if imported.startswith(name + ".") and imported.rsplit(".", 1)[1] in modules:
+                if imported.count(".") > name.count(".") + 1:  # a value, not a module
+                    clash.append(imported)
+    assert clash == []
+
+
 def test_a_planted_cycle_and_an_upward_import_are_caught(tmp_path: Path) -> None:
     for folder in ("stand/core", "stand/cli", "drivers", "calib"):
         (tmp_path / folder).mkdir(parents=True)

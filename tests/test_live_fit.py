@@ -34,7 +34,7 @@ from stand.measuring.live_fit import extend
 from stand.measuring.measure import measure
 from stand.measuring.passes import node_phasor, sums_phasor
 from stand.sim import load_scene, simulate
-from stand.solve.pipeline import SolveOptions, measure_streams
+from stand.solve import SolveOptions, measure_streams
 
 
 @functools.cache

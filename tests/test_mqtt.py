@@ -93,9 +93,9 @@ def test_a_balanced_run_is_published_as_its_json(
 
 
 def test_a_broker_that_does_not_answer_is_a_note_not_a_failure(tmp_path: Path) -> None:
-    from stand.config.schema import load_config
-    from stand.plant.mqtt import publish_archived
-    from stand.solve.recordings import solve_recording
+    from stand.config import load_config
+    from stand.plant import publish_archived
+    from stand.solve import solve_recording
 
     run = tmp_path / "r.h5"
     assert main(["simulate", "demo", "--out", str(run)]) == 0

@@ -28,7 +28,7 @@ def demo_result(tmp_path_factory: pytest.TempPathFactory) -> Any:
     folder = tmp_path_factory.mktemp("opcua")
     run = folder / "r.h5"
     assert main(["simulate", "demo", "--out", str(run), "--serial", "UA-7"]) == 0
-    from stand.solve.recordings import solve_recording
+    from stand.solve import solve_recording
 
     return solve_recording(str(run))
 
@@ -43,7 +43,7 @@ def test_browse_read_call_subscribe_and_the_event_within_a_second(
     tmp_path: Path, demo_result: Any
 ) -> None:
     from stand.archive import Archive, archive_result
-    from stand.plant.opcua import ResultServer
+    from stand.plant import ResultServer
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     Archive(url).close()
@@ -62,7 +62,7 @@ async def _client(endpoint: str, url: str, result: Any) -> None:
     from asyncua import Client, ua
 
     from stand.archive import archive_result
-    from stand.solve.result_json import to_json
+    from stand.solve import to_json
 
     result = type(result)(**{**result.__dict__, "provenance": type(result.provenance)(
         **{**result.provenance.__dict__, "stand_id": "stand-7"})})  # fmt: skip
@@ -117,7 +117,7 @@ async def _client(endpoint: str, url: str, result: Any) -> None:
 
 def test_a_user_and_password_keep_anonymous_clients_out(tmp_path: Path) -> None:
     from stand.archive import Archive
-    from stand.plant.opcua import Access, ResultServer
+    from stand.plant import Access, ResultServer
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     Archive(url).close()

@@ -24,8 +24,7 @@ def _results(n: int) -> list[tuple[Any, int | None]]:
     run it checks)."""
     from stand.drivers.streams import rebuild
     from stand.sim import load_scene, simulate
-    from stand.solve.pipeline import SolveOptions, build_result, measure_streams
-    from stand.solve.result import Job, Provenance
+    from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 
     sc, p, _ = load_scene("demo")
     cfg = sc.config()

@@ -14,7 +14,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from strategies import log_uniform, stands, unbalances
 
-from stand.config.schema import validate
+from stand.config import validate
 from stand.core import (
     StandParameters,
     forward,
@@ -26,8 +26,7 @@ from stand.drivers.codec import decode
 from stand.drivers.protocol import SAMPLES_BASE
 from stand.drivers.streams import rebuild
 from stand.errors import ConfigError
-from stand.sim import Scene, load_scene, shipped_scenes, simulate
-from stand.sim.emit import Simulation
+from stand.sim import Scene, Simulation, load_scene, shipped_scenes, simulate
 
 BASE: dict[str, Any] = {
     "stand": {

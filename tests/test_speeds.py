@@ -117,8 +117,8 @@ def test_the_station_shows_the_correction_across_speeds_of_archived_runs(
     read."""
     from stand.archive import archive_result
     from stand.errors import UsageError
-    from stand.solve.recordings import solve_recording
-    from stand.station.service import Station
+    from stand.solve import solve_recording
+    from stand.station import Station
 
     rotors = Path(__file__).resolve().parents[1] / "stand" / "data" / "rotors"
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from stand.errors import StationBusyError, UsageError
-from stand.plant.safety import TokenGate, check_bind, is_local, read_token
+from stand.plant import TokenGate, check_bind, is_local, read_token
+from stand.solve import Job
 from stand.solve.pipeline import precision_targets
-from stand.solve.result import Job
-from stand.station.service import Station
+from stand.station import Station
 
 ROTORS = Path(__file__).resolve().parents[1] / "stand" / "data" / "rotors"
 TOKEN = "a-long-enough-token"
@@ -102,7 +102,7 @@ def test_rotor_types_and_files_stay_inside_their_folders(station: Station, tmp_p
 def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> None:
     """A rotor type whose configuration asks for ounces and inches has its archived
     unbalances shown so; a type no longer in the folder (or broken) in g mm."""
-    from stand.report.units import Display
+    from stand.report import Display
     from stand.station.history import _history_row
 
     folder = tmp_path / "rotors"
@@ -125,7 +125,7 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
 
 def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run: Path) -> None:
     from stand.archive import archive_result
-    from stand.solve.recordings import solve_recording
+    from stand.solve import solve_recording
 
     run_id = archive_result(solve_recording(str(demo_run)), station.archive_url)
     with pytest.raises(UsageError, match="outside"):
@@ -140,9 +140,8 @@ def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
     station: Station, demo_run: Path
 ) -> None:
     from stand.archive import archive_result
-    from stand.report.certificate import render
-    from stand.solve.pipeline import SolveOptions
-    from stand.solve.recordings import solve_recording
+    from stand.report import render
+    from stand.solve import SolveOptions, solve_recording
 
     station.runs_dir.mkdir(parents=True)
     run = station.runs_dir / "demo.h5"
@@ -382,7 +381,7 @@ def test_the_rotor_face_numbers_the_holes_and_marks_the_masses() -> None:
 
 
 def test_the_live_chart_draws_the_circles_where_they_are() -> None:
-    from stand.report.units import Display
+    from stand.report import Display
     from stand.station.views import PlaneLive, polar_chart
 
     p = PlaneLive(U_kg_m=5e-3, angle_deg=30.0, radius95_kg_m=1e-3, goal_kg_m=2e-3,

@@ -71,7 +71,7 @@ def test_all_stands_at_once_are_each_stand_alone_to_the_bit(
     import dataclasses
 
     from stand.calib.tolerance import _solve
-    from stand.core.model import inverse_matrix
+    from stand.core import inverse_matrix
 
     w = rpm_to_rad_s(900.0) * speed
     A = np.array([0.3 + 0.1j, -0.2 + 0.4j])

@@ -141,8 +141,8 @@ def _table(model: type[BaseModel], name: str, lines: list[str], seen: set[str]) 
 
 
 def config_reference() -> str:
-    from stand.config.schema import Config
-    from stand.sim.scene import Scene
+    from stand.config import Config
+    from stand.sim import Scene
 
     lines = [
         "# Configuration reference",

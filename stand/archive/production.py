@@ -22,12 +22,13 @@ from typing import Any
 import numpy as np
 
 from stand import __version__
-from stand.archive import Archive, add_result, file_digest
-from stand.config.schema import config_toml
+from stand.archive.results import add_result, file_digest
+from stand.archive.store import Archive
+from stand.config import config_toml
 from stand.drivers.recording import STAND_ATTR, Recording, write_recording
 from stand.drivers.streams import rebuild
 from stand.errors import UsageError
-from stand.health.monitor import datum_row
+from stand.health import datum_row
 from stand.sim import Mass, load_scene, simulate, with_masses
 from stand.sim.tables import PlaneUnbalance
 from stand.solve.recordings import result_masses, solve_recording

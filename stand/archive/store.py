@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive.schema import corrections, planes, runs
-from stand.config.paths import data_folder
+from stand.config import data_folder
 from stand.errors import ArchiveError
 
 BUSY_TIMEOUT_S = 60.0

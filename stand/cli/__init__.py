@@ -18,7 +18,7 @@ from collections.abc import Callable, Sequence
 
 from stand import __version__
 from stand.errors import StandError, UsageError
-from stand.process.allocator import keep_freed_memory
+from stand.process import keep_freed_memory
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1

@@ -7,7 +7,7 @@ from typing import Any
 
 from stand.calib.advisor import advise, plan_across_speeds
 from stand.cli.format import dump_json
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.config.typed import parse_rpm
 from stand.core.flexible import rigid_limit_rpm
 

@@ -11,7 +11,7 @@ from typing import Any
 
 from stand.archive import archive_result, url_for
 from stand.errors import ArchiveError
-from stand.plant.mqtt import publish_archived
+from stand.plant import publish_archived
 
 
 def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import math
 import sys
 from pathlib import Path
 
@@ -22,17 +21,16 @@ from stand.cli.common import (
 )
 from stand.cli.format import dump_json, print_speeds, show
 from stand.cli.panel import measure_live_from_args
-from stand.config.matrix import SAME_SPEED
+from stand.config import SAME_SPEED
 from stand.config.typed import parse_mass, parse_rpm
+from stand.core import rad_s_to_rpm
 from stand.drivers.files import check_output
 from stand.errors import ArchiveError, StandError, UsageError
-from stand.field.speeds import balance_speeds, speeds_json
-from stand.health.monitor import datum_row, with_drift
-from stand.report.certificate import render
-from stand.report.pages import render_speeds
-from stand.solve.check import with_check
+from stand.field import balance_speeds, speeds_json
+from stand.health import datum_row, with_drift
+from stand.report import render, render_speeds
+from stand.solve import to_json, with_check
 from stand.solve.recordings import result_masses, solve_recording
-from stand.solve.result_json import to_json
 
 
 def parse_masses(text: str) -> list[tuple[int, float, float, float | None]]:
@@ -197,7 +195,7 @@ def _across_speeds(args: argparse.Namespace) -> int:
         result, cfg, _ = measure_live_from_args(
             one, "balance", targets_from(one, TOLERANCE_SHARE), solve_options(one)
         )
-        got = result.omega_rad_s * 30 / math.pi
+        got = float(rad_s_to_rpm(result.omega_rad_s))
         if abs(got / rpm - 1) > SAME_SPEED:
             raise UsageError(f"the run at {rpm:g} rpm went at {got:.0f} rpm: set the speed again")
         archive_live(one, result, cfg)

@@ -21,7 +21,7 @@ from stand.config.schema import STRICT, load_config, read_toml, updated_toml, va
 from stand.drivers.files import check_output
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.health.monitor import answers, refit
-from stand.solve.recordings import measure_recording
+from stand.solve import measure_recording
 
 
 class MassTable(BaseModel):

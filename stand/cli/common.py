@@ -9,16 +9,16 @@ from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from stand.calib.tolerance import Tolerances
-from stand.config.matrix import read_matrix
-from stand.config.typed import parse_angle, parse_mass, parse_rpm, positive_float
+from stand.config import read_matrix
+from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
 from stand.drivers.files import output
 from stand.errors import UsageError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.sim import Mass
+from stand.solve import Job
 from stand.solve.pipeline import SolveOptions, precision_targets
 from stand.solve.recordings import correction_masses
-from stand.solve.result import Job
 
 if TYPE_CHECKING:
     pass
@@ -321,6 +321,16 @@ def add_archive_argument(p: argparse.ArgumentParser | argparse._ArgumentGroup) -
 
 
 JOB_FIELDS = ("serial", "order", "operator", "note")
+
+
+def add_date_arguments(p: argparse.ArgumentParser) -> None:
+    """``--since`` and ``--until``: the archive's runs of these days (UTC), inclusive."""
+    p.add_argument(
+        "--since", type=parse_date, metavar="YYYY-MM-DD", help="runs from this date on (UTC)"
+    )
+    p.add_argument(
+        "--until", type=parse_date, metavar="YYYY-MM-DD", help="runs up to this date (UTC)"
+    )
 
 
 def add_job_arguments(p: argparse.ArgumentParser) -> None:

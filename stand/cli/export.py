@@ -3,40 +3,26 @@
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 
 from stand.archive.query import Filters
 from stand.cli.archiving import archive_url
-from stand.cli.common import add_archive_argument
-from stand.errors import UsageError
-from stand.plant.qdas import export_qdas
+from stand.cli.common import add_archive_argument, add_date_arguments
+from stand.plant import export_qdas
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("format", choices=("qdas",), help="qdas: the Q-DAS ASCII transfer format")
     p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
-    p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
-    p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
+    add_date_arguments(p)
     p.add_argument("--stand", metavar="ID", help="this stand's runs only")
     add_archive_argument(p)
     p.add_argument("-o", "--out", metavar="FILE.dfq", required=True, help="the file to write")
     p.add_argument("--force", action="store_true", help="replace FILE if it exists")
 
 
-def _date(text: str | None, flag: str) -> dt.date | None:
-    if text is None:
-        return None
-    try:
-        return dt.date.fromisoformat(text)
-    except ValueError:
-        raise UsageError(f"{flag}: a date YYYY-MM-DD, got {text!r}") from None
-
-
 def run(args: argparse.Namespace) -> int:
 
-    f = Filters(
-        since=_date(args.since, "--since"), until=_date(args.until, "--until"), stand=args.stand
-    )
+    f = Filters(since=args.since, until=args.until, stand=args.stand)
     _, n = export_qdas(archive_url(args), args.rotor_type, f, args.out, force=args.force)
     print(f"wrote {args.out}: {n} runs of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)")
     return 0

@@ -10,9 +10,9 @@ import sys
 from collections.abc import Iterable
 from typing import Any, TextIO
 
-from stand.report.units import Display
+from stand.report import Display
+from stand.solve import json_text
 from stand.solve.recordings import recording_summary
-from stand.solve.result import json_text
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
 

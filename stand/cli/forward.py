@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from stand.cli.format import dump_json, print_warnings
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.config.typed import parse_rpm, parse_unbalance
 from stand.core import (
     forward,

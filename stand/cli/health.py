@@ -8,7 +8,7 @@ from stand.archive import correction_rows
 from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
-from stand.health.monitor import health, health_json
+from stand.health import health, health_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

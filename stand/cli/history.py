@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import argparse
 import csv
-import datetime as dt
 import io
 import sys
 from typing import Any
 
 from stand.archive.query import Filters, history
 from stand.cli.archiving import archive_url
-from stand.cli.common import add_archive_argument, write_text_output
+from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
 from stand.cli.format import dump_json
 from stand.errors import UsageError
 
@@ -27,8 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rotor-type", metavar="TYPE")
     p.add_argument("--order", metavar="ORDER")
     p.add_argument("--operator", metavar="NAME")
-    p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
-    p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
+    add_date_arguments(p)
     p.add_argument("--verdict", choices=("pass", "fail", "none"))
     p.add_argument("--stand", metavar="ID", help="runs of this stand ([stand] id)")
     p.add_argument("--limit", type=int, metavar="N", help="at most N runs (the oldest)")
@@ -37,15 +35,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     out.add_argument("--json", action="store_true", help="print one JSON object")
     out.add_argument("--csv", metavar="FILE", help="write a CSV table ('-': stdout)")
     p.add_argument("--force", action="store_true", help="replace --csv FILE if it exists")
-
-
-def _date(text: str | None, flag: str) -> dt.date | None:
-    if text is None:
-        return None
-    try:
-        return dt.date.fromisoformat(text)
-    except ValueError:
-        raise UsageError(f"{flag}: a date YYYY-MM-DD, got {text!r}") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,8 +46,8 @@ def run(args: argparse.Namespace) -> int:
         rotor_type=args.rotor_type,
         order=args.order,
         operator=args.operator,
-        since=_date(args.since, "--since"),
-        until=_date(args.until, "--until"),
+        since=args.since,
+        until=args.until,
         verdict=args.verdict,
         limit=args.limit,
         stand=args.stand,

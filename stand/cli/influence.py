@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -19,19 +18,16 @@ from stand.calib.influence import (
 )
 from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
+from stand.config import STRICT, read_toml, validate
 from stand.config.matrix import Pair, matrix_document, parse_matrix, read_matrix
-from stand.config.schema import STRICT, read_toml, validate
 from stand.config.typed import positive_float
+from stand.core import rad_s_to_rpm
 from stand.core.influence import InfluenceMap
 from stand.drivers.recording import config_digest
 from stand.errors import ConfigError, ModelError, UsageError
+from stand.field import field_from_runs, influence_runs, solve_initial_run
 from stand.field.planes import field_json
-from stand.field.runs import field_from_runs
-from stand.field.trials import influence_runs, solve_initial_run
-from stand.solve.pipeline import SolveOptions
-from stand.solve.recordings import solve_recording
-from stand.solve.result import json_text
-from stand.solve.result_json import to_json
+from stand.solve import SolveOptions, json_text, solve_recording, to_json
 
 PLANES = 2
 """The planes of the stand's own answer (a run solved through the matrix)."""
@@ -202,7 +198,7 @@ def _measured_matrix(
     doc = matrix_document(
         imap,
         readings="typed in" if omega is None else "support acceleration",
-        rpm=None if omega is None else omega * 30 / math.pi,
+        rpm=None if omega is None else float(rad_s_to_rpm(omega)),
         rotor_type=None if cfg is None else cfg.rotor.type,
         config_sha256=config_digest(text) if text else None,
         runs=[str(f) for f, *_ in entries if f],
@@ -246,7 +242,7 @@ def _suggest(
     sizes = suggested_trials(params, omega, runs[0].readings)
     R = (params.R1, params.R2)
     out: dict[str, Any] = {
-        "rpm": round(omega * 30 / math.pi, 3),
+        "rpm": round(float(rad_s_to_rpm(omega)), 3),
         "next_trials": [
             {
                 "plane": j,

@@ -13,7 +13,7 @@ from stand.cli.common import (
 )
 from stand.cli.format import show
 from stand.cli.panel import measure_live_from_args
-from stand.solve.result_json import to_json
+from stand.solve import to_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -12,9 +12,9 @@ from typing import Any
 
 from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.errors import UsageError
-from stand.plant.opcua import Access, ResultServer
+from stand.plant import Access, ResultServer
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -17,8 +17,8 @@ from typing import Any
 
 from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path, scene_masses
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.live.loop import live_source, measure_live
-from stand.report.units import Display
+from stand.live import live_source, measure_live
+from stand.report import Display
 from stand.solve.pipeline import tolerance_of
 
 ANGLE_HELP = "angles from the reference mark, against the direction of rotation"

@@ -14,8 +14,8 @@ from stand.drivers.protocol import Frames
 from stand.drivers.recording import Recording
 from stand.drivers.streams import rebuild
 from stand.errors import BusError, BusTimeoutError, UsageError
-from stand.live.session import LiveSession
-from stand.solve.pipeline import load_config_text
+from stand.live import LiveSession
+from stand.solve import load_config_text
 
 STATUS_EVERY_S = 1.0
 SPEED_WINDOW_S = 2.0

@@ -15,13 +15,10 @@ from stand.cli.common import (
 from stand.drivers.files import check_output
 from stand.drivers.recording import read_recording
 from stand.errors import UsageError
-from stand.field.speeds import balance_speeds, speeds_json
-from stand.report.certificate import render
-from stand.report.pages import render_speeds
-from stand.report.printing import write_pdf
-from stand.solve.check import with_check
+from stand.field import balance_speeds, speeds_json
+from stand.report import render, render_speeds, write_pdf
+from stand.solve import solve_recording, with_check
 from stand.solve.pipeline import load_config_text, stored_config
-from stand.solve.recordings import solve_recording
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

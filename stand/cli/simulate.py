@@ -19,14 +19,14 @@ from stand.cli.common import (
     job_from,
     scene_masses,
 )
-from stand.config.schema import config_toml
+from stand.config import config_toml
 from stand.drivers.bus import describe_bus, open_bus, play
 from stand.drivers.files import check_output
 from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.drivers.streams import rebuild
 from stand.errors import UsageError
 from stand.sim import load_scene, shipped_scenes, simulate, with_masses
-from stand.solve.pipeline import load_config_text
+from stand.solve import load_config_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

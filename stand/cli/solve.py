@@ -24,10 +24,9 @@ from stand.cli.common import (
 from stand.cli.format import dump_json, print_speeds, show
 from stand.drivers.files import check_output
 from stand.errors import StandError, UsageError
-from stand.field.speeds import balance_speeds, speeds_json
+from stand.field import balance_speeds, speeds_json
+from stand.solve import json_text, to_json
 from stand.solve.recordings import solve_many, solve_recording
-from stand.solve.result import json_text
-from stand.solve.result_json import to_json
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -8,13 +8,12 @@ from pathlib import Path
 
 from stand.archive import url_for
 from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
-from stand.config.paths import data_folder
+from stand.config import data_folder
 from stand.errors import UsageError
-from stand.plant.opcua import ResultServer
-from stand.plant.safety import check_bind, read_token
+from stand.plant import ResultServer, check_bind, read_token
 from stand.solve.pipeline import precision_targets
+from stand.station import Station
 from stand.station.pages import serve
-from stand.station.service import Station
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

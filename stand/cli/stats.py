@@ -3,22 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 from typing import Any
 
 from stand.archive.query import Filters
 from stand.archive.stats import production
 from stand.cli.archiving import archive_url
-from stand.cli.common import add_archive_argument, write_text_output
+from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
 from stand.cli.format import dump_json
-from stand.errors import UsageError
-from stand.report.pages import render_production
+from stand.report import render_production
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
-    p.add_argument("--since", metavar="YYYY-MM-DD", help="runs from this date on (UTC)")
-    p.add_argument("--until", metavar="YYYY-MM-DD", help="runs up to this date (UTC)")
+    add_date_arguments(p)
     p.add_argument(
         "--stand", metavar="ID", help="this stand's runs only ([stand] id; default: every stand)"
     )
@@ -34,17 +31,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
-    dates = {}
-    for name in ("since", "until"):
-        text = getattr(args, name)
-        try:
-            dates[name] = None if text is None else dt.date.fromisoformat(text)
-        except ValueError:
-            raise UsageError(f"--{name}: a date YYYY-MM-DD, got {text!r}") from None
     out = production(
         archive_url(args),
         args.rotor_type,
-        Filters(since=dates["since"], until=dates["until"], stand=args.stand),
+        Filters(since=args.since, until=args.until, stand=args.stand),
     )
     if args.json:
         dump_json(out)

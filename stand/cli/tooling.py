@@ -7,8 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.cli.format import ANGLE_NOTE, dump_json
-from stand.config.paths import data_folder
-from stand.config.schema import load_config
+from stand.config import data_folder, load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
 from stand.errors import UsageError

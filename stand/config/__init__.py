@@ -1,0 +1,34 @@
+"""The configuration: a stand, its rotor types and their corrections as TOML, validated
+into frozen models (:mod:`stand.config.schema`, with the rotor's shaft in
+:mod:`stand.config.rotor` and the correction's rules in :mod:`stand.config.correction`),
+the stored influence matrix (:mod:`stand.config.matrix`), the values a user types
+(:mod:`stand.config.typed`) and where the product keeps its data
+(:mod:`stand.config.paths`).  Bad input is one :class:`~stand.errors.ConfigError` naming
+the key and the file.
+"""
+
+from stand.config.matrix import SAME_SPEED, parse_matrix, read_matrix
+from stand.config.paths import data_folder
+from stand.config.schema import (
+    STRICT,
+    Config,
+    config_from_dict,
+    config_toml,
+    load_config,
+    read_toml,
+    validate,
+)
+
+__all__ = [
+    "SAME_SPEED",
+    "STRICT",
+    "Config",
+    "config_from_dict",
+    "config_toml",
+    "data_folder",
+    "load_config",
+    "parse_matrix",
+    "read_matrix",
+    "read_toml",
+    "validate",
+]

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import math
 from dataclasses import dataclass, field
 from typing import Annotated, Any, Literal
 
@@ -21,7 +20,7 @@ import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat
 
 from stand.config.schema import STRICT, validate
-from stand.core import Diagnostic
+from stand.core import Diagnostic, rad_s_to_rpm
 from stand.core.influence import InfluenceMap
 from stand.drivers.files import check_input
 from stand.drivers.recording import MATRIX_ATTR
@@ -122,7 +121,7 @@ class LoadedMatrix:
         """A warning when used more than ``SAME_SPEED`` away from the speed it was measured at."""
         if self.stored.rpm is None:
             return None
-        rpm = omega_rad_s * 30 / math.pi
+        rpm = float(rad_s_to_rpm(omega_rad_s))
         off = rpm / self.stored.rpm - 1
         if abs(off) <= SAME_SPEED:
             return None

@@ -1,4 +1,4 @@
-"""Values a user types: speeds, masses, angles, unbalances, positive numbers.
+"""Values a user types: speeds, masses, angles, unbalances, positive numbers, dates.
 
 Each parser gives the value in the units it names, or one line naming what is wrong
 (raised as argparse's ``ArgumentTypeError``, so a parser is an argument's ``type=``).
@@ -8,6 +8,7 @@ Not part of the CLI's modules: the subcommands parse with them, as a screen coul
 from __future__ import annotations
 
 import argparse
+import datetime as dt
 import math
 
 from stand.core.model import MAX_SPEED_RPM
@@ -97,3 +98,12 @@ def parse_unbalance(text: str) -> tuple[float, float]:
 
 MAX_UNBALANCE_G_MM = 1e9
 """The largest unbalance typed in: 1 t at 1 m (the model's arithmetic stays meaningful)."""
+
+
+def parse_date(text: str) -> dt.date:
+    """A calendar day typed as ``YYYY-MM-DD`` (ISO 8601): the archive's ``--since`` and
+    ``--until``."""
+    try:
+        return dt.date.fromisoformat(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a date YYYY-MM-DD, got {text!r}") from None

@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import RESONANCE_BAND, Diagnostic, UnbalanceSolution, speed_diagnostics
-from stand.core.model import ComplexArray, StandParameters
+from stand.core.model import ComplexArray, StandParameters, rad_s_to_rpm
 from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
 from stand.errors import ModelError
 
@@ -240,9 +240,9 @@ def solve_beam(
         notes.append(
             Diagnostic(
                 "near_bending_mode",
-                f"speed {omega_rad_s * 30 / math.pi:.0f} rpm is within a factor "
+                f"speed {rad_s_to_rpm(omega_rad_s):.0f} rpm is within a factor "
                 f"{RESONANCE_BAND:g} of the rotor's first bending mode in the stand, "
-                f"{wn[2] / (2 * math.pi):.3g} Hz ({wn[2] * 30 / math.pi:.0f} rpm): the answer "
+                f"{wn[2] / (2 * math.pi):.3g} Hz ({rad_s_to_rpm(wn[2]):.0f} rpm): the answer "
                 "rests on the shaft's description there; balance well below it",
                 float(omega_rad_s / wn[2]),
             )

@@ -32,6 +32,7 @@ from stand.core.model import (
     StandParameters,
     inverse_matrix,
     natural_frequencies,
+    rad_s_to_rpm,
     support_matrix,
 )
 from stand.errors import ModelError, PlanesTooCloseError
@@ -217,9 +218,9 @@ def speed_diagnostics(
         out.append(
             Diagnostic(
                 "near_resonance",
-                f"speed {w * 60 / (2 * math.pi):.1f} rpm is {100 * (ratios[k] - 1):+.1f} % from "
+                f"speed {rad_s_to_rpm(w):.1f} rpm is {100 * (ratios[k] - 1):+.1f} % from "
                 f"natural frequency {wn[k] / (2 * math.pi):.3g} Hz "
-                f"({wn[k] * 60 / (2 * math.pi):.0f} rpm) of stand + rotor: the response is "
+                f"({rad_s_to_rpm(wn[k]):.0f} rpm) of stand + rotor: the response is "
                 "dominated by the stand there and small errors in C, M or speed move the result",
                 float(ratios[k]),
             )
@@ -228,8 +229,8 @@ def speed_diagnostics(
         out.append(
             Diagnostic(
                 "below_support_resonance",
-                f"speed {w * 60 / (2 * math.pi):.1f} rpm is below the highest natural frequency "
-                f"{wn[-1] / (2 * math.pi):.3g} Hz ({wn[-1] * 60 / (2 * math.pi):.0f} rpm): "
+                f"speed {rad_s_to_rpm(w):.1f} rpm is below the highest natural frequency "
+                f"{wn[-1] / (2 * math.pi):.3g} Hz ({rad_s_to_rpm(wn[-1]):.0f} rpm): "
                 "a soft-bearing stand should run well above it; here the result rests on "
                 "C1, C2 and noise is amplified about C/omega^4",
                 float(w / wn[-1]),

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.core.model import phasor_to_polar, unbalance_to_polar
+from stand.core import phasor_to_polar, unbalance_to_polar
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.errors import ConfigError, ModelError
 from stand.solve.correct import weight_entries, weights_correction

@@ -10,18 +10,17 @@ takes.
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from stand.calib.influence import InfluenceRun, influence_matrix, phasors
-from stand.config.matrix import SAME_SPEED
+from stand.config import SAME_SPEED
+from stand.core import rad_s_to_rpm
 from stand.errors import ConfigError, ModelError
 from stand.field.planes import FieldResult, label_readings, reading_weights, solve_field
-from stand.solve.pipeline import load_config_text
-from stand.solve.recordings import measure_recording
+from stand.solve import load_config_text, measure_recording
 
 
 def _typed_readings(spec: Any, entries: list[Any], source: str) -> tuple[list[Any], list[Any]]:
@@ -62,7 +61,7 @@ def _recorded_readings(
         for path in files:
             m, run_cfg, _, _ = measure_recording(path, config)
             cfg = cfg or run_cfg
-            rpm = m.omega_rad_s * 30 / math.pi
+            rpm = float(rad_s_to_rpm(m.omega_rad_s))
             if any(abs(rpm / s - 1) <= SAME_SPEED for s in speeds):
                 raise ConfigError(
                     f"{path}: a second run at {rpm:.0f} rpm: one run file per speed",

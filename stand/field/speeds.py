@@ -23,22 +23,21 @@ passes.
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from stand.config.matrix import SAME_SPEED
+from stand.config import SAME_SPEED
+from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.core.beam import receptance, receptance_at
-from stand.core.model import unbalance_to_polar
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.core.multiplane_interval import complex_block, correction_covariance, plane_radii
 from stand.errors import ConfigError, ModelError
+from stand.solve import solve_recording
 from stand.solve.correct import weight_entries, weights_correction
 from stand.solve.pipeline import load_config_text, stored_config
-from stand.solve.recordings import solve_recording
 
 
 @dataclass(frozen=True)
@@ -128,7 +127,7 @@ def _runs(paths: Sequence[str], config: str | None) -> tuple[list[Any], Any, Any
         wa, wb = results[a].omega_rad_s, results[b].omega_rad_s
         if wb / wa - 1 <= SAME_SPEED:
             raise ConfigError(
-                f"{paths[a]} and {paths[b]} are both at about {wa * 30 / math.pi:.0f} rpm: "
+                f"{paths[a]} and {paths[b]} are both at about {rad_s_to_rpm(wa):.0f} rpm: "
                 "give each speed once",
                 source=paths[b],
             )
@@ -170,9 +169,9 @@ def slow_roll_of(path: str, config: str | None, runs: list[Any]) -> SlowRoll:
     slowest = min(r.omega_rad_s for _, r in runs)
     if w_s * SLOW_ROLL_BELOW > slowest:
         raise ConfigError(
-            f"the slow-roll run is at {w_s * 30 / math.pi:.0f} rpm: a slow roll is at least "
+            f"the slow-roll run is at {rad_s_to_rpm(w_s):.0f} rpm: a slow roll is at least "
             f"{SLOW_ROLL_BELOW:g} times slower than the slowest balancing speed "
-            f"({slowest * 30 / math.pi:.0f} rpm)",
+            f"({rad_s_to_rpm(slowest):.0f} rpm)",
             source=path,
         )
     sup = res.measurement.supports
@@ -307,7 +306,7 @@ def balance_speeds(
     speeds = tuple(
         SpeedReading(
             run=path,
-            rpm=res.omega_rad_s * 30 / math.pi,
+            rpm=float(rad_s_to_rpm(res.omega_rad_s)),
             result=res,
             U_kg_m=unbalances[k],
             after_kg_m=sol.residual[2 * k : 2 * k + 2]
@@ -398,7 +397,7 @@ def speeds_json(result: SpeedsResult) -> dict[str, Any]:
         if result.slow_roll is None
         else {
             "run": result.slow_roll.run,
-            "rpm": round(result.slow_roll.omega_rad_s * 30 / math.pi, 3),
+            "rpm": round(float(rad_s_to_rpm(result.slow_roll.omega_rad_s)), 3),
             "runout_um": [round(x, 3) for x in result.slow_roll.runout_um],
         },
     }

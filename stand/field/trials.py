@@ -16,11 +16,8 @@ import numpy as np
 
 from stand.calib.influence import InfluenceRun, initial_covariance
 from stand.core import StandParameters
-from stand.measuring.covariance import with_unbalance_covariance
-from stand.measuring.measure import Measurement
-from stand.solve.pipeline import SolveOptions, load_config_text
-from stand.solve.recordings import measure_recording, solve_recording
-from stand.solve.result import Result
+from stand.measuring import Measurement, with_unbalance_covariance
+from stand.solve import Result, SolveOptions, load_config_text, measure_recording, solve_recording
 
 
 def influence_runs(

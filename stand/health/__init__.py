@@ -1,0 +1,10 @@
+"""The stand's health: every confirmed correction and its check is a calibration datum;
+:mod:`stand.health.monitor` judges the data it is given (the archive's rows) for drift
+(CUSUM), refits the parameters that moved and widens a result's calibration interval
+while the stand is drifted; :mod:`stand.health.evaluate` measures the solve's accuracy
+over a simulated scene.
+"""
+
+from stand.health.monitor import datum_row, health, health_json, refit, with_drift
+
+__all__ = ["datum_row", "health", "health_json", "refit", "with_drift"]

@@ -28,10 +28,10 @@ import numpy as np
 
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
 from stand.drivers.streams import rebuild
-from stand.measuring.measure import Measurement
+from stand.measuring import Measurement
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable
-from stand.solve.pipeline import SolveOptions, measure_streams
+from stand.solve import SolveOptions, measure_streams
 
 POSITIONS = 12
 SPREAD_LIMIT = 0.12

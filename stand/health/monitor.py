@@ -24,9 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from stand.config.matrix import SAME_SPEED
-from stand.config.schema import config_from_dict
-from stand.core import Diagnostic, solve_unbalance
+from stand.config import SAME_SPEED, config_from_dict
+from stand.core import Diagnostic, rad_s_to_rpm, solve_unbalance, unbalance_to_polar
 from stand.core.drift import (
     CUSUM_H,
     FALSE_ALARM,
@@ -39,7 +38,6 @@ from stand.core.drift import (
     single_fits,
     whitened,
 )
-from stand.core.model import unbalance_to_polar
 from stand.errors import ConfigError, UsageError
 from stand.solve.pipeline import calibration_radius
 
@@ -111,7 +109,7 @@ def datum_row(
         "check_sha256": check_sha256,
         "stand_id": prov.stand_id or None,
         "rotor_type": prov.rotor_type or None,
-        "rpm": m1.omega_rad_s * 30 / math.pi,
+        "rpm": float(rad_s_to_rpm(m1.omega_rad_s)),
         "config_sha256": prov.config_sha256,
         "confirmed_by": confirmed_by,
         "applied": applied,
@@ -332,7 +330,7 @@ def drift_bands(rows: Sequence[Any], result: Any) -> dict[str, float] | None:
     (:func:`stand.archive.drift_rows`).
     """
     prov = result.provenance
-    rpm = result.omega_rad_s * 30 / math.pi
+    rpm = float(rad_s_to_rpm(result.omega_rad_s))
     mine = [
         g
         for g in groups(rows)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.config.schema import config_toml
+from stand.config import config_toml
 from stand.core import Diagnostic
 from stand.drivers.recording import JOB_ATTR, STAND_ATTR, config_digest
 from stand.drivers.streams import StreamBuilder

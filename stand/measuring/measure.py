@@ -23,17 +23,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from stand.core import Diagnostic, StandParameters, solve_unbalance
+from stand.core import Diagnostic, StandParameters, UnbalanceSolution, rad_s_to_rpm, solve_unbalance
 from stand.core.beam import solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.influence import solve_influence
-from stand.core.inverse import UnbalanceSolution
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
 from stand.measuring.passes import NodeFit, node_phasor
-from stand.process.beside import Beside, can_fork
+from stand.process import Beside, can_fork
 
 if TYPE_CHECKING:  # imported where used: a rigid rotor's solve needs neither
     from stand.core.beam import BeamRotor
@@ -285,8 +284,8 @@ def _check_clocks(
     if abs(w1 / w2 - 1) > clock_tolerance:
         rates = " and ".join(f"{r:g}" for r in rates_hz)
         raise SensorFaultError(
-            f"nodes 1 and 2 see one shaft at different speeds: {w1 * 30 / math.pi:.2f} and "
-            f"{w2 * 30 / math.pi:.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
+            f"nodes 1 and 2 see one shaft at different speeds: {rad_s_to_rpm(w1):.2f} and "
+            f"{rad_s_to_rpm(w2):.2f} rpm ({100 * (w1 / w2 - 1):+.3f} %, tolerance "
             f"+-{100 * clock_tolerance:g} %): a node's sample rate (STATUS says {rates} Hz) "
             "or its clock is wrong"
         )

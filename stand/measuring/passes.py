@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from stand.core import rad_s_to_rpm
 from stand.core.dsp import (
     SIDE_BANDS,
     SPEED_SPAN_SLOPE,
@@ -289,7 +290,7 @@ def _check_aliasing(w_ref: float, rate: float) -> None:
     sample), else they alias: refused, naming the speed and the rate."""
     if w_ref > math.pi / 3:
         raise SensorFaultError(
-            f"the shaft turns at {w_ref * rate * 30 / math.pi:.0f} rpm: its 3x "
+            f"the shaft turns at {rad_s_to_rpm(w_ref * rate):.0f} rpm: its 3x "
             f"({3 * w_ref * rate / (2 * math.pi):.0f} Hz) is beyond half the node's sample rate "
             f"({rate / 2:g} Hz); it cannot be measured at this rate"
         )

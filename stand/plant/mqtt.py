@@ -13,8 +13,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from stand.errors import ArchiveError
-from stand.solve.result import Result, json_text
-from stand.solve.result_json import to_json
+from stand.solve import Result, json_text, to_json
 
 TIMEOUT_S = 5.0
 """How long to wait for the broker to take a result [s]."""

@@ -19,8 +19,7 @@ from typing import Any
 
 from stand.report.plots import polar, spectrum_and_speed
 from stand.report.units import Display
-from stand.solve.result import Result
-from stand.solve.result_json import to_json
+from stand.solve import Result, to_json
 
 CSS = """
 body { font-family: "DejaVu Sans", system-ui, sans-serif; margin: 2em auto; max-width: 960px;

@@ -41,8 +41,8 @@ from stand.config.schema import (
     validate,
     with_shaft,
 )
+from stand.core import StandParameters
 from stand.core.beam import beam_rotor, distributed_unbalance, node_at
-from stand.core.model import StandParameters
 from stand.errors import ConfigError
 from stand.sim.tables import (
     NODES as NODES,  # re-exported: the simulator's modules read it here

@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
-from stand.config.schema import STRICT
+from stand.config import STRICT
 
 NODES = 2
 

@@ -13,11 +13,11 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from stand.config.matrix import SAME_SPEED
-from stand.core import Diagnostic, StandParameters
+from stand.config import SAME_SPEED
+from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
 from stand.drivers.recording import read_streams
 from stand.errors import UsageError
-from stand.measuring.measure import Measurement
+from stand.measuring import Measurement
 from stand.solve.pipeline import SolveOptions, measure_streams, stored_config
 from stand.solve.recordings import named_errors
 from stand.solve.result import Check, Result
@@ -53,8 +53,8 @@ def check_against(
         before = measure_streams(streams, cfg, params, SolveOptions(matrix=matrix))
     if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > SAME_SPEED:
         raise UsageError(
-            f"--check {previous}: that run turned at {before.omega_rad_s * 30 / math.pi:.0f} rpm, "
-            f"this one at {after.omega_rad_s * 30 / math.pi:.0f} rpm: check at the same speed "
+            f"--check {previous}: that run turned at {rad_s_to_rpm(before.omega_rad_s):.0f} rpm, "
+            f"this one at {rad_s_to_rpm(after.omega_rad_s):.0f} rpm: check at the same speed "
             "(or say --check-any)"
         )
     b, a = before.solution.U_kg_m, after.solution.U_kg_m

@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from stand.config.matrix import SAME_SPEED
+from stand.config import SAME_SPEED
+from stand.core import rad_s_to_rpm
 from stand.core.balance import index_split
 from stand.drivers.recording import config_digest
 from stand.errors import ConfigError
@@ -34,7 +35,7 @@ def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | No
     if abs(m180.omega_rad_s / m0.omega_rad_s - 1) > SAME_SPEED:
         raise ConfigError(
             f"the two index runs differ in speed by more than {100 * SAME_SPEED:g} % "
-            f"({m0.omega_rad_s * 30 / np.pi:.0f} and {m180.omega_rad_s * 30 / np.pi:.0f} rpm)",
+            f"({rad_s_to_rpm(m0.omega_rad_s):.0f} and {rad_s_to_rpm(m180.omega_rad_s):.0f} rpm)",
             source=run_180,
         )
     name = name or (cfg.tooling.name if cfg.tooling else None)

@@ -26,14 +26,15 @@ import numpy as np
 
 from stand import __version__
 from stand.calib.tolerance import Tolerances, parameter_uncertainty
-from stand.config.schema import config_from_dict, read_toml
-from stand.core import Diagnostic, StandParameters, natural_frequencies, rpm_to_rad_s
+from stand.config import config_from_dict, read_toml
+from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.balance import permissible_unbalance, plane_tolerances, static_couple
 from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
 from stand.core.inverse import RESONANCE_BAND
 from stand.errors import ConfigError
+from stand.measuring import Measurement
 from stand.measuring.live_fit import remeasure
-from stand.measuring.measure import Measurement, measure
+from stand.measuring.measure import measure
 from stand.solve.correct import corrections as plane_corrections
 from stand.solve.result import (
     Check,
@@ -342,7 +343,7 @@ def rigid_note(cfg: Any, params: StandParameters, omega_rad_s: float) -> Diagnos
     if hi <= RIGID_TOLERANCE:
         return None
     limit = rigid_limit_rpm(f_ff)
-    floor = float(natural_frequencies(params).max()) * 30 / math.pi * RESONANCE_BAND
+    floor = float(rad_s_to_rpm(natural_frequencies(params).max())) * RESONANCE_BAND
     return Diagnostic(
         "flexible_rotor",
         f"the rotor bends: at {60 * f:.0f} rpm, {100 * f / f_ff:.1f} % "

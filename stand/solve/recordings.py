@@ -22,11 +22,12 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any
 
-from stand.config.matrix import parse_matrix
+from stand.config import parse_matrix
 from stand.core import StandParameters
 from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest, read_streams
 from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
-from stand.measuring.measure import Measurement, measure
+from stand.measuring import Measurement
+from stand.measuring.measure import measure
 from stand.solve.correct import removed_masses
 from stand.solve.pipeline import (
     SOFTWARE,

@@ -21,7 +21,7 @@ import numpy as np
 from stand.core import Diagnostic
 from stand.core.balance import Correction
 from stand.errors import ModelError
-from stand.measuring.measure import Measurement
+from stand.measuring import Measurement
 
 RESULT_VERSION = 1
 """Version of the JSON form; bumped when a key changes meaning."""

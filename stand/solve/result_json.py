@@ -15,7 +15,7 @@ from typing import Any
 from stand.core import phasor_to_polar, rad_s_to_rpm, unbalance_to_polar
 from stand.core.balance import Correction
 from stand.core.dsp import radius95
-from stand.measuring.measure import Measurement
+from stand.measuring import Measurement
 from stand.solve.result import RESULT_VERSION, Check, Result
 
 

@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from stand.config.paths import data_folder
+from stand.config import data_folder
 from stand.drivers.files import output
 from stand.errors import ConfigError, RecordingError
-from stand.measuring.covariance import with_unbalance_covariance
+from stand.measuring import with_unbalance_covariance
 
 TOOLING_VERSION = 1
 """Version of the stored tooling file."""

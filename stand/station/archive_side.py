@@ -17,11 +17,10 @@ from typing import Any
 from stand.archive import Archive, correction_rows, file_digest
 from stand.archive.query import Filters, history, run_file
 from stand.errors import StandError, UsageError
-from stand.field.speeds import balance_speeds, speeds_json
-from stand.health.monitor import datum_row, health, health_json
-from stand.plant.qdas import export_qdas
-from stand.report.pages import render_speeds
-from stand.report.printing import write_pdf
+from stand.field import balance_speeds, speeds_json
+from stand.health import datum_row, health, health_json
+from stand.plant import export_qdas
+from stand.report import render_speeds, write_pdf
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 

@@ -14,7 +14,7 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
-from stand.report.units import Display
+from stand.report import Display
 from stand.station.service import Station
 
 

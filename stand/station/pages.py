@@ -15,10 +15,9 @@ from typing import Any
 from nicegui import app, ui
 
 from stand.errors import StandError
-from stand.plant.safety import TokenGate
-from stand.report.units import Display
-from stand.solve.result import Job
-from stand.solve.result_json import to_json
+from stand.plant import TokenGate
+from stand.report import Display
+from stand.solve import Job, to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, history_screen
 from stand.station.service import Station

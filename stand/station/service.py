@@ -26,16 +26,14 @@ from stand.archive import archive_result, drift_rows
 from stand.drivers.bus import ALLOW_URL
 from stand.drivers.files import output
 from stand.errors import StandError, StationBusyError, UsageError
-from stand.health.monitor import with_drift
-from stand.live.loop import live_source, measure_live
-from stand.plant.mqtt import publish_archived
-from stand.report.certificate import render
-from stand.sim import Mass
-from stand.sim.scene import shipped_scenes
-from stand.solve.check import with_check
+from stand.health import with_drift
+from stand.live import live_source, measure_live
+from stand.plant import publish_archived
+from stand.report import render
+from stand.sim import Mass, shipped_scenes
+from stand.solve import Job, with_check
 from stand.solve.pipeline import SolveOptions, load_config_text, tolerance_of
 from stand.solve.recordings import correction_masses
-from stand.solve.result import Job
 from stand.station.archive_side import ArchiveSide
 from stand.station.snapshot import BUS, Snapshot
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from stand.solve.result import Job
+from stand.solve import Job
 
 BUS = "bus"
 """The source that reads the stand's CAN bus (the rotor type's ``[bus]`` table)."""

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.report.units import Display
+from stand.report import Display
 
 ANGLE_NOTE = "angles from the reference mark, against the direction of rotation"
 RING = np.linspace(0.0, 2.0 * math.pi, 73)

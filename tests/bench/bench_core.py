@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stand.config.schema import load_config
+from stand.config import load_config
 from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
 from stand.core.transient import SpeedProfile, integrate
 

@@ -34,7 +34,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from test_sim import BASE
 
-from stand.config.schema import validate
+from stand.config import validate
 from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
 from stand.core.dsp import radius_factor
 from stand.drivers.streams import rebuild

@@ -29,7 +29,7 @@ def run(seconds: float, every: float) -> list[tuple[float, float, str, int]]:
     """The costs of every estimate: ``(run time [s], seconds, kind, frames read)``."""
     from stand.live.loop import replay_estimates
     from stand.sim import load_scene, simulate
-    from stand.solve.pipeline import SolveOptions
+    from stand.solve import SolveOptions
 
     sc, p, _ = load_scene("demo")
     data = sc.model_dump()

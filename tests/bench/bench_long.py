@@ -174,7 +174,7 @@ def compile_bytecode() -> None:
 
 
 def make_run(tmp: Path, seconds: float) -> tuple[Path, Path, Path]:
-    from stand.config.schema import config_toml
+    from stand.config import config_toml
     from stand.drivers.logs import write_log
     from stand.drivers.recording import Recording, write_recording
     from stand.sim import load_scene, simulate

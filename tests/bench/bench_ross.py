@@ -31,8 +31,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 warnings.filterwarnings("ignore")
 
+from stand.core import StandParameters, unbalance_from_polar  # noqa: E402
 from stand.core.beam import beam_rotor, forward_beam, natural_frequencies_beam  # noqa: E402
-from stand.core.model import StandParameters, unbalance_from_polar  # noqa: E402
 from stand.core.shaft import Section, shaft_rotor  # noqa: E402
 
 E, RHO, D = 2.11e11, 7810.0, 0.060

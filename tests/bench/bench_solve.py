@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from stand.config.schema import config_toml
+from stand.config import config_toml
 from stand.drivers.logs import write_log
 from stand.drivers.recording import Recording, write_recording
 from stand.sim import load_scene, simulate

@@ -1,0 +1,176 @@
+"""Results into the archive and back: one run written (:func:`archive_result`), the
+runs of a command's filters read as rows, a run file's digest, runs recorded before
+imported and every archived file verified; the calibration data the stand's health
+judges (:func:`correction_rows`)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+from stand.archive.schema import runs
+from stand.archive.store import Archive, default_url
+from stand.drivers.files import check_input
+from stand.errors import RecordingError, StandError
+from stand.solve import Result, json_text, solve_recording, to_json
+
+READ_CHUNK = 1 << 20
+
+
+def url_for(option: str | None, cfg: Any = None) -> str:
+    """The archive to use: the option, else the config's ``[archive] url``, else the default."""
+    if option:
+        return option
+    table = getattr(cfg, "archive", None)
+    if table is not None and table.url:
+        return str(table.url)
+    return default_url()
+
+
+def correction_rows(url: str, stand: str | None = None, rotor_type: str | None = None) -> Any:
+    """The calibration data (corrections and their checks) of a stand and a rotor type, in
+    the order they were archived: what :mod:`stand.health.monitor` judges."""
+    with Archive(url) as a:
+        return a.correction_rows(stand, rotor_type)
+
+
+def drift_rows(url: str, result: Result) -> Any:
+    """The calibration data of the stand and rotor type ``result`` was measured on."""
+    prov = result.provenance
+    return correction_rows(url, prov.stand_id or None, prov.rotor_type)
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 of a file, read in 1 MiB chunks (RecordingError naming it if unreadable)."""
+
+    check_input(path)
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            while chunk := f.read(READ_CHUNK):
+                h.update(chunk)
+    except OSError as exc:
+        raise RecordingError(f"cannot read it ({exc.strerror})", path=str(path)) from exc
+    return h.hexdigest()
+
+
+def _verdict(out: dict[str, Any]) -> str:
+    t = out.get("tolerance")
+    if t is None:
+        return "none"
+    return "pass" if all(p["pass"] for p in t["planes"]) else "fail"
+
+
+def rows(
+    result: Result, file_sha256: str, checks_run_id: int | None
+) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The archive rows of one result: the run's, and one per plane."""
+    out = to_json(result)
+    p, job = result.provenance, result.provenance.job
+    run = {
+        "run_file": str(Path(p.run_file or "").resolve()),
+        "file_sha256": file_sha256,
+        "start_time": p.start_time or "",
+        "serial": job.serial,
+        "order_no": job.order,
+        "operator": job.operator,
+        "note": job.note,
+        "rotor_type": p.rotor_type,
+        "rpm": out["rpm"],
+        "config_sha256": p.config_sha256,
+        "matrix": p.matrix,
+        "correction_mode": result.correction_mode,
+        "verdict": _verdict(out),
+        "checks_run_id": checks_run_id,
+        "static_re_kg_m": result.static_kg_m.real,
+        "static_im_kg_m": result.static_kg_m.imag,
+        "couple_re_kg_m": result.couple_kg_m.real,
+        "couple_im_kg_m": result.couple_kg_m.imag,
+        "software": p.software,
+        "result_json": json_text(out),
+        "stand_id": p.stand_id or None,
+    }
+    urr = result.check.urr if result.check is not None else (None, None)
+    per = None if result.tolerance is None else result.tolerance.per_plane_kg_m
+    planes = []
+    for i in range(2):
+        U = complex(result.U_kg_m[i])
+        planes.append(
+            {
+                "plane": i + 1,
+                "U_re_kg_m": U.real,
+                "U_im_kg_m": U.imag,
+                "radius95_kg_m": float(result.measurement.radius95_kg_m[i]),
+                "permissible_kg_m": None if per is None else per[i],
+                "passed": None if per is None else bool(abs(U) <= per[i]),
+                "leftover_kg_m": abs(result.corrections[i].residual_kg_m),
+                "urr": urr[i],
+            }
+        )
+    return run, planes
+
+
+def archive_result(result: Result, url: str, *, config: str | None = None) -> int:
+    """Archive one run's result (and the run it checks, if not archived yet); its id."""
+    with Archive(url) as archive:
+        return add_result(archive, result, config=config)
+
+
+def add_result(archive: Archive, result: Result, *, config: str | None = None) -> int:
+    """:func:`archive_result` into an archive already open (a series of many runs)."""
+    run_file = result.provenance.run_file
+    if not run_file:
+        raise ValueError("only a recorded run is archived")
+    checks = None
+    if result.check is not None:
+        prev = result.check.previous_run
+        checks = archive.run_id(file_digest(prev))
+        if checks is None:
+            before = solve_recording(prev, config)
+            checks = archive.add(*rows(before, file_digest(prev), None))
+    return archive.add(*rows(result, file_digest(run_file), checks))
+
+
+def result_of(row: Any) -> dict[str, Any]:
+    """The archived result's JSON form."""
+    out: dict[str, Any] = json.loads(row.result_json)
+    return out
+
+
+def import_runs(paths: list[str], url: str, config: str | None = None) -> list[tuple[str, int]]:
+    """Archive runs recorded before (solved with their stored config, or ``config``):
+    ``(path, id)`` each; a run already archived keeps its id."""
+
+    done = []
+    with Archive(url) as archive:
+        for path in paths:
+            digest = file_digest(path)
+            found = archive.run_id(digest)
+            if found is None:
+                found = archive.add(*rows(solve_recording(path, config), digest, None))
+            done.append((path, found))
+    return done
+
+
+def verify(url: str) -> tuple[int, list[dict[str, Any]]]:
+    """Every archived run's file against its digest: (runs checked, problems), a problem
+    being ``{"id", "run_file", "problem"}`` with problem ``missing`` or ``altered``."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        listed = conn.execute(sa.select(runs.c.id, runs.c.run_file, runs.c.file_sha256)).all()
+    problems = []
+    for run_id, path, digest in listed:
+        p = Path(path)
+        if not p.is_file():
+            problems.append({"id": run_id, "run_file": path, "problem": "missing"})
+            continue
+        try:
+            same = file_digest(p) == digest
+        except StandError:
+            same = False  # unreadable counts as altered: it no longer gives the run
+        if not same:
+            problems.append({"id": run_id, "run_file": path, "problem": "altered"})
+    return len(listed), problems
