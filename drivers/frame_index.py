@@ -11,7 +11,7 @@ machine memory written for the first time costs about 2 ms a MB).
 It reads as the int64 array it stands for: ``len``, an element, a slice (a
 view: nothing is computed), an integer or boolean array of positions, ``astype``,
 ``searchsorted``, numpy's functions and operators (through ``__array__`` and
-``__array_ufunc__``, which compute the values asked for).  ``tests/test_frame_index.py``
+``__array_ufunc__``, which compute the values asked for).  ``tests/drivers/test_frame_index.py``
 checks every one against the array itself.
 """
 

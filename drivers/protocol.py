@@ -1,7 +1,7 @@
 """Sensor-node protocol v1 in numpy: a block of raw frames, decoded all at once.
 
 The wire contract is ``spec/can-protocol.md``; its machine-readable form is
-``drivers/sensor_node_v1.dbc``, and ``tests/test_protocol.py`` shows that
+``drivers/sensor_node_v1.dbc``, and ``tests/drivers/test_protocol.py`` shows that
 :func:`stand.drivers.codec.decode` agrees with cantools' decoding of that DBC
 for random frames and that :data:`LAYOUT` below is the DBC's signal layout.
 This module holds the layout, the constants and the record types; the

@@ -30,7 +30,7 @@ any moment leaves a file that plain ``h5py.File(path)`` opens, and
 most the last interval is lost.  (HDF5's SWMR mode was tried and refused:
 after a crash the file only opens in SWMR-read mode or after ``h5clear``.)
 The file is created under a temporary name and renamed, so a half-made
-header never sits under the run's name.  ``tests/test_recording.py`` kills a
+header never sits under the run's name.  ``tests/drivers/test_recording.py`` kills a
 recording process at random times and reopens the file.
 
 **The seal.**  A run the writer closed is read only if its bytes still have

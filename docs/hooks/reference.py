@@ -1,7 +1,7 @@
 """mkdocs hook: the configuration and command-line references, generated at every build
 from the pydantic models and the argparse parsers, so that they cannot drift from the code.
 
-``mkdocs build --strict`` (tests/test_docs.py) runs it; the pages are ``reference/config.md``
+``mkdocs build --strict`` (tests/system/test_docs.py) runs it; the pages are ``reference/config.md``
 and ``reference/cli.md``.
 """
 

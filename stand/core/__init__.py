@@ -1,7 +1,7 @@
 """The pure numerical core: the seed-002 stand model, its inverse, the time path.
 
 Arrays in, arrays out, SI units. Never imports ``can``, ``h5py``,
-``drivers``, ``calib``, the config or the CLI (``tests/test_layers.py``
+``drivers``, ``calib``, the config or the CLI (``tests/system/test_layers.py``
 guards this).
 """
 

@@ -20,7 +20,7 @@ the reference angle), so:
 - the **alarm** is Page's CUSUM on ``z^T z``: ``S_k = max(0, S_{k-1} + z^T z -
   CUSUM_K)``, raised when ``S_k > CUSUM_H``; under a stable stand the chance
   of an alarm within :data:`RUN_LENGTH` data is at most :data:`FALSE_ALARM`
-  (the constants are set by simulation, ``tests/test_drift.py`` checks them);
+  (the constants are set by simulation, ``tests/core/test_drift.py`` checks them);
 - **what moved** is the single parameter whose generalised least-squares fit
   explains the residuals best, with its interval; a support's stiffness and
   mass act alike at one speed (``C/w^2 - M``), and the answer says so.
@@ -55,7 +55,7 @@ placement scatter)."""
 CUSUM_H = 12.0
 """The alarm threshold: with :data:`CUSUM_K`, at most :data:`FALSE_ALARM` chance of any of
 the ten CUSUMs raising an alarm within :data:`RUN_LENGTH` data of a stable stand (by
-simulation, ``tests/test_drift.py``)."""
+simulation, ``tests/core/test_drift.py``)."""
 FALSE_ALARM = 0.01
 RUN_LENGTH = 1000
 ALIKE = 0.99

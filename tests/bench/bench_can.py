@@ -29,7 +29,7 @@ from pathlib import Path
 
 import can
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
 from synth import sine_run
 
 from stand.cli.record import speed_line

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from test_sim import BASE
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
+from scenes import BASE
 
 from stand.config import validate
 from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar

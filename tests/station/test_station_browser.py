@@ -1,0 +1,292 @@
+"""The operator station in a real browser: ``stand station`` served as a user starts it,
+driven by headless Chromium through Selenium (Debian's chromium and chromium-driver, which
+``.ci/run`` installs).  Each screen is saved as a picture (``STAND_DOCS_SCREENSHOTS=1``
+writes them into docs/ as well, where README shows them)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+TOKEN = "station-test-token-1234"
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+DRIVER = shutil.which("chromedriver")
+
+pytestmark = pytest.mark.skipif(
+    CHROMIUM is None or DRIVER is None,
+    reason="Chromium and its driver are not installed (Debian: apt-get install chromium "
+    "chromium-driver)",
+)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@contextmanager
+def served(tmp_path: Path, *extra: str) -> Iterator[str]:
+    """``stand station`` in a child process, as a user starts it; its address."""
+    port = _free_port()
+    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
+    env["XDG_DATA_HOME"] = str(tmp_path / "data")
+    log = (tmp_path / "station.log").open("w")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "stand.cli", "station", "--no-browser", "--port", str(port),
+         "--runs-dir", str(tmp_path / "runs"), "--archive", f"sqlite:///{tmp_path / 'a.sqlite'}",
+         *extra],
+        stdout=log, stderr=subprocess.STDOUT, env=env,
+    )  # fmt: skip
+    try:
+        end = time.monotonic() + 30
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+                break
+            except OSError:
+                if proc.poll() is not None or time.monotonic() > end:
+                    raise AssertionError((tmp_path / "station.log").read_text()) from None
+                time.sleep(0.2)
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        proc.terminate()
+        proc.wait(15)
+        log.close()
+
+
+@pytest.fixture
+def browser() -> Iterator[Any]:
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+                "--window-size=1400,950", "--disable-gpu"):  # fmt: skip
+        options.add_argument(arg)
+    options.binary_location = str(CHROMIUM)
+    options.set_capability("goog:loggingPrefs", {"performance": "ALL"})
+    driver = webdriver.Chrome(service=Service(str(DRIVER)), options=options)
+    driver.implicitly_wait(0)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+def _button(driver: Any, text: str, timeout_s: float = 30.0) -> Any:
+    """The visible button whose text is ``text``, once it is there."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    xpath = f"//button[normalize-space(.)='{text}']"
+
+    def found(d: Any) -> Any:
+        return next((b for b in d.find_elements(By.XPATH, xpath) if b.is_displayed()), None)
+
+    return WebDriverWait(driver, timeout_s, 0.1).until(found, f"no button {text!r}")
+
+
+def _see(driver: Any, text: str, timeout_s: float = 30.0) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    WebDriverWait(driver, timeout_s, 0.1).until(
+        lambda d: text in d.find_element(By.TAG_NAME, "body").text, f"never saw {text!r}"
+    )
+
+
+def _type(driver: Any, label: str, text: str) -> None:
+    from selenium.webdriver.common.by import By
+
+    driver.find_element(By.CSS_SELECTOR, f'input[aria-label="{label}"]').send_keys(text)
+
+
+def _shot(driver: Any, tmp_path: Path, name: str) -> None:
+    driver.save_screenshot(str(tmp_path / f"station-{name}.png"))
+    if os.environ.get("STAND_DOCS_SCREENSHOTS"):
+        shutil.copy(tmp_path / f"station-{name}.png", ROOT / "docs" / f"station-{name}.png")
+
+
+def _requests(driver: Any) -> list[str]:
+    """Every address the browser asked for since the last call (Chrome's network log)."""
+    urls = []
+    for entry in driver.get_log("performance"):
+        msg = json.loads(entry["message"])["message"]
+        if msg["method"] == "Network.requestWillBeSent":
+            urls.append(msg["params"]["request"]["url"])
+        elif msg["method"] == "Network.webSocketCreated":
+            urls.append(msg["params"]["url"])
+    return urls
+
+
+@pytest.mark.realtime
+def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
+    browser: Any, tmp_path: Path
+) -> None:
+    """Start, measure, correct (applied on the simulated stand), check, certificate and
+    history, as an operator clicks them; a second browser sees the same measurement and
+    cannot start another."""
+    from selenium.webdriver.common.by import By
+
+    with served(tmp_path) as base:
+        browser.get(base + "/")
+        _see(browser, "New rotor")
+        _type(browser, "serial number", "D-1")
+        _type(browser, "order", "O-77")
+        _type(browser, "operator", "kim")
+        _shot(browser, tmp_path, "start")
+        _button(browser, "Start measuring").click()
+        _see(browser, "measuring D-1")
+        first = browser.current_window_handle
+        browser.switch_to.new_window("window")  # a second browser on the same station
+        browser.get(base + "/")
+        _see(browser, "measuring D-1")
+        _button(browser, "Start measuring").click()
+        _see(browser, "the station is measuring the initial run of D-1 already")
+        browser.close()
+        browser.switch_to.window(first)
+        _button(browser, "Go to the correction")
+        _see(browser, "precise")
+        _shot(browser, tmp_path, "measure")
+        _button(browser, "Go to the correction").click()
+        _see(browser, "in hole")
+        _shot(browser, tmp_path, "correct")
+        _button(browser, "Apply the correction (simulated stand)").click()
+        _see(browser, "masses put on the simulated rotor")
+        _button(browser, "Start the check run").click()
+        _button(browser, "See the check").click()
+        _see(browser, "D-1: WITHIN TOLERANCE")
+        body = browser.find_element(By.TAG_NAME, "body").text
+        assert body.count("PASS") == 2 and "%" in body
+        _shot(browser, tmp_path, "check")
+        link = browser.find_element(By.LINK_TEXT, "Open the certificate").get_attribute("href")
+        pdf = browser.find_element(By.LINK_TEXT, "as PDF").get_attribute("href")
+        with urllib.request.urlopen(pdf, timeout=120) as got:  # printed by Chromium
+            assert got.headers["content-type"] == "application/pdf"
+            assert got.read(5) == b"%PDF-"
+        browser.get(link)
+        assert "D-1" in browser.find_element(By.TAG_NAME, "body").text
+        browser.get(base + "/history")
+        _type(browser, "serial number", "D-1")
+        _button(browser, "Search").click()
+        _see(browser, "pass (check)")
+        _shot(browser, tmp_path, "history")
+        rows = browser.find_elements(By.CSS_SELECTOR, "tbody tr")
+        assert len(rows) == 2 and all("D-1" in r.text for r in rows)
+
+
+@pytest.mark.realtime
+def test_a_drilled_correction_through_the_screens(browser: Any, tmp_path: Path) -> None:
+    """The demo auger corrected by drilling: the Correct screen gives each hole's drill, depth
+    and angle, numbered in drilling order on the face; the simulated stand takes the holes
+    out at their centres of mass, and the check run passes."""
+    rotors = tmp_path / "rotors"
+    rotors.mkdir()
+    shutil.copy(ROOT / "stand" / "data" / "rotors" / "demo-auger-drilled.toml", rotors)
+    with served(tmp_path, "--config-dir", str(rotors)) as base:
+        browser.get(base + "/")
+        _see(browser, "New rotor")
+        _type(browser, "serial number", "H-1")
+        _button(browser, "Start measuring").click()
+        _button(browser, "Go to the correction").click()
+        _see(browser, "DRILL Ø20 mm")
+        _see(browser, "depth to the tip")
+        _shot(browser, tmp_path, "correct-drill")
+        _button(browser, "Apply the correction (simulated stand)").click()
+        _see(browser, "masses put on the simulated rotor")
+        _button(browser, "Start the check run").click()
+        _button(browser, "See the check").click()
+        _see(browser, "H-1: WITHIN TOLERANCE")
+        from selenium.webdriver.common.by import By
+
+        body = browser.find_element(By.TAG_NAME, "body").text
+        urr = [float(x) for x in re.findall(r"(\d+\.\d) %", body)]  # the URR per plane
+        assert body.count("PASS") == 2 and len(urr) >= 2 and min(urr) >= 95.0, body
+
+
+def test_the_screens_load_nothing_from_outside_and_need_the_token(
+    browser: Any, tmp_path: Path
+) -> None:
+    """With a token every request must carry it (the first one in the address, then the
+    cookie, also on the websocket); every script, style and font comes from the station."""
+    with served(tmp_path, "--token", TOKEN) as base:
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(base + "/", timeout=10)
+        assert refused.value.code == 401
+        browser.get(f"{base}/?token={TOKEN}")
+        _see(browser, "New rotor")
+        for name in ("Measure", "Correct", "Check", "History", "Start"):
+            _button(browser, name).click()
+            time.sleep(0.5)
+        _see(browser, "New rotor")
+        browser.get(base + "/history")  # a new page load: the cookie alone lets it in
+        _see(browser, "History")
+        urls = _requests(browser)
+        host = urlsplit(base).netloc
+        outside = [u for u in urls if urlsplit(u).scheme not in ("data", "blob")
+                   and urlsplit(u).netloc != host]  # fmt: skip
+        assert len(urls) > 10 and not outside, outside
+        assert any("/_nicegui_ws/" in u for u in urls)  # the page's socket, through the gate
+
+
+def _tab_to(driver: Any, what: str, timeout_s: float = 30.0) -> Any:
+    """Press Tab until the focus is on the field labelled ``what`` or the button reading
+    ``what`` (which may appear later: a run still being archived); that element.  Fails
+    after ``timeout_s`` naming what the focus went through last."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    seen: list[str] = []
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        ActionChains(driver).send_keys(Keys.TAB).perform()
+        el = driver.switch_to.active_element
+        name = el.get_attribute("aria-label") or el.text.strip()
+        seen = [*seen[-20:], name[:40]]
+        if name.casefold() == what.casefold():  # buttons show their text in capitals
+            return el
+        time.sleep(0.02)
+    raise AssertionError(f"Tab never reached {what!r}; it went last through {seen}")
+
+
+@pytest.mark.realtime
+def test_the_screens_work_from_the_keyboard_alone(browser: Any, tmp_path: Path) -> None:
+    """Tab and Enter only: the start form filled and the run started, stopped by hand, on
+    to the correction, back to the start (an operator without a mouse or touch screen)."""
+    from selenium.webdriver.common.keys import Keys
+
+    # a tolerance so tight the run is never precise: it goes on until stopped (or the 8 s
+    # scene ends), so the test waits for states, not for a machine's speed
+    strict = tmp_path / "rotors"
+    strict.mkdir()
+    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    (strict / "demo-auger.toml").write_text(text.replace("grade_mm_s = 6.3", "grade_mm_s = 0.1"))
+    with served(tmp_path, "--config-dir", str(strict)) as base:
+        browser.get(base + "/")
+        _see(browser, "New rotor")
+        for label, text in (("serial number", "K-1"), ("order", "O-1"), ("operator", "lee")):
+            _tab_to(browser, label).send_keys(text)
+        _tab_to(browser, "Start measuring").send_keys(Keys.ENTER)
+        _see(browser, "vibration at the supports")  # the first estimate: an answer to stop on
+        _tab_to(browser, "Stop").send_keys(Keys.ENTER)
+        _tab_to(browser, "Go to the correction").send_keys(Keys.ENTER)
+        _see(browser, "in hole")
+        _tab_to(browser, "Start").send_keys(Keys.ENTER)  # the Start screen, from the top bar
+        _see(browser, "New rotor")
