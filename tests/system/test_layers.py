@@ -253,15 +253,3 @@ def test_decoding_loads_neither_python_can_nor_h5py() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
-
-
-def test_no_top_level_drivers_or_calib_package_is_installed(tmp_path: Path) -> None:
-    """The folders drivers/ and calib/ install as stand.drivers and stand.calib only."""
-    code = (
-        "import importlib.util as u, stand.drivers.protocol, stand.calib.identify; "
-        "print(u.find_spec('drivers'), u.find_spec('calib'))"
-    )
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path
-    )
-    assert out.stdout.strip() == "None None"
