@@ -10,7 +10,6 @@ the traceback instead.
 from __future__ import annotations
 
 import argparse
-import gc
 import importlib
 import os
 import sys
@@ -18,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 from stand import __version__
 from stand.errors import StandError, UsageError
-from stand.process import keep_freed_memory
+from stand.process import one_blas_thread, skip_last_collection
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
@@ -61,18 +60,6 @@ SUBCOMMANDS: dict[str, str] = {
 """Each subcommand and its one-line help; its module ``stand.cli.<name>`` is imported only
 when it is the one chosen, so ``stand --help`` and ``stand --version`` import none."""
 
-BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
-"""One BLAS thread: the arrays here are long and thin, and threads only spin."""
-NO_PYDANTIC_PLUGINS = ("PYDANTIC_DISABLE_PLUGINS", "__all__")
-"""The project uses no pydantic plugin, and finding out that none is installed reads every
-installed package's entry points at the first model (5 ms of every command).  Set the
-variable to an empty string to have pydantic load its plugins again."""
-
-
-REUSE_MEMORY = ("solve", "report")
-"""Commands that read whole runs: freed memory is kept for reuse
-(:func:`stand.process.allocator.keep_freed_memory`)."""
-
 
 def _chosen(argv: Sequence[str]) -> str | None:
     """The subcommand named in ``argv`` (the first word that is not an option)."""
@@ -105,16 +92,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def entry() -> int:
     """The ``stand`` program (its console script and ``python -m stand.cli``): :func:`main`,
-    then every object left to the interpreter's last collection at exit is left out of it.
-
-    That collection visits every object the process made (pydantic's schemas, numpy's
-    and h5py's modules ...) only to free memory the process is about to hand back: 25
-    to 40 ms of every command (a 3 s solve 0.278 -> 0.252 s, median of 15).  Files are
-    written and closed before :func:`main` returns; finalizers registered with ``atexit``
-    or ``weakref.finalize`` still run.
-    """
+    then the interpreter's last collection skipped
+    (:func:`stand.process.program.skip_last_collection`: 7 % of a 3 s solve)."""
     code = main()
-    gc.freeze()
+    skip_last_collection()
     return code
 
 
@@ -122,12 +103,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``stand`` command with ``argv`` (default ``sys.argv[1:]``); return the exit code."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in args_list
-    for var in BLAS_THREADS:
-        os.environ.setdefault(var, "1")
-    os.environ.setdefault(*NO_PYDANTIC_PLUGINS)
+    one_blas_thread()
     chosen = _chosen(args_list)
-    if chosen in REUSE_MEMORY:
-        keep_freed_memory()
     try:
         parser = build_parser(chosen)
         args = parser.parse_args(args_list)

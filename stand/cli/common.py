@@ -14,11 +14,8 @@ from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, p
 from stand.drivers.bus import ALLOW_URL
 from stand.drivers.files import output
 from stand.errors import UsageError
-from stand.field.speeds import correction_masses_across_speeds
-from stand.sim import Mass
 from stand.solve import Job
 from stand.solve.pipeline import SolveOptions, precision_targets
-from stand.solve.recordings import correction_masses
 
 if TYPE_CHECKING:
     pass
@@ -74,22 +71,6 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
         help="the rotor turned this far on its tooling ([effects.tooling]): 180 for the "
         "second run of `stand tooling measure`",
     )
-
-
-def scene_masses(args: argparse.Namespace) -> list[Any]:
-    """The masses ``--add`` and ``--apply`` put on the simulated rotor."""
-
-    masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
-    runs = getattr(args, "apply", None) or []
-    if len(runs) == 1:
-        masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
-    elif runs:
-        slow = getattr(args, "apply_slow_roll", None)
-        masses += [
-            Mass(p, g, a, r, x)
-            for p, g, a, r, x in correction_masses_across_speeds(runs, slow_roll=slow)
-        ]
-    return masses
 
 
 def add_across_speeds_arguments(p: argparse.ArgumentParser, *, flag: bool = True) -> None:

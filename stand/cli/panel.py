@@ -15,11 +15,14 @@ import argparse
 import sys
 from typing import Any
 
-from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path, scene_masses
+from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
 from stand.core import rad_s_to_rpm, unbalance_to_polar
+from stand.field.speeds import correction_masses_across_speeds
 from stand.live import live_source, measure_live
 from stand.report import Display
+from stand.sim import Mass
 from stand.solve.pipeline import tolerance_of
+from stand.solve.recordings import correction_masses
 
 ANGLE_HELP = "angles from the reference mark, against the direction of rotation"
 
@@ -201,3 +204,19 @@ def measure_live_from_args(
     if session.failure is not None and not args.quiet:
         print(f"stand: {session.failure}", file=sys.stderr)
     return result, source.cfg, source.params
+
+
+def scene_masses(args: argparse.Namespace) -> list[Any]:
+    """The masses ``--add`` and ``--apply`` put on the simulated rotor."""
+
+    masses = [Mass(p, g, a, None if r is None else r * 1e-3) for p, g, a, r in args.add]
+    runs = getattr(args, "apply", None) or []
+    if len(runs) == 1:
+        masses += [Mass(p, g, a, r) for p, g, a, r in correction_masses(runs[0])]
+    elif runs:
+        slow = getattr(args, "apply_slow_roll", None)
+        masses += [
+            Mass(p, g, a, r, x)
+            for p, g, a, r, x in correction_masses_across_speeds(runs, slow_roll=slow)
+        ]
+    return masses

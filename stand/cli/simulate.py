@@ -17,8 +17,8 @@ from stand.cli.common import (
     add_scene_arguments,
     bus_kwargs,
     job_from,
-    scene_masses,
 )
+from stand.cli.panel import scene_masses
 from stand.config import config_toml
 from stand.drivers.bus import describe_bus, open_bus, play
 from stand.drivers.files import check_output

@@ -5,6 +5,7 @@ pyproject.toml, nothing else at site-packages' top."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -51,10 +52,15 @@ def test_the_installed_package_maps_the_folders(tmp_path: Path) -> None:
 
 def test_a_regular_install_maps_them_too(tmp_path: Path) -> None:
     """A regular install (a wheel, as pip builds it) lays the folders out inside stand/."""
-    site = tmp_path / "site"
+    site, src = tmp_path / "site", tmp_path / "src"  # a copy: no build/ left in the tree
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy(ROOT / name, src / name)
+    for name in ("stand", "drivers", "calib"):
+        shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
     subprocess.run(
         [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-compile",
-         "--target", str(site), str(ROOT)],
+         "--target", str(site), str(src)],
         capture_output=True, check=True,
     )  # fmt: skip
     env = {**os.environ, "PYTHONPATH": str(site)}
