@@ -8,11 +8,12 @@ one segment, ``F`` strictly increasing) that is all the index is, and
 instead of 115 MB, and it is never written out whole (on this project's
 machine memory written for the first time costs about 2 ms a MB).
 
-It reads as the int64 array it stands for: ``len``, an element, a slice (a
-view: nothing is computed), an integer or boolean array of positions, ``astype``,
-``searchsorted``, numpy's functions and operators (through ``__array__`` and
-``__array_ufunc__``, which compute the values asked for).  ``tests/drivers/test_frame_index.py``
-checks every one against the array itself.
+It offers what the measuring path asks of a node's index, and no more: ``len``, an
+element, a slice (a view: nothing is computed), an integer or boolean array of
+positions (an array), ``astype``, ``nbytes`` and ``searchsorted`` (also as ``np.searchsorted``);
+``np.asarray`` gives the whole array, for anything else.  Arithmetic and comparisons
+are not offered: a caller that needs them takes the array.
+``tests/drivers/test_frame_index.py`` checks every one against the array itself.
 """
 
 from __future__ import annotations
@@ -20,18 +21,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.lib.mixins import NDArrayOperatorsMixin
 from numpy.typing import NDArray
-
 from stand.drivers.protocol import SAMPLES_PER_FRAME as PER_FRAME
 
 
-class FrameIndex(NDArrayOperatorsMixin):
+class FrameIndex:
     """``3 F[i // 3] + i % 3`` for samples ``lo <= i < hi`` (``F`` strictly increasing)."""
 
     __slots__ = ("_F", "_hi", "_lo")
-    dtype = np.dtype(np.int64)
-    ndim = 1
 
     def __init__(self, F: NDArray[np.int64], lo: int = 0, hi: int | None = None) -> None:
         self._F = F
@@ -42,16 +39,8 @@ class FrameIndex(NDArrayOperatorsMixin):
         return self._hi - self._lo
 
     @property
-    def shape(self) -> tuple[int]:
-        return (len(self),)
-
-    @property
-    def size(self) -> int:
-        return len(self)
-
-    @property
     def nbytes(self) -> int:
-        """What the array it stands for would take [B]."""
+        """What the array it stands for would take [B] (a run file's size bound)."""
         return 8 * len(self)
 
     def __repr__(self) -> str:
@@ -79,16 +68,6 @@ class FrameIndex(NDArrayOperatorsMixin):
         values = self._range(self._lo, self._hi)
         return values if dtype is None else values.astype(dtype)
 
-    def __array_ufunc__(self, ufunc: Any, method: str, *inputs: Any, **kwargs: Any) -> Any:
-        args = [np.asarray(x) if isinstance(x, FrameIndex) else x for x in inputs]
-        return getattr(ufunc, method)(*args, **kwargs)
-
-    def __iter__(self) -> Any:
-        return iter(np.asarray(self))
-
-    def tolist(self) -> list[int]:
-        return np.asarray(self).tolist()  # type: ignore[no-any-return]
-
     def astype(self, dtype: Any, copy: bool = True) -> NDArray[Any]:
         return np.asarray(self).astype(dtype)
 
@@ -109,10 +88,10 @@ class FrameIndex(NDArrayOperatorsMixin):
             return self._at(self._lo + np.where(k < 0, k + n, k).astype(np.int64))
         return np.asarray(self)[key]
 
-    def searchsorted(self, v: Any, side: str = "left", sorter: Any = None) -> Any:
-        """Where ``v`` would go to keep the values sorted, as numpy's ``searchsorted``."""
-        if sorter is not None:
-            return np.asarray(self).searchsorted(v, side=side, sorter=sorter)  # type: ignore[call-overload]
+    def searchsorted(self, v: Any, side: str = "left", sorter: None = None) -> Any:
+        """Where ``v`` would go to keep the values sorted, as numpy's ``searchsorted``
+        (``sorter`` is there for ``np.searchsorted``, which passes None: the values are
+        sorted)."""
         keys = np.asarray(v, dtype=np.float64)
         # the values are integers: at or after k is at or after ceil(k); after k is at or
         # after floor(k) + 1

@@ -13,6 +13,9 @@ from fit import fit
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scenes import BASE, SCALE, run, scene
+from stand.drivers.codec import decode
+from stand.drivers.protocol import SAMPLES_BASE
+from stand.drivers.streams import rebuild
 from strategies import log_uniform, stands, unbalances
 
 from stand.config import validate
@@ -23,9 +26,6 @@ from stand.core import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
-from stand.drivers.codec import decode
-from stand.drivers.protocol import SAMPLES_BASE
-from stand.drivers.streams import rebuild
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate
 
@@ -44,7 +44,7 @@ def test_no_effects_reproduces_the_closed_form_to_the_quantisation_step() -> Non
     A = A_true(sc)
     for i in (1, 2):
         s = r.nodes[i]
-        t = s.index / 4000.0
+        t = np.asarray(s.index) / 4000.0
         exact = (A[i - 1] * np.exp(1j * w * t)).real
         assert s.accel_m_s2 is not None
         # rounding to a count: at most half a count (plus float noise of the sum)
@@ -142,7 +142,7 @@ def test_lost_frames_single_and_bursts_keep_true_indices() -> None:
     clean = rebuild(run(scene()).frames).nodes[1]
     s = rebuild(sim.frames).nodes[1]
     assert s.lost_frames > 0.02 * clean.frames
-    present = np.isin(clean.index, s.index)
+    present = np.isin(clean.index, np.asarray(s.index))
     assert np.array_equal(clean.accel_m_s2[present], s.accel_m_s2)  # type: ignore[index]
 
 
@@ -203,7 +203,7 @@ def test_run_up_starts_at_rest_and_settles_to_the_closed_form() -> None:
     rpm = 60 * 4000 / np.diff(s.mark_position)
     assert rpm[0] < 300 and rpm[-1] == pytest.approx(900.0, rel=1e-6)
     # the last 3 s: transients have decayed (damping time ~ 2 M / H ~ 0.1 s for the supports)
-    tail = s.index >= 6 * 4000
+    tail = np.asarray(s.index) >= 6 * 4000
     tail_stream = s.take(tail)
     got = fit(tail_stream)[1]
     assert abs(got - A_true(sc)[0]) < 2e-4 * abs(A_true(sc)[0])
@@ -323,6 +323,6 @@ def test_any_stand_from_grams_to_tonnes_reaches_the_frames_within_half_a_count(
     r = rebuild(simulate(sc, p).frames)
     for i in (1, 2):
         s = r.nodes[i]
-        exact = (A[i - 1] * np.exp(1j * w * s.index / 4000.0)).real
+        exact = (A[i - 1] * np.exp(1j * w * np.asarray(s.index) / 4000.0)).real
         err = np.max(np.abs(s.accel_m_s2 - exact))  # type: ignore[operator]
         assert err <= 0.5 * scale_um * 1e-6 * (1 + 1e-9) + 1e-9 * peak
