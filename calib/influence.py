@@ -31,8 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from stand.core.inverse import Diagnostic
-from stand.core.model import StandParameters, forward
+from stand.core import Diagnostic, StandParameters, forward
 from stand.errors import ModelError
 
 TRIAL_EFFECT_MIN = 0.25

@@ -25,8 +25,8 @@ from stand import __version__
 from stand.archive.results import add_result, file_digest
 from stand.archive.store import Archive
 from stand.config import config_toml
+from stand.drivers import rebuild
 from stand.drivers.recording import STAND_ATTR, Recording, write_recording
-from stand.drivers.streams import rebuild
 from stand.errors import UsageError
 from stand.health import datum_row
 from stand.sim import Mass, load_scene, simulate, with_masses

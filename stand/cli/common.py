@@ -8,7 +8,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
-from stand.calib.tolerance import Tolerances
+from stand.calib import Tolerances
 from stand.config import read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from stand.drivers import read_recording, rebuild, write_recording
 from stand.drivers.files import check_output
-from stand.drivers.recording import read_recording, write_recording
-from stand.drivers.streams import rebuild
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 
 from stand.cli.format import print_recording
-from stand.drivers.recording import read_recording
-from stand.drivers.streams import rebuild
+from stand.drivers import read_recording, rebuild
 from stand.errors import RecordingError
 
 

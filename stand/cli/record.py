@@ -10,9 +10,7 @@ from typing import Any
 
 from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs
 from stand.cli.format import print_recording
-from stand.drivers.protocol import Frames
-from stand.drivers.recording import Recording
-from stand.drivers.streams import rebuild
+from stand.drivers import Frames, Recording, rebuild
 from stand.errors import BusError, BusTimeoutError, UsageError
 from stand.live import LiveSession
 from stand.solve import load_config_text

@@ -12,8 +12,8 @@ from stand.cli.common import (
     solve_options,
     write_text_output,
 )
+from stand.drivers import read_recording
 from stand.drivers.files import check_output
-from stand.drivers.recording import read_recording
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.report import render, render_speeds, write_pdf

@@ -20,10 +20,10 @@ from stand.cli.common import (
 )
 from stand.cli.panel import scene_masses
 from stand.config import config_toml
+from stand.drivers import rebuild
 from stand.drivers.bus import describe_bus, open_bus, play
 from stand.drivers.files import check_output
 from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
-from stand.drivers.streams import rebuild
 from stand.errors import UsageError
 from stand.sim import load_scene, shipped_scenes, simulate, with_masses
 from stand.solve import load_config_text

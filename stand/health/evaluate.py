@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
-from stand.drivers.streams import rebuild
+from stand.drivers import rebuild
 from stand.measuring import Measurement
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable

@@ -22,9 +22,9 @@ from numpy.typing import NDArray
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
+from stand.drivers import Frames
 from stand.drivers.budget import frames_budget
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
-from stand.drivers.protocol import Frames
 from stand.errors import ConfigError
 from stand.sim.physics import (
     SceneSpeed,

@@ -15,7 +15,7 @@ from typing import Any
 
 from stand.config import SAME_SPEED
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
-from stand.drivers.recording import read_streams
+from stand.drivers import read_streams
 from stand.errors import UsageError
 from stand.measuring import Measurement
 from stand.solve.pipeline import SolveOptions, measure_streams, stored_config

@@ -57,8 +57,8 @@ of the 600 s figure, so they are imported at the top like any module)."""
 def test_solving_a_rigid_rotor_imports_only_what_it_needs(
     demo_run: Path, tmp_path: Path, suffix: str
 ) -> None:
+    from stand.drivers import read_recording
     from stand.drivers.logs import write_log
-    from stand.drivers.recording import read_recording
 
     argv = ["solve", str(demo_run), "--json"]
     if suffix == ".log":

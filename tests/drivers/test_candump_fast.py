@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from stand.drivers import candump, logs
+
 from stand.errors import RecordingError
 
 FIELDS = ("t_s", "can_id", "dlc", "data", "flags")
@@ -87,8 +87,8 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Blocks already decoded are dropped and the whole file is read the slow way."""
-    from stand.drivers.recording import read_streams
-    from stand.drivers.streams import rebuild
+    from stand.drivers import read_streams, rebuild
+
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")

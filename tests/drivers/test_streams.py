@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from stand.drivers import rebuild
 from stand.drivers.codec import decode
 from stand.drivers.nodes import merge, node_frames
 from stand.drivers.protocol import INVALID_COUNT, MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
-from stand.drivers.streams import rebuild
 from synth import sine_run
 
 from stand.errors import NoStatusError

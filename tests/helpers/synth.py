@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-
+from stand.drivers import Frames
 from stand.drivers.nodes import merge, node_frames
-from stand.drivers.protocol import Frames
 
 
 def sine_run(

@@ -144,7 +144,7 @@ def test_no_fork_with_other_threads_or_when_told(monkeypatch: pytest.MonkeyPatch
 
 @pytest.mark.skipif(not beside.can_fork(), reason="no fork here")
 def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.MonkeyPatch) -> None:
-    from stand.drivers.streams import rebuild
+    from stand.drivers import rebuild
 
     from stand.sim import load_scene, simulate
 
@@ -226,8 +226,7 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
     """Read in blocks, a run file's times are views of the one array read whole: the
     streams take that array itself (and what live blocks bring is still joined); the
     streams are those of the run read whole."""
-    from stand.drivers import recording
-    from stand.drivers.recording import Recording, read_streams, write_recording
+    from stand.drivers import Recording, read_streams, recording, write_recording
     from stand.drivers.streams import StreamBuilder, _joined
 
     from stand.sim import load_scene, simulate

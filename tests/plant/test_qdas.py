@@ -22,7 +22,8 @@ def _results(n: int) -> list[tuple[Any, int | None]]:
     """``n`` rotors measured on the simulated demo stand (2 s runs), and a check run for
     the first :data:`CHECKED` (their residual a few tens of g mm): (result, index of the
     run it checks)."""
-    from stand.drivers.streams import rebuild
+    from stand.drivers import rebuild
+
     from stand.sim import load_scene, simulate
     from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 

@@ -13,9 +13,9 @@ from fit import fit
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scenes import BASE, SCALE, run, scene
+from stand.drivers import rebuild
 from stand.drivers.codec import decode
 from stand.drivers.protocol import SAMPLES_BASE
-from stand.drivers.streams import rebuild
 from strategies import log_uniform, stands, unbalances
 
 from stand.config import validate
