@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
 from stand.drivers.protocol import SAMPLES_PER_FRAME as PER_FRAME
 
 

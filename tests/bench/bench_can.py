@@ -30,14 +30,14 @@ from pathlib import Path
 import can
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
+from synth import sine_run
+
+from stand.cli.record import speed_line
 from stand.drivers import Frames, rebuild
 from stand.drivers.bus import BusReader, play
 from stand.drivers.logs import read_log, write_log
 from stand.drivers.recording import Recording, read_run, write_recording
 from stand.drivers.run_writer import RunWriter
-from synth import sine_run
-
-from stand.cli.record import speed_line
 from stand.errors import BusError
 
 

@@ -33,11 +33,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
 from scenes import BASE
-from stand.drivers import rebuild
 
 from stand.config import validate
 from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
 from stand.core.dsp import radius_factor
+from stand.drivers import rebuild
 from stand.measuring.measure import measure
 from stand.sim import Scene, simulate
 

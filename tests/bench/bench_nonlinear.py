@@ -30,9 +30,9 @@ from multiprocessing import Pool
 from typing import Any
 
 import numpy as np
-from stand.drivers import rebuild
 
 from stand.core import forward
+from stand.drivers import rebuild
 from stand.errors import StandError
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate

@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from stand.drivers import Recording, write_recording
 
+from stand.drivers import Recording, write_recording
 from stand.sim import load_scene, simulate
 from stand.sim.emit import scene_speed
 

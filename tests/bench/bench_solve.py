@@ -18,10 +18,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from stand.config import config_toml
 from stand.drivers import Recording, write_recording
 from stand.drivers.logs import write_log
-
-from stand.config import config_toml
 from stand.sim import load_scene, simulate
 
 STAND = str(Path(sys.executable).with_name("stand"))

@@ -8,12 +8,12 @@ from typing import Any
 
 import numpy as np
 import pytest
-from stand.drivers import Recording, write_recording
-from stand.drivers.logs import write_log
-from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
 
 from stand.cli import main
 from stand.config import config_toml
+from stand.drivers import Recording, write_recording
+from stand.drivers.logs import write_log
+from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
 from stand.sim import load_scene, simulate
 
 ROOT = Path(__file__).resolve().parents[2]

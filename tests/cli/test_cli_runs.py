@@ -12,13 +12,13 @@ from pathlib import Path
 import can
 import numpy as np
 import pytest
+from synth import sine_run
+
+from stand.cli import main
 from stand.drivers import Frames
 from stand.drivers.bus import play
 from stand.drivers.logs import write_log
 from stand.drivers.recording import read_run
-from synth import sine_run
-
-from stand.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 DEMO = ROOT / "examples" / "demo-stand.toml"

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scenes import scene
-from stand.drivers import rebuild
 
 from stand.core import forward, unbalance_from_polar
 from stand.core.dsp import fit_1x, radius_factor, shaft_angle
+from stand.drivers import rebuild
 from stand.measuring.measure import measure
 from stand.sim import simulate
 

@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from stand.drivers import rebuild
 
 from stand.core.nonlinear import (
     KINDS,
@@ -25,6 +24,7 @@ from stand.core.nonlinear import (
     fit_columns,
     force_1x,
 )
+from stand.drivers import rebuild
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
 

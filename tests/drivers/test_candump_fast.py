@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from stand.drivers import candump, logs
 
+from stand.drivers import candump, logs
 from stand.errors import RecordingError
 
 FIELDS = ("t_s", "can_id", "dlc", "data", "flags")
@@ -88,7 +88,6 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
 ) -> None:
     """Blocks already decoded are dropped and the whole file is read the slow way."""
     from stand.drivers import read_streams, rebuild
-
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")

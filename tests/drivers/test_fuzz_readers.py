@@ -17,9 +17,9 @@ import h5py
 import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+
 from stand.drivers import Frames, Recording, read_recording, read_streams, write_recording
 from stand.drivers.logs import write_log
-
 from stand.errors import StandError
 from stand.sim import load_scene, simulate
 

@@ -13,15 +13,15 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from synth import sine_run
+
+from stand.core import Diagnostic
 from stand.drivers import rebuild
 from stand.drivers.logs import read_candump, read_log, write_log
 from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
 from stand.drivers.recording import Recording, read_recording, read_run, write_recording
 from stand.drivers.run_writer import FLUSH_INTERVAL_S, RunWriter
 from stand.drivers.seal import MAGIC, USERBLOCK_BYTES, read_in_child, seal_state
-from synth import sine_run
-
-from stand.core import Diagnostic
 from stand.errors import RecordingError, WriteError
 
 TESTS = Path(__file__).resolve().parents[1]
@@ -95,6 +95,7 @@ def test_python_can_logs_round_trip(tmp_path: Path, suffix: str) -> None:
 
 def test_fast_candump_reader_equals_python_can(tmp_path: Path) -> None:
     import can
+
     from stand.drivers.logs import frames_from_messages
 
     path = tmp_path / "run.log"

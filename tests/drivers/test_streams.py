@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from synth import sine_run
+
 from stand.drivers import rebuild
 from stand.drivers.codec import decode
 from stand.drivers.nodes import merge, node_frames
 from stand.drivers.protocol import INVALID_COUNT, MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
-from synth import sine_run
-
 from stand.errors import NoStatusError
 
 

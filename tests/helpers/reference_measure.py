@@ -28,10 +28,10 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from stand.drivers import NodeStream, RunStreams
 
 from stand.core import Diagnostic, StandParameters, UnbalanceSolution, solve_unbalance
 from stand.core.dsp import Phasor, fit_1x, radius_factor, shaft_angle
+from stand.drivers import NodeStream, RunStreams
 from stand.errors import MeasurementError
 
 SPEED_TOLERANCE = 0.03

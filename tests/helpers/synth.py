@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+
 from stand.drivers import Frames
 from stand.drivers.nodes import merge, node_frames
 

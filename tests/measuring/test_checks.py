@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from stand.drivers import rebuild
-from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
 
 from stand.cli import main
+from stand.drivers import rebuild
+from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate

@@ -16,8 +16,8 @@ from dataclasses import astuple
 import numpy as np
 import pytest
 import reference_measure
-from stand.drivers import rebuild
 
+from stand.drivers import rebuild
 from stand.measuring import measure, passes
 from stand.sim import load_scene, simulate
 

@@ -145,7 +145,6 @@ def test_no_fork_with_other_threads_or_when_told(monkeypatch: pytest.MonkeyPatch
 @pytest.mark.skipif(not beside.can_fork(), reason="no fork here")
 def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.MonkeyPatch) -> None:
     from stand.drivers import rebuild
-
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -170,7 +169,6 @@ def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.Monkey
 def test_streams_released_are_the_streams() -> None:
     """A builder's blocks let go during the rebuild give the streams kept blocks give."""
     from stand.drivers.streams import StreamBuilder
-
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -228,7 +226,6 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
     streams are those of the run read whole."""
     from stand.drivers import Recording, read_streams, recording, write_recording
     from stand.drivers.streams import StreamBuilder, _joined
-
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")

@@ -23,7 +23,6 @@ def _results(n: int) -> list[tuple[Any, int | None]]:
     the first :data:`CHECKED` (their residual a few tens of g mm): (result, index of the
     run it checks)."""
     from stand.drivers import rebuild
-
     from stand.sim import load_scene, simulate
     from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 

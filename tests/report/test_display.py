@@ -82,9 +82,9 @@ def test_a_bad_display_unit_is_refused_naming_the_key(
 def test_the_live_panel_shows_each_plane_against_its_goal_and_tolerance() -> None:
     """The panel as a terminal shows it (rendered to text), from a real measurement."""
     from rich.console import Console
-    from stand.drivers import rebuild
 
     from stand.cli.panel import panel
+    from stand.drivers import rebuild
     from stand.live import Progress
     from stand.sim import load_scene, simulate
     from stand.solve import SolveOptions, measure_streams

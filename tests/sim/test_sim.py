@@ -13,9 +13,6 @@ from fit import fit
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scenes import BASE, SCALE, run, scene
-from stand.drivers import rebuild
-from stand.drivers.codec import decode
-from stand.drivers.protocol import SAMPLES_BASE
 from strategies import log_uniform, stands, unbalances
 
 from stand.config import validate
@@ -26,6 +23,9 @@ from stand.core import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
+from stand.drivers import rebuild
+from stand.drivers.codec import decode
+from stand.drivers.protocol import SAMPLES_BASE
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate
 

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from stand.drivers import read_recording
-from stand.drivers.protocol import SAMPLES_BASE, Frames
 
 from stand.cli import main
+from stand.drivers import read_recording
+from stand.drivers.protocol import SAMPLES_BASE, Frames
 
 ROOT = Path(__file__).resolve().parents[2]
 CFG = (ROOT / "examples" / "demo-stand.toml").read_text()

@@ -18,12 +18,12 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+
+from stand.cli import main
 from stand.drivers import read_recording
 from stand.drivers.logs import write_log
 from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
 from stand.drivers.seal import USERBLOCK_BYTES
-
-from stand.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 CFG = (ROOT / "examples" / "demo-stand.toml").read_text()
