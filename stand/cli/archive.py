@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from stand.archive import import_runs, verify
-from stand.cli.archiving import archive_url
+from stand.archive import import_runs, url_for, verify
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
 from stand.errors import UsageError
@@ -29,7 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
-    url = archive_url(args)
+    url = url_for(args.archive)
     if args.action == "import":
         if not args.runs:
             raise UsageError("stand archive import: give the runs to import")

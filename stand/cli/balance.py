@@ -7,8 +7,7 @@ import copy
 import sys
 from pathlib import Path
 
-from stand.archive import Archive, drift_rows, file_digest
-from stand.cli.archiving import archive_live, archive_url
+from stand.archive import Archive, drift_rows, file_digest, url_for
 from stand.cli.common import (
     DEFAULT_TARGET_PCT,
     TOLERANCE_SHARE,
@@ -20,7 +19,7 @@ from stand.cli.common import (
     write_text_output,
 )
 from stand.cli.format import dump_json, print_speeds, show
-from stand.cli.panel import measure_live_from_args
+from stand.cli.panel import archive_live, measure_live_from_args
 from stand.config import SAME_SPEED
 from stand.config.typed import parse_mass, parse_rpm
 from stand.core import rad_s_to_rpm
@@ -118,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_archive:  # a stand that drifted from its calibration says so, widened
         try:
             result = with_drift(
-                drift_rows(archive_url(args, cfg), result), result, cfg, params, options
+                drift_rows(url_for(args.archive, cfg), result), result, cfg, params, options
             )
         except ArchiveError:  # an archive out of reach is said once, when the run goes in
             pass
@@ -171,7 +170,7 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
         confirmed_by=args.operator,
         applied="typed" if args.applied_masses else "as shown",
     )
-    with Archive(archive_url(args, cfg)) as a:
+    with Archive(url_for(args.archive, cfg)) as a:
         a.add_correction(row)
     if not args.quiet:
         print("stored as a calibration datum (stand health)", file=sys.stderr)

@@ -12,9 +12,8 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
-from stand.archive import correction_rows
+from stand.archive import correction_rows, url_for
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
-from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
 from stand.cli.format import dump_json
 from stand.config.schema import STRICT, load_config, read_toml, updated_toml, validate
@@ -295,7 +294,7 @@ def _from_archive(args: argparse.Namespace) -> int:
                 f"--fit: {', '.join(bad) or 'nothing'}: choose from {', '.join(FITTABLE)}"
             )
     cfg, params = load_config(args.config)
-    rows = correction_rows(archive_url(args, cfg), args.stand, args.rotor_type)
+    rows = correction_rows(url_for(args.archive, cfg), args.stand, args.rotor_type)
     r = refit(rows, params, names)
     original, _ = read_toml(args.config)
     header, text = _refitted_config(cfg, r, original)

@@ -6,7 +6,7 @@ import argparse
 import datetime as dt
 import math
 from collections.abc import Iterable, Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from stand.calib import Tolerances
 from stand.config import read_matrix
@@ -16,9 +16,6 @@ from stand.drivers.files import output
 from stand.errors import UsageError
 from stand.solve import Job
 from stand.solve.pipeline import SolveOptions, precision_targets
-
-if TYPE_CHECKING:
-    pass
 
 
 def add_force_argument(p: argparse.ArgumentParser, what: str) -> None:

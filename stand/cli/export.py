@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from stand.archive import url_for
 from stand.archive.query import Filters
-from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument, add_date_arguments
 from stand.plant import export_qdas
 
@@ -23,6 +23,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
 
     f = Filters(since=args.since, until=args.until, stand=args.stand)
-    _, n = export_qdas(archive_url(args), args.rotor_type, f, args.out, force=args.force)
+    _, n = export_qdas(url_for(args.archive), args.rotor_type, f, args.out, force=args.force)
     print(f"wrote {args.out}: {n} runs of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)")
     return 0

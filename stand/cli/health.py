@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from stand.archive import correction_rows
-from stand.cli.archiving import archive_url
+from stand.archive import correction_rows, url_for
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
 from stand.health import health, health_json
@@ -22,7 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
-    out = health_json(health(correction_rows(archive_url(args), args.stand, args.rotor_type)))
+    out = health_json(health(correction_rows(url_for(args.archive), args.stand, args.rotor_type)))
     if args.json:
         dump_json(out)
         return 0

@@ -8,8 +8,8 @@ import io
 import sys
 from typing import Any
 
+from stand.archive import url_for
 from stand.archive.query import Filters, history
-from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
 from stand.cli.format import dump_json
 from stand.errors import UsageError
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         limit=args.limit,
         stand=args.stand,
     )
-    found = history(archive_url(args), f)
+    found = history(url_for(args.archive), f)
     if args.json:
         dump_json({"runs": found})
     elif args.csv:

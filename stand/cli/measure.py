@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from stand.cli.archiving import archive_live
 from stand.cli.common import (
     DEFAULT_TARGET_PCT,
     add_live_measure_arguments,
@@ -12,7 +11,7 @@ from stand.cli.common import (
     targets_from,
 )
 from stand.cli.format import show
-from stand.cli.panel import measure_live_from_args
+from stand.cli.panel import archive_live, measure_live_from_args
 from stand.solve import to_json
 
 

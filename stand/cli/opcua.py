@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from stand.cli.archiving import archive_url
+from stand.archive import url_for
 from stand.cli.common import add_archive_argument
 from stand.config import load_config
 from stand.errors import UsageError
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)[0]
     stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)
     server = ResultServer(
-        archive_url(args, cfg),
+        url_for(args.archive, cfg),
         stand,
         args.host,
         args.port,

@@ -6,7 +6,9 @@ its tolerance, the supports' 1x; what the measurement is waiting for.
 Elsewhere (a pipe, a log file) the same figures go out as one line per
 solve (:func:`progress_line`).  :func:`measure_live_from_args` runs the live
 measurement the options of ``stand measure`` and ``stand balance`` ask for,
-with this display.
+with this display; :func:`scene_masses` the masses they put on a simulated rotor and
+:func:`archive_live` the archiving of their run (kept out of :mod:`stand.cli.common`, so
+that ``stand solve`` loads neither the simulator nor the database).
 """
 
 from __future__ import annotations
@@ -15,10 +17,13 @@ import argparse
 import sys
 from typing import Any
 
+from stand.archive import archive_result, url_for
 from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
 from stand.core import rad_s_to_rpm, unbalance_to_polar
+from stand.errors import ArchiveError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.live import live_source, measure_live
+from stand.plant import publish_archived
 from stand.report import Display
 from stand.sim import Mass
 from stand.solve.pipeline import tolerance_of
@@ -220,3 +225,24 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
             for p, g, a, r, x in correction_masses_across_speeds(runs, slow_roll=slow)
         ]
     return masses
+
+
+def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
+    """Archive a live run (unless ``--no-archive``); say where on stderr."""
+    if args.no_archive or not result.provenance.run_file:
+        return
+    url = url_for(args.archive, cfg)
+    try:
+        run_id = archive_result(result, url, config=args.config)
+    except ArchiveError as exc:
+        raise ArchiveError(
+            f"{str(exc).split(': ', 1)[1]} (the run is kept in {result.provenance.run_file}: "
+            "stand archive import it later)",
+            url=exc.url,
+        ) from exc
+    if not args.quiet:
+        print(f"archived as run {run_id}", file=sys.stderr)
+
+    said = publish_archived(result, cfg)
+    if said and (not args.quiet or said.startswith("not")):
+        print(said, file=sys.stderr)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from stand.archive import url_for
 from stand.archive.query import Filters
 from stand.archive.stats import production
-from stand.cli.archiving import archive_url
 from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
 from stand.cli.format import dump_json
 from stand.report import render_production
@@ -32,7 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
 
     out = production(
-        archive_url(args),
+        url_for(args.archive),
         args.rotor_type,
         Filters(since=args.since, until=args.until, stand=args.stand),
     )

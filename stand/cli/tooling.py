@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.cli.format import ANGLE_NOTE, dump_json
-from stand.config import data_folder, load_config
+from stand.config import load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
 from stand.errors import UsageError
@@ -49,13 +49,10 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
 
 
 def _where(args: argparse.Namespace, cfg: Any) -> Path:
-
+    """The folder of the toolings: ``--folder``, else the config's, else the data folder's."""
     if args.folder:
         return Path(args.folder)
-    if cfg is not None and cfg.tooling is not None:
-        return folder(cfg.tooling)
-
-    return data_folder() / "tooling"
+    return folder(None if cfg is None else cfg.tooling)
 
 
 def _measure(args: argparse.Namespace) -> int:

@@ -19,24 +19,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from stand.core import Diagnostic, StandParameters, UnbalanceSolution, rad_s_to_rpm, solve_unbalance
-from stand.core.beam import solve_beam
+from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
-from stand.core.influence import solve_influence
+from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
 from stand.measuring.passes import NodeFit, node_phasor
 from stand.process import Beside, can_fork
-
-if TYPE_CHECKING:  # imported where used: a rigid rotor's solve needs neither
-    from stand.core.beam import BeamRotor
-    from stand.core.influence import InfluenceMap
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 

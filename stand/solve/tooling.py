@@ -59,9 +59,10 @@ class Tooling:
         }
 
 
-def folder(table: Any) -> Path:
-    """Where a ``[tooling]`` table's measurements are kept."""
-    if table.folder:
+def folder(table: Any | None) -> Path:
+    """Where a ``[tooling]`` table's measurements are kept (no table: the data folder's
+    ``tooling``)."""
+    if table is not None and table.folder:
         return Path(table.folder)
     return data_folder() / "tooling"
 
