@@ -1,10 +1,11 @@
 """A simulated production series: rotor after rotor balanced, corrected and checked.
 
-``stand simulate SCENE --series N --out-dir DIR``: each rotor gets a random
+``stand simulate SCENE --series N --out-dir DIR``: each rotor (serial ``S-00001`` ...) gets a random
 initial unbalance (each plane's size between 0.3 and 1 times
 the scene's, at a random angle), a run, the correction the software
 prescribes (with the runs' stored calibration: the scene's config), put on
-with the operator's scatter (``[effects.placement]``), and a check run;
+with the operator's scatter (``[effects.placement]``), and a check run (archived as the
+check of the first, with its URR);
 both runs are archived, and the pair stored as a calibration datum
 (:mod:`stand.health.monitor`, confirmed "as shown").  From rotor ``from_rotor`` on,
 ``[effects.drift]`` moves one of the stand's parameters: the physics
@@ -26,15 +27,16 @@ from stand.archive.results import add_result, file_digest
 from stand.archive.store import Archive
 from stand.config import config_toml
 from stand.drivers import rebuild
-from stand.drivers.recording import STAND_ATTR, Recording, write_recording
+from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.errors import UsageError
 from stand.health import datum_row
 from stand.sim import Mass, load_scene, simulate, with_masses
 from stand.sim.tables import PlaneUnbalance
-from stand.solve.recordings import result_masses, solve_recording
+from stand.solve import Job, solve_check, solve_recording
+from stand.solve.recordings import result_masses
 
 
-def _write(scene: Any, params: Any, path: Path, believed: str, force: bool) -> None:
+def _write(scene: Any, params: Any, path: Path, believed: str, force: bool, job: Job) -> None:
 
     sim = simulate(scene, params)
     rec = Recording(
@@ -45,6 +47,7 @@ def _write(scene: Any, params: Any, path: Path, believed: str, force: bool) -> N
             "config_toml": believed,
             "software": f"stand {__version__}",
             STAND_ATTR: scene.stand.stand_id(),
+            JOB_ATTR: job.to_text(),
         },
     )
     write_recording(rec, path, rebuild(sim.frames, strict_status=False), force=force)
@@ -99,7 +102,7 @@ def simulate_series(
                 truth = dataclasses.replace(params, **factors)
             rotor, serial = _rotor(scene, rng, i), f"S-{i:05d}"
             first, check = folder / f"{serial}-a.h5", folder / f"{serial}-b.h5"
-            _write(rotor, truth, first, believed, force)
+            _write(rotor, truth, first, believed, force, Job(serial=serial, note="first run"))
             before = solve_recording(str(first))
             add_result(archive, before)
             masses = result_masses(before)
@@ -109,8 +112,11 @@ def simulate_series(
                 Mass(p, g * (1 + sm * float(rng.normal())), a + sa * float(rng.normal()), r)
                 for p, g, a, r in masses
             ]
-            _write(with_masses(rotor, put), truth, check, believed, force)
-            after = solve_recording(str(check))
+            _write(
+                with_masses(rotor, put), truth, check, believed, force,
+                Job(serial=serial, note="check run"),
+            )  # fmt: skip
+            after = solve_check(str(check), str(first))
             add_result(archive, after)
             row = datum_row(
                 before,

@@ -12,13 +12,11 @@ from stand.cli.common import (
     solve_options,
     write_text_output,
 )
-from stand.drivers import read_recording
 from stand.drivers.files import check_output
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.report import render, render_speeds, write_pdf
-from stand.solve import solve_recording, with_check
-from stand.solve.pipeline import load_config_text, stored_config
+from stand.solve import solve_check, solve_recording
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -74,16 +72,10 @@ def run(args: argparse.Namespace) -> int:
         return _write(args, render_speeds(speeds_json(speeds)), inputs)
     options = solve_options(args, traces=True)
     run = args.run[0]
-    result = solve_recording(run, args.config, options)
     if args.check:
-        if args.config:
-            cfg, params, _ = load_config_text(args.config)
-        else:
-            cfg, params, _ = stored_config(read_recording(run).meta, run)
-
-        result = with_check(
-            result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
-        )
+        result = solve_check(run, args.check, args.config, options, strict=not args.check_any)
+    else:
+        result = solve_recording(run, args.config, options)
     return _write(args, render(result), inputs)
 
 

@@ -8,13 +8,20 @@ is its one JSON form; the tooling's unbalance is subtracted here
 (:mod:`stand.solve.index_runs`).  Everything above only formats a Result.
 """
 
-from stand.solve.check import with_check
-from stand.solve.pipeline import SolveOptions, build_result, load_config_text, measure_streams
+from stand.solve.check import solve_check, with_check
+from stand.solve.pipeline import (
+    ConfigText,
+    SolveOptions,
+    build_result,
+    load_config_text,
+    measure_streams,
+)
 from stand.solve.recordings import measure_recording, solve_recording
 from stand.solve.result import Job, Provenance, Result, json_text
 from stand.solve.result_json import to_json
 
 __all__ = [
+    "ConfigText",
     "Job",
     "Provenance",
     "Result",
@@ -24,6 +31,7 @@ __all__ = [
     "load_config_text",
     "measure_recording",
     "measure_streams",
+    "solve_check",
     "solve_recording",
     "to_json",
     "with_check",

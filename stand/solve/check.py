@@ -15,11 +15,17 @@ from typing import Any
 
 from stand.config import SAME_SPEED
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
-from stand.drivers import read_streams
+from stand.drivers import read_recording, read_streams
 from stand.errors import UsageError
 from stand.measuring import Measurement
-from stand.solve.pipeline import SolveOptions, measure_streams, stored_config
-from stand.solve.recordings import named_errors
+from stand.solve.pipeline import (
+    ConfigText,
+    SolveOptions,
+    load_config_text,
+    measure_streams,
+    stored_config,
+)
+from stand.solve.recordings import named_errors, solve_recording
 from stand.solve.result import Check, Result
 
 
@@ -124,3 +130,24 @@ def with_check(
     return replace(
         result, check=check, warnings=(*result.warnings, *check.warnings, *check_notes(check))
     )
+
+
+def solve_check(
+    run: str,
+    previous: str,
+    config: str | ConfigText | None = None,
+    options: SolveOptions = SolveOptions(),
+    *,
+    strict: bool = True,
+) -> Result:
+    """A recorded check run solved (:func:`~stand.solve.recordings.solve_recording`) and
+    checked against ``previous`` (:func:`with_check`) with the same config: the given one,
+    else the check run's stored one."""
+    result = solve_recording(run, config, options)
+    if isinstance(config, ConfigText):
+        cfg, params, _ = config.load()
+    elif config:
+        cfg, params, _ = load_config_text(config)
+    else:
+        cfg, params, _ = stored_config(read_recording(run).meta, run)
+    return with_check(result, previous, cfg, params, strict=strict, matrix=options.matrix)

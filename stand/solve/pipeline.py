@@ -107,6 +107,25 @@ def load_config_text(path: str) -> tuple[Any, StandParameters, str]:
     return cfg, params, text
 
 
+@dataclass(frozen=True)
+class ConfigText:
+    """A configuration given by its text, not its path: what a worker on another machine,
+    which cannot read the client's file, solves with (``source`` names it in errors and in
+    the result's provenance)."""
+
+    text: str
+    source: str
+
+    def load(self) -> tuple[Any, StandParameters, str]:
+        """(config, parameters, text), as :func:`load_config_text` gives them."""
+        try:
+            data = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"not TOML ({exc})", source=self.source) from exc
+        cfg, params = config_from_dict(data, source=self.source)
+        return cfg, params, self.text
+
+
 def tolerance_of(cfg: Any, params: StandParameters) -> Tolerance | None:
     """The ISO 21940-11 tolerance of the config's ``[tolerance]`` table, if any."""
     t = cfg.tolerance

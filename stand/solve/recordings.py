@@ -31,6 +31,7 @@ from stand.measuring.measure import measure
 from stand.solve.correct import removed_masses
 from stand.solve.pipeline import (
     SOFTWARE,
+    ConfigText,
     SolveOptions,
     build_result,
     check_matrix,
@@ -57,7 +58,7 @@ def job_of(meta: dict[str, Any], path: str) -> Job:
 
 def solve_recording(
     path: str,
-    config: str | None = None,
+    config: str | ConfigText | None = None,
     options: SolveOptions = SolveOptions(),
     *,
     adjust: Callable[[Measurement], Measurement] | None = None,
@@ -69,7 +70,8 @@ def solve_recording(
     path
         The recording.
     config
-        A configuration file; None: the one the run file carries.
+        A configuration file (or its text, :class:`~stand.solve.pipeline.ConfigText`);
+        None: the one the run file carries.
     options
         How to solve.  Without a matrix, a run measured with an influence
         matrix is solved with the one it stores.
@@ -85,7 +87,10 @@ def solve_recording(
 
     with named_errors(path):
         rec, streams = read_streams(path)
-    if config:
+    if isinstance(config, ConfigText):
+        cfg, params, text = config.load()
+        source = config.source
+    elif config:
         cfg, params, text = load_config_text(config)
         source = config
     else:
