@@ -247,6 +247,20 @@ class ArchiveError(StandError, OSError):
         super().__init__(f"archive {url}: {message}")
 
 
+class ClusterError(StandError, ConnectionError):
+    """A compute cluster (a Dask scheduler) cannot be reached, or is not usable.
+
+    Attributes
+    ----------
+    address : str
+        The scheduler's address, as given.
+    """
+
+    def __init__(self, message: str, *, address: str):
+        self.address = address
+        super().__init__(f"scheduler {address}: {message}")
+
+
 class StationBusyError(StandError, RuntimeError):
     """The station measures already: one measurement at a time, whichever screen asks.
 

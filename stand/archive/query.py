@@ -10,7 +10,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from stand.archive.schema import planes, runs
+from stand.archive.revisions import revision_id_in
+from stand.archive.schema import planes, revised, revised_planes, runs
 from stand.archive.store import Archive
 
 
@@ -18,7 +19,9 @@ from stand.archive.store import Archive
 class Filters:
     """What ``stand history`` looks for; None matches anything.
 
-    ``since`` and ``until`` are dates (``YYYY-MM-DD``, UTC), both included.
+    ``since`` and ``until`` are dates (``YYYY-MM-DD``, UTC), both included.  ``revision``:
+    the runs as that revision (``stand reprocess``) re-judged them, its verdicts and planes
+    in place of the archived ones; only the runs it re-solved (status ``ok``).
     """
 
     serial: str | None = None
@@ -30,6 +33,7 @@ class Filters:
     verdict: str | None = None
     limit: int | None = None
     stand: str | None = None
+    revision: str | None = None
 
 
 def _where(f: Filters) -> list[Any]:
@@ -39,7 +43,7 @@ def _where(f: Filters) -> list[Any]:
         (runs.c.rotor_type, f.rotor_type),
         (runs.c.order_no, f.order),
         (runs.c.operator, f.operator),
-        (runs.c.verdict, f.verdict),
+        (runs.c.verdict if f.revision is None else revised.c.verdict, f.verdict),
         (runs.c.stand_id, f.stand),
     ):
         if value is not None:
@@ -75,8 +79,15 @@ def select_runs(conn: Any, f: Filters) -> list[Any]:
     """The runs that match (every column but the result's JSON), oldest first."""
     import sqlalchemy as sa
 
-    cols = [c for c in runs.c if c.name != "result_json"]
-    q = sa.select(*cols).where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
+    cols: list[Any] = [c for c in runs.c if c.name != "result_json"]
+    q = sa.select(*cols)
+    if f.revision is not None:
+        rid = revision_id_in(conn, f.revision)
+        cols = [c for c in cols if c.name != "verdict"] + [revised.c.verdict.label("verdict")]
+        q = sa.select(*cols).join(revised, sa.and_(
+            revised.c.run_id == runs.c.id, revised.c.revision_id == rid,
+            revised.c.status == "ok"))  # fmt: skip
+    q = q.where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
     if f.limit is not None:
         q = q.limit(f.limit)
     return list(conn.execute(q).all())
@@ -88,13 +99,18 @@ def chunks(ids: list[int]) -> Iterator[list[int]]:
         yield ids[k : k + IN_CHUNK]
 
 
-def plane_rows(conn: Any, ids: list[int]) -> Iterator[Any]:
-    """The plane rows of these runs, plane 1 before plane 2 within each run."""
+def plane_rows(conn: Any, ids: list[int], revision: str | None = None) -> Iterator[Any]:
+    """The plane rows of these runs, plane 1 before plane 2 within each run (as the
+    revision ``revision`` re-judged them, if one is named)."""
     import sqlalchemy as sa
 
+    table, where = planes, []
+    if revision is not None:
+        table = revised_planes
+        where = [revised_planes.c.revision_id == revision_id_in(conn, revision)]
     for part in chunks(ids):
         yield from conn.execute(
-            sa.select(planes).where(planes.c.run_id.in_(part)).order_by(planes.c.plane)
+            sa.select(table).where(table.c.run_id.in_(part), *where).order_by(table.c.plane)
         )
 
 
@@ -108,7 +124,7 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
         ids = [r.id for r in found]
         by_run: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
         checked_by: dict[int, list[int]] = {i: [] for i in ids}
-        for p in plane_rows(conn, ids):
+        for p in plane_rows(conn, ids, f.revision):
             by_run[p.run_id].append(_plane(p))
         for part in chunks(ids):
             for c in conn.execute(

@@ -4,7 +4,9 @@ One row per run (its job, its file and digest, its verdict, the run it
 checks), one row per plane (the unbalance as a complex number in kg m, its
 95 % radius, the tolerance and the URR when it was a check), and one row
 per confirmed correction with its check (the calibration datum of
-:mod:`stand.health.monitor`).  SI units and
+:mod:`stand.health.monitor`); and the revisions ``stand reprocess`` makes: a named
+re-judgement (its config's digest, the software), a row per run it re-solved (its status,
+verdict and JSON) and one per plane, beside the originals, which are never changed.  SI units and
 complex parts in columns; the whole result as JSON beside them, so that a
 report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -13,11 +15,14 @@ here alone.
 
 from __future__ import annotations
 
+from typing import Any
+
 from sqlalchemy import (
     Boolean,
     Column,
     Float,
     ForeignKey,
+    ForeignKeyConstraint,
     Index,
     Integer,
     MetaData,
@@ -61,18 +66,26 @@ Index("ix_runs_order", runs.c.order_no)
 Index("ix_runs_start", runs.c.start_time)
 Index("ix_runs_stand", runs.c.stand_id, runs.c.start_time)
 
+
+def plane_values() -> list[Column[Any]]:
+    """A plane's columns (new objects each call): the archive's planes and a revision's."""
+    return [
+        Column("U_re_kg_m", Float, nullable=False),
+        Column("U_im_kg_m", Float, nullable=False),
+        Column("radius95_kg_m", Float, nullable=False),
+        Column("permissible_kg_m", Float),
+        Column("passed", Boolean),
+        Column("leftover_kg_m", Float, nullable=False),  # what rounding the correction leaves
+        Column("urr", Float),  # when the run checks another (a revision: not recomputed)
+    ]
+
+
 planes = Table(
     "planes",
     metadata,
     Column("run_id", Integer, ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True),
     Column("plane", Integer, primary_key=True),
-    Column("U_re_kg_m", Float, nullable=False),
-    Column("U_im_kg_m", Float, nullable=False),
-    Column("radius95_kg_m", Float, nullable=False),
-    Column("permissible_kg_m", Float),
-    Column("passed", Boolean),
-    Column("leftover_kg_m", Float, nullable=False),  # what rounding the correction leaves
-    Column("urr", Float),  # when the run checks another
+    *plane_values(),
 )
 
 corrections = Table(
@@ -93,3 +106,38 @@ corrections = Table(
 )  # revision 0003: each confirmed correction and its check (stand.health.monitor)
 Index("ix_corrections_group", corrections.c.stand_id, corrections.c.rotor_type,
       corrections.c.start_time)  # fmt: skip
+
+revisions = Table(
+    "revisions",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("name", String(64), nullable=False, unique=True),
+    Column("config_sha256", String(64)),  # None: each run re-solved with its own stored config
+    Column("config_source", Text),  # the file it was given as
+    Column("software", String(64), nullable=False),
+    Column("created_at", String(40), nullable=False),
+)  # revision 0004: the runs re-judged by stand reprocess, beside the originals
+
+revised = Table(
+    "revised",
+    metadata,
+    Column("revision_id", Integer, ForeignKey("revisions.id", ondelete="CASCADE"),
+           primary_key=True),
+    Column("run_id", Integer, ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True),
+    Column("status", String(12), nullable=False),  # ok, missing, altered, unreadable, refused
+    Column("reason", Text),  # why not ok, in one line
+    Column("verdict", String(8)),  # pass, fail, none; None unless ok
+    Column("result_json", Text),  # the re-solved result's JSON form; None unless ok
+    Column("solved_at", String(40), nullable=False),
+)  # fmt: skip
+
+revised_planes = Table(
+    "revised_planes",
+    metadata,
+    Column("revision_id", Integer, primary_key=True),
+    Column("run_id", Integer, primary_key=True),
+    Column("plane", Integer, primary_key=True),
+    *plane_values(),
+    ForeignKeyConstraint(["revision_id", "run_id"], ["revised.revision_id", "revised.run_id"],
+                         ondelete="CASCADE"),
+)  # fmt: skip

@@ -176,7 +176,7 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
         U: dict[int, list[complex]] = {i: [0j, 0j] for i in ids}
         r95: dict[int, list[float]] = {i: [0.0, 0.0] for i in ids}
         per: list[list[float]] = [[], []]
-        for p in plane_rows(conn, ids):
+        for p in plane_rows(conn, ids, f.revision):
             U[p.run_id][p.plane - 1] = complex(p.U_re_kg_m, p.U_im_kg_m)
             r95[p.run_id][p.plane - 1] = p.radius95_kg_m
             if p.permissible_kg_m is not None:

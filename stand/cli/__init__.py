@@ -53,6 +53,7 @@ SUBCOMMANDS: dict[str, str] = {
     "stats": "production statistics of a rotor type: yield, spread, systematic unbalance",
     "station": "the operator station: a web screen at the stand (measure, correct, check)",
     "opcua": "the OPC UA result server: identification, state and latest result for the MES",
+    "reprocess": "re-judge archived runs with a corrected config: what changed, the recall list",
     "health": "is the stand still as calibrated? drift alarms from the corrected rotors",
     "tooling": "the tooling's own unbalance (index runs at 0 and 180 deg), subtracted from "
     "every run",

@@ -298,6 +298,16 @@ def add_archive_argument(p: argparse.ArgumentParser | argparse._ArgumentGroup) -
     )
 
 
+def add_revision_argument(p: argparse.ArgumentParser) -> None:
+    """``--revision NAME``: the runs as a ``stand reprocess`` revision re-judged them."""
+    p.add_argument(
+        "--revision",
+        metavar="NAME",
+        help="the runs as this revision (stand reprocess) re-judged them: its verdicts and "
+        "unbalances in place of the archived ones, only the runs it re-solved",
+    )
+
+
 JOB_FIELDS = ("serial", "order", "operator", "note")
 
 

@@ -6,7 +6,7 @@ import argparse
 
 from stand.archive import url_for
 from stand.archive.query import Filters
-from stand.cli.common import add_archive_argument, add_date_arguments
+from stand.cli.common import add_archive_argument, add_date_arguments, add_revision_argument
 from stand.plant import export_qdas
 
 
@@ -14,6 +14,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("format", choices=("qdas",), help="qdas: the Q-DAS ASCII transfer format")
     p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
     add_date_arguments(p)
+    add_revision_argument(p)
     p.add_argument("--stand", metavar="ID", help="this stand's runs only")
     add_archive_argument(p)
     p.add_argument("-o", "--out", metavar="FILE.dfq", required=True, help="the file to write")
@@ -22,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
-    f = Filters(since=args.since, until=args.until, stand=args.stand)
+    f = Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision)
     _, n = export_qdas(url_for(args.archive), args.rotor_type, f, args.out, force=args.force)
     print(f"wrote {args.out}: {n} runs of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)")
     return 0

@@ -10,7 +10,12 @@ from typing import Any
 
 from stand.archive import url_for
 from stand.archive.query import Filters, history
-from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
+from stand.cli.common import (
+    add_archive_argument,
+    add_date_arguments,
+    add_revision_argument,
+    write_text_output,
+)
 from stand.cli.format import dump_json
 from stand.errors import UsageError
 
@@ -27,6 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--order", metavar="ORDER")
     p.add_argument("--operator", metavar="NAME")
     add_date_arguments(p)
+    add_revision_argument(p)
     p.add_argument("--verdict", choices=("pass", "fail", "none"))
     p.add_argument("--stand", metavar="ID", help="runs of this stand ([stand] id)")
     p.add_argument("--limit", type=int, metavar="N", help="at most N runs (the oldest)")
@@ -51,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
         verdict=args.verdict,
         limit=args.limit,
         stand=args.stand,
+        revision=args.revision,
     )
     found = history(url_for(args.archive), f)
     if args.json:
@@ -59,6 +66,9 @@ def run(args: argparse.Namespace) -> int:
         _csv(found, args.csv, args.force)
     else:
         _table(found)
+        if args.revision:
+            print(f"(verdicts and unbalances as the revision {args.revision} re-judged them; "
+                  "URR not recomputed)")  # fmt: skip
     return 0
 
 

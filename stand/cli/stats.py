@@ -8,7 +8,12 @@ from typing import Any
 from stand.archive import url_for
 from stand.archive.query import Filters
 from stand.archive.stats import production
-from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
+from stand.cli.common import (
+    add_archive_argument,
+    add_date_arguments,
+    add_revision_argument,
+    write_text_output,
+)
 from stand.cli.format import dump_json
 from stand.report import render_production
 
@@ -16,6 +21,7 @@ from stand.report import render_production
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
     add_date_arguments(p)
+    add_revision_argument(p)
     p.add_argument(
         "--stand", metavar="ID", help="this stand's runs only ([stand] id; default: every stand)"
     )
@@ -34,7 +40,7 @@ def run(args: argparse.Namespace) -> int:
     out = production(
         url_for(args.archive),
         args.rotor_type,
-        Filters(since=args.since, until=args.until, stand=args.stand),
+        Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision),
     )
     if args.json:
         dump_json(out)

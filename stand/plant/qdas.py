@@ -168,7 +168,7 @@ def parts(url: str, rotor_type: str, filters: Any) -> tuple[list[dict[str, Any]]
         checked = [r.checks_run_id for r in rows if r.checks_run_id is not None]
         earlier = [i for i in checked if i not in planes]
         for extra in (list(planes), earlier):
-            for p in plane_rows(conn, extra):
+            for p in plane_rows(conn, extra, f.revision):
                 planes.setdefault(p.run_id, [None, None])[p.plane - 1] = p
     out, per = [], [None, None]
     for r in rows:

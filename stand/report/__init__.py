@@ -1,6 +1,7 @@
 """What a person reads: the run's certificate as one HTML page (:mod:`stand.report.certificate`),
 the pages of corrections across speeds and of production statistics
-(:mod:`stand.report.pages`), their plots (:mod:`stand.report.plots`), PDFs printed by
+(:mod:`stand.report.pages`), a re-judgement's (:mod:`stand.report.reprocess_page`),
+their plots (:mod:`stand.report.plots`), PDFs printed by
 headless Chromium (:mod:`stand.report.printing`) and the units shown (:mod:`stand.report.units`:
 g, mm, deg, rpm at the edges, SI inside).  Formatting only: nothing here measures.
 """
@@ -8,6 +9,14 @@ g, mm, deg, rpm at the edges, SI inside).  Formatting only: nothing here measure
 from stand.report.certificate import render
 from stand.report.pages import render_production, render_speeds
 from stand.report.printing import write_pdf
+from stand.report.reprocess_page import render_reprocess
 from stand.report.units import Display
 
-__all__ = ["Display", "render", "render_production", "render_speeds", "write_pdf"]
+__all__ = [
+    "Display",
+    "render",
+    "render_production",
+    "render_reprocess",
+    "render_speeds",
+    "write_pdf",
+]

@@ -27,7 +27,7 @@ FLOORS: list[set[str]] = [
     {"stand.solve"},  # one run (file, log, live streams) to one Result
     {"stand.field", "stand.live", "stand.health"},  # trial runs, live sessions, drift
     {"stand.archive"},  # the database of results
-    {"stand.report"},  # certificate, pages, plots, printing, units
+    {"stand.report", "stand.reprocess"},  # what a person reads; archived runs re-judged
     {"stand.plant"},  # Q-DAS, OPC UA, MQTT, the servers' bind rule
     {"stand.station"},  # the operator's screens
     {"stand.cli"},  # the stand command
