@@ -93,7 +93,6 @@ def add_revised(
     ids = [o["run_id"] for o in outcomes]
     if not ids:
         return 0
-    written = 0
     with archive.transaction() as conn:
         mine = sa.and_(revised.c.revision_id == revision_id, revised.c.run_id.in_(ids))
         there = set(conn.execute(sa.select(revised.c.run_id).where(mine)).scalars())
@@ -106,21 +105,25 @@ def add_revised(
             conn.execute(revised.delete().where(mine))  # fmt: skip
             there = set()
         stamp = _now()
+        run_rows, plane_rows = [], []
         for o in outcomes:
             if o["run_id"] in there:
                 continue
             there.add(o["run_id"])
-            conn.execute(revised.insert().values(
-                revision_id=revision_id, run_id=o["run_id"], status=o["status"],
-                reason=o.get("reason"), verdict=o.get("verdict"),
-                result_json=o.get("result_json"), solved_at=stamp,
-            ))  # fmt: skip
-            if o.get("planes"):
-                conn.execute(revised_planes.insert(), [
-                    {**p, "revision_id": revision_id, "run_id": o["run_id"]}
-                    for p in o["planes"]
-                ])  # fmt: skip
-            written += 1
+            run_rows.append({
+                "revision_id": revision_id, "run_id": o["run_id"], "status": o["status"],
+                "reason": o.get("reason"), "verdict": o.get("verdict"),
+                "result_json": o.get("result_json"), "solved_at": stamp,
+            })  # fmt: skip
+            plane_rows += [
+                {**p, "revision_id": revision_id, "run_id": o["run_id"]}
+                for p in o.get("planes") or ()
+            ]
+        if run_rows:  # one statement per table (executemany): a task's writes cost little
+            conn.execute(revised.insert(), run_rows)
+        if plane_rows:
+            conn.execute(revised_planes.insert(), plane_rows)
+        written = len(run_rows)
     return written
 
 

@@ -20,7 +20,7 @@ from typing import Any
 
 from stand import __version__
 from stand.errors import ClusterError, UsageError
-from stand.process import one_blas_thread
+from stand.process import keep_freed_memory, one_blas_thread
 from stand.reprocess.selection import Item
 from stand.reprocess.work import rejudge_chunk
 from stand.solve import ConfigText
@@ -48,24 +48,30 @@ def default_jobs() -> int:
 
 
 class LocalEngine:
-    """``jobs`` processes on this machine (1: in this process)."""
+    """``jobs`` processes on this machine (1: in this process).  ``keep_memory``: each
+    solving process keeps freed memory for the next run
+    (:func:`stand.process.keep_freed_memory`)."""
 
     dashboard: str | None = None
 
-    def __init__(self, jobs: int):
+    def __init__(self, jobs: int, *, keep_memory: bool = True):
         if jobs < 1:
             raise UsageError(f"--jobs {jobs}: at least 1")
         self.workers = jobs
+        self.keep_memory = keep_memory
 
     def run(self, work: list[list[Item]], config: ConfigText | None) -> Iterator[list[Any]]:
         """Each task's outcomes, as it finishes."""
         if self.workers == 1:
+            if self.keep_memory:
+                keep_freed_memory()
             for chunk in work:
                 yield rejudge_chunk(chunk, config)
             return
         one_blas_thread()  # the spawned interpreters inherit it: N processes, not N x cores
         context = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=self.workers, mp_context=context) as pool:
+        start = keep_freed_memory if self.keep_memory else None
+        with ProcessPoolExecutor(self.workers, context, initializer=start) as pool:
             futures = [pool.submit(rejudge_chunk, chunk, config) for chunk in work]
             try:
                 for f in as_completed(futures):
@@ -82,10 +88,29 @@ def _software() -> str:
     return __version__
 
 
-class DaskEngine:
-    """The workers of a Dask distributed scheduler (``tcp://HOST:PORT``)."""
+def keep_memory_plugin() -> Any:
+    """A Dask worker plugin: :func:`stand.process.keep_freed_memory` in every worker, those
+    that join or restart later too (Dask's nanny starts them with a 64 KiB trim threshold,
+    which costs a third of the runs/s here).  Made here, where Dask is imported."""
+    from distributed.diagnostics.plugin import WorkerPlugin
 
-    def __init__(self, address: str, timeout_s: float = CONNECT_TIMEOUT_S):
+    class KeepFreedMemory(WorkerPlugin):  # type: ignore[misc]
+        name = "stand-keep-freed-memory"
+        idempotent = True
+
+        def setup(self, worker: Any) -> None:
+            keep_freed_memory()
+
+    return KeepFreedMemory()
+
+
+class DaskEngine:
+    """The workers of a Dask distributed scheduler (``tcp://HOST:PORT``).  ``keep_memory``:
+    each worker keeps freed memory for the next run (:func:`keep_memory_plugin`)."""
+
+    def __init__(
+        self, address: str, timeout_s: float = CONNECT_TIMEOUT_S, *, keep_memory: bool = True
+    ):
         try:
             from distributed import Client
         except ImportError as exc:
@@ -114,6 +139,8 @@ class DaskEngine:
             self.close()
             raise ClusterError("it has no worker", address=address)
         self.workers = len(versions)
+        if keep_memory:
+            self.client.register_plugin(keep_memory_plugin())
         services = self.client.scheduler_info().get("services", {})
         self.dashboard: str | None = self.client.dashboard_link if "dashboard" in services else None
 

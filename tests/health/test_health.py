@@ -235,3 +235,32 @@ def test_a_series_never_replaces_runs_without_force(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "exists already" in err and "--force" in err, err
     assert main([*args, "--archive", url, "--force"]) == 0
+
+
+def test_reprocess_with_the_recalibration_names_every_changed_rotor(
+    series: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The quality engineer's chain: the calibration the runs carry, `calibrate
+    --from-archive`, then `reprocess --config` the corrected file: every run's verdict is
+    `stand solve` of its file alone with that config, and the rotors whose final verdict
+    changes are exactly those named (recall: passed, fails now; cleared: the reverse)."""
+    d, url = series
+    cfg = tmp_path / "stand.toml"
+    assert main(["inspect", str(d / "runs" / "S-00001-a.h5"), "--config-out", str(cfg)]) == 0
+    new = tmp_path / "new.toml"
+    assert main(["calibrate", "--from-archive", "--config", str(cfg), "--out", str(new),
+                 "--archive", url]) == 0  # fmt: skip
+    out = run_json(["reprocess", "--archive", url, "--config", str(new), "--revision", "C1",
+                    "--jobs", "2"], capsys)  # fmt: skip
+    assert out["counts"]["runs"] == 400 and out["counts"]["ok"] == 400
+    files = [r["run_file"] for r in out["runs"]]
+    alone = run_json(["solve", *files, "--config", str(new), "--jobs", "2"], capsys)
+    final: dict[str, tuple[str, str]] = {}
+    for r in out["runs"]:
+        t = alone[r["run_file"]]["tolerance"]["planes"]
+        verdict = "pass" if all(p["pass"] for p in t) else "fail"
+        assert r["after"]["verdict"] == verdict, r
+        final[r["serial"]] = (r["before"]["verdict"], verdict)
+    changed = sorted(s for s, (b, a) in final.items() if b != a)
+    assert sorted(out["recall"] + out["cleared"]) == changed
+    assert len(final) == 200

@@ -189,9 +189,10 @@ def test_interrupted_then_run_again_solves_each_run_once(
         if written >= 4:
             break
         time.sleep(0.02)
+    assert 4 <= written < 60 and proc.poll() is None, (written, proc.poll())  # mid-way
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
+    assert proc.returncode == 130, (written, err)
     done = subprocess.run([*args, "--json"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     c = json.loads(done.stdout)["counts"]
