@@ -57,7 +57,7 @@ def open_revision(
                 name=name, config_sha256=config_sha256, config_source=config_source,
                 software=software, created_at=_now(),
             ))  # fmt: skip
-            return int(new.inserted_primary_key[0]), True  # type: ignore[index]
+            return int(new.inserted_primary_key[0]), True
     if row.config_sha256 != config_sha256:
         was = "each run's stored config" if row.config_sha256 is None else (
             f"the config {row.config_source} (sha256 {row.config_sha256[:12]})")  # fmt: skip

@@ -50,9 +50,9 @@ def keep_freed_memory() -> bool:
     MiB, trim threshold 64 MiB) in a process that solves run after run: the arrays of one
     run are reused by the next instead of mapped, faulted in and returned each time.  Also
     undoes ``MALLOC_TRIM_THRESHOLD_=65536``, which Dask's nanny sets for its workers and
-    which fixes the mmap threshold at 128 KiB.  Reprocessing 400 runs of 8 s, one worker:
-    a Dask worker 27.9 -> 48.6 runs/s, this machine's process 39.0 -> (see
-    docs/performance.md) (2026-11-25).  True if glibc took both."""
+    which fixes the mmap threshold at 128 KiB.  Reprocessing 2000 runs of 8 s
+    (``tests/bench/bench_reprocess.py``, 2026-11-25): one process 34.3 -> 43.5 runs/s, one
+    Dask worker 24.7 -> 48.1 runs/s.  True if glibc took both."""
     libc = _glibc()
     try:
         if libc is None:

@@ -14,6 +14,7 @@ import math
 import multiprocessing
 import os
 import queue
+import socket
 from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
@@ -104,6 +105,27 @@ def keep_memory_plugin() -> Any:
     return KeepFreedMemory()
 
 
+def probe(address: str, timeout_s: float) -> None:
+    """Refuse a ``tcp://`` scheduler that does not say hello within ``timeout_s``: a Dask
+    server sends its handshake as soon as it accepts, and Dask's own client waits for it
+    without a timeout (a port that accepts and stays silent would hold the command
+    forever).  Other schemes (``tls://`` ...) are left to the client."""
+    if not address.startswith("tcp://"):
+        return
+    host, _, port = address.removeprefix("tcp://").rstrip("/").rpartition(":")
+    try:
+        number = int(port)
+        with socket.create_connection((host.strip("[]"), number), timeout=timeout_s) as s:
+            s.settimeout(timeout_s)
+            if not s.recv(1):
+                raise ConnectionError("it closed the connection")
+    except ValueError as exc:
+        raise ClusterError("not an address tcp://HOST:PORT", address=address) from exc
+    except (OSError, TimeoutError) as exc:
+        raise ClusterError(f"did not answer within {timeout_s:g} s ({exc})",
+                           address=address) from exc  # fmt: skip
+
+
 class DaskEngine:
     """The workers of a Dask distributed scheduler (``tcp://HOST:PORT``).  ``keep_memory``:
     each worker keeps freed memory for the next run (:func:`keep_memory_plugin`)."""
@@ -116,6 +138,7 @@ class DaskEngine:
         except ImportError as exc:
             raise UsageError(f"--scheduler needs Dask distributed: {INSTALL}") from exc
         self.address = address
+        probe(address, timeout_s)
         try:
             self.client = Client(address, timeout=f"{timeout_s}s", set_as_default=False)
         except (OSError, TimeoutError, ValueError, TypeError) as exc:

@@ -1,16 +1,18 @@
 """How fast ``stand reprocess`` re-judges archived runs: this machine's processes and a Dask
 cluster on it.
 
-    python tests/bench/bench_reprocess.py [--rotors 1000] [--keep DIR]
+    python tests/bench/bench_reprocess.py [--rotors 1000] [--keep DIR] [--repeat 3]
 
 A simulated production series of ``--rotors`` rotors (two 8 s runs each, as the stand
 records them: run files at 4 kHz per node) is archived once (``--keep DIR`` keeps it for the
 next call); then the whole archive is re-judged with a corrected config into a fresh
 revision by: 1 and 2 local processes, and a Dask ``LocalCluster`` of 1 and 2 worker
-processes (one thread each) on 127.0.0.1.  Printed per way: wall seconds, runs/s, and the
-share of the wall time that is not waiting for the solves (the selection, the revision's
-writes, the summary).  The cluster's start is not timed (it is up before a plant's job);
-the local pool's start is (it is part of every command).
+processes (one thread each) on 127.0.0.1, each ``--repeat`` times in turns (the machine's
+speed wanders), and once each without :func:`stand.process.keep_freed_memory`.  Printed per
+turn: wall seconds, runs/s, and the share of the wall time that is not waiting for the
+solves (the selection, the revision's writes, the summary); then the medians.  The
+cluster's start is not timed (it is up before a plant's job); the local pool's start is
+(it is part of every command).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -117,6 +120,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rotors", type=int, default=1000)
     p.add_argument("--keep", metavar="DIR", help="make the series here once, reuse it after")
+    p.add_argument("--repeat", type=int, default=3, help="turns per way (the median is given)")
     p.add_argument("--one", metavar="WAY", help=argparse.SUPPRESS)  # a child's own way
     p.add_argument("--plain", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -129,16 +133,25 @@ def main() -> None:
     if args.one:
         print(json.dumps(one_way(url, new, args.one, not args.plain)), flush=True)
         return
-    rows = {}
-    for keep in (True, False):
-        for way in WAYS:  # each in a fresh interpreter: none warms the next
-            cmd = [sys.executable, __file__, "--keep", str(folder), "--one", way]
-            done = subprocess.run([*cmd, *([] if keep else ["--plain"])], check=True,
-                                  capture_output=True, text=True)  # fmt: skip
-            row = json.loads(done.stdout.strip().splitlines()[-1])
-            rows[way, keep] = row
-            print(json.dumps(row), flush=True)
-    r = {k: v["runs_per_s"] for k, v in rows.items()}
+    runs: dict[tuple[str, bool], list[dict[str, Any]]] = {}
+    turns = [(way, True) for _ in range(args.repeat) for way in WAYS] + [(w, False) for w in WAYS]
+    for way, keep in turns:  # each in a fresh interpreter, in turns: none warms the next
+        cmd = [sys.executable, __file__, "--keep", str(folder), "--one", way]
+        done = subprocess.run([*cmd, *([] if keep else ["--plain"])], check=True,
+                              capture_output=True, text=True)  # fmt: skip
+        row = json.loads(done.stdout.strip().splitlines()[-1])
+        runs.setdefault((way, keep), []).append(row)
+        print(json.dumps(row), flush=True)
+    r = {k: statistics.median(x["runs_per_s"] for x in v) for k, v in runs.items()}
+    share = {k: max(x["client_share_pct"] for x in v) for k, v in runs.items()}
+    print(
+        f"median of {args.repeat} (plain: 1) runs/s: "
+        + ", ".join(f"{w} {r[w, True]:.1f} ({r[w, False]:.1f} plain)" for w in WAYS)
+    )
+    print(
+        "client share of the wall time, largest: "
+        + ", ".join(f"{w} {share[w, True]:.1f} %" for w in WAYS)
+    )
     print(
         f"2 processes / 1: {r['local-2', True] / r['local-1', True]:.2f}x; "
         f"dask / local at 1 worker: {r['dask-1', True] / r['local-1', True]:.2f}, "
