@@ -2,7 +2,7 @@ r"""The stand model of seed 002: parameters, steady state, natural frequencies.
 
 Pure numerics: arrays in, arrays out, SI units, no I/O.
 
-Derivation (see ../shared/spec/stand-model.md for the notation)
+Derivation (see docs/stand-model.md for the notation)
 ----------------------------------------------------------------
 The seed's four equations, with the rigid-rotor constraints
 ``x1 = x3 + L1 phi`` and ``x2 = x3 - L2 phi`` (``L1 = a + b``, ``L2 = c + d``,

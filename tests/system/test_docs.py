@@ -30,6 +30,24 @@ def test_readme_links_lead_somewhere() -> None:
         assert (ROOT / target).exists() or target in GENERATED, target
 
 
+def test_nothing_points_outside_the_repository() -> None:
+    """The model and the protocol are the project's own pages: no README, page, module or
+    example names a path above the repository (a clone holds nothing there)."""
+    outside = re.compile(r"\.\./shared\b")  # the seeds' and specs' folder beside a checkout
+    folders = ("docs", "stand", "drivers", "calib", "examples", "tests")
+    files = [ROOT / "README.md", *(p for f in folders for p in (ROOT / f).rglob("*")
+                                   if p.suffix in (".md", ".py", ".toml"))]  # fmt: skip
+    found = [
+        f"{f.relative_to(ROOT)}:{n}"
+        for f in files if f.is_file() and f != Path(__file__)
+        for n, line in enumerate(f.read_text(errors="replace").splitlines(), 1)
+        if outside.search(line)
+    ]  # fmt: skip
+    assert found == []
+    for page in ("stand-model.md", "protocol.md"):
+        assert (ROOT / "docs" / page).is_file(), page
+
+
 @pytest.mark.skipif(shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,
                     reason="mkdocs is installed with the test extras")  # fmt: skip
 def test_the_site_builds_strictly(tmp_path: Path) -> None:
