@@ -76,7 +76,8 @@ IN_CHUNK = 500
 
 
 def select_runs(conn: Any, f: Filters) -> list[Any]:
-    """The runs that match (every column but the result's JSON), oldest first."""
+    """The runs that match (every column but the result's JSON), oldest first; with a
+    limit, the newest that many."""
     import sqlalchemy as sa
 
     cols: list[Any] = [c for c in runs.c if c.name != "result_json"]
@@ -87,10 +88,11 @@ def select_runs(conn: Any, f: Filters) -> list[Any]:
         q = sa.select(*cols).join(revised, sa.and_(
             revised.c.run_id == runs.c.id, revised.c.revision_id == rid,
             revised.c.status == "ok"))  # fmt: skip
-    q = q.where(*_where(f)).order_by(runs.c.start_time, runs.c.id)
-    if f.limit is not None:
-        q = q.limit(f.limit)
-    return list(conn.execute(q).all())
+    q = q.where(*_where(f))
+    if f.limit is not None:  # the newest N, still listed oldest first
+        newest = q.order_by(runs.c.start_time.desc(), runs.c.id.desc()).limit(f.limit)
+        return list(conn.execute(newest).all())[::-1]
+    return list(conn.execute(q.order_by(runs.c.start_time, runs.c.id)).all())
 
 
 def chunks(ids: list[int]) -> Iterator[list[int]]:

@@ -35,7 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_revision_argument(p)
     p.add_argument("--verdict", choices=("pass", "fail", "none"))
     p.add_argument("--stand", metavar="ID", help="runs of this stand ([stand] id)")
-    p.add_argument("--limit", type=int, metavar="N", help="at most N runs (the oldest)")
+    p.add_argument("--limit", type=int, metavar="N", help="the newest N runs (listed oldest first)")
     add_archive_argument(p)
     out = p.add_mutually_exclusive_group()
     out.add_argument("--json", action="store_true", help="print one JSON object")
@@ -67,8 +67,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         _table(found)
         if args.revision:
-            print(f"(verdicts and unbalances as the revision {args.revision} re-judged them; "
-                  "URR not recomputed)")  # fmt: skip
+            print(f"(verdicts and unbalances as the revision {args.revision} re-judged them: "
+                  "only the runs it re-solved; URR not recomputed)")  # fmt: skip
     return 0
 
 

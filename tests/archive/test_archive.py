@@ -105,7 +105,8 @@ def test_history_filters_and_writes_csv(tmp_path: Path, capsys: pytest.CaptureFi
     assert ids("--operator", "kim") == [1, 3]
     assert ids("--rotor-type", "fan-B") == [2, 3]
     assert ids("--rotor-type", "fan-B", "--operator", "kim") == [3]
-    assert ids("--verdict", "fail", "--limit", "2") == [1, 2]
+    assert ids("--verdict", "fail", "--limit", "2") == [2, 3]  # the newest two
+    assert ids("--limit", "1") == [3]
     assert ids("--until", "2000-01-01") == []
     assert ids("--since", "2000-01-01", "--order", "O-9") == [1, 2, 3]
     csv_path = tmp_path / "h.csv"
