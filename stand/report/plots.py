@@ -97,8 +97,11 @@ def polar(out: dict[str, Any]) -> str:
             ax.plot(ring, np.full_like(ring, per), color="tab:green", lw=1.5,
                     label=f"tolerance {d.unbalance(tol[i]['permissible_g_mm'])}")  # fmt: skip
             rmax = max(rmax, per * 1.25)
-        if i in check:
-            ax.plot([], [], " ", label=f"before {d.unbalance(check[i]['before_g_mm'])}")
+        if i in check:  # the run before the correction, where it was
+            b = check[i]
+            ax.plot([math.radians(b["before_angle_deg"])], [d.unbalance_value(b["before_g_mm"])],
+                    "s", color="0.45", ms=7, label=f"before {d.unbalance(b['before_g_mm'])} at "
+                    f"{b['before_angle_deg']:.1f}°")  # fmt: skip
         word = "after" if i in check else "unbalance"
         label = f"{word} {d.unbalance(plane['unbalance_g_mm'])} at {plane['angle_deg']:.1f}°"
         ax.plot([phi], [u], "o", color="tab:red", ms=7, label=label)

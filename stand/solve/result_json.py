@@ -221,6 +221,7 @@ def _check(c: Check) -> dict[str, Any]:
             {
                 "plane": i + 1,
                 "before_g_mm": _g_mm(abs(c.before_kg_m[i])),
+                "before_angle_deg": _polar(c.before_kg_m[i])["angle_deg"],
                 "after_g_mm": _g_mm(abs(c.after_kg_m[i])),
                 "urr": None if urr is None else round(urr, 5),
             }

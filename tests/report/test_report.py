@@ -130,3 +130,29 @@ def test_a_missing_browser_is_one_line(tmp_path: Path, capsys, monkeypatch) -> N
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "apt-get install chromium" in err
     assert not (tmp_path / "r.pdf").exists()
+
+
+def test_the_check_s_polar_plot_draws_the_before_point_it_names(tmp_path: Path) -> None:
+    """The check certificate's legend names "before": the picture shows it, a grey square
+    at the run before's unbalance (there are pixels of its colour only with a check)."""
+    import base64
+    import io
+
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    from stand.report.plots import polar
+    from stand.solve import solve_check, solve_recording, to_json
+
+    _, before, after = _check_pair(tmp_path)
+    pictures = []
+    for out in (
+        to_json(solve_recording(str(after))),
+        to_json(solve_check(str(after), str(before))),
+    ):
+        data = base64.b64decode(polar(out).split(",", 1)[1])
+        pictures.append(mpimg.imread(io.BytesIO(data), format="png")[..., :3])
+    grey = [int((np.abs(p - 0.45) < 0.02).all(axis=-1).sum()) for p in pictures]
+    assert grey[1] >= grey[0] + 2 * 40, grey  # two squares of at least 40 pixels each
+    out = to_json(solve_check(str(after), str(before)))
+    assert all(0 <= p["before_angle_deg"] < 360 for p in out["check"]["planes"])
