@@ -151,8 +151,13 @@ def _series(args: argparse.Namespace) -> int:
     if args.out or args.bus:
         raise UsageError("stand simulate: --series writes --out-dir and the archive only")
     folder = Path(args.out_dir)
-    if not folder.is_dir():
-        raise UsageError(f"stand simulate: --out-dir {folder}: no such folder")
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"stand simulate: --out-dir {folder}: not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"stand simulate: --out-dir {folder}: cannot make it "
+                         f"({exc.strerror})") from exc  # fmt: skip
     url = url_for(args.archive)
     done = simulate_series(
         args.scene,

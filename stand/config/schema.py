@@ -107,14 +107,19 @@ class ToolingTable(BaseModel):
     folder, beside the archive)."""
 
 
+PORT = r"([1-9]\d{0,3}|[1-5]\d{4}|6[0-4]\d{3}|65[0-4]\d{2}|655[0-2]\d|6553[0-5])"
+"""A TCP port, 1 to 65535, as a pattern."""
+MQTT_URL = rf"^mqtts?://[^\s/:]+(:{PORT})?/?$"
+
+
 class PlantTable(BaseModel):
     """``[plant]``: the plant's systems that take each archived result."""
 
     model_config = STRICT
 
-    mqtt_url: Annotated[str, Field(pattern=r"^mqtts?://[^\s/]+(:\d+)?/?$")] | None = None
-    """``mqtt://host[:port]`` (1883) or ``mqtts://`` (8883, TLS): each archived result is
-    published as JSON on ``stand/<stand id>/result``."""
+    mqtt_url: Annotated[str, Field(pattern=MQTT_URL)] | None = None
+    """``mqtt://host[:port]`` (1883) or ``mqtts://`` (8883, TLS), the port 1 to 65535: each
+    archived result is published as JSON on ``stand/<stand id>/result``."""
 
 
 class CalibrationTable(BaseModel):

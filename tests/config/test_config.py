@@ -203,3 +203,25 @@ def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
     back, _ = config_from_dict(tomllib.loads(new), source="new")
     assert back.stand.C1 == 46123.5 and back.stand.reference_angle_deg == 1.25
     assert back.sensors.gain == [1.02, 0.98] and back.rotor == cfg.rotor
+
+
+@pytest.mark.parametrize(
+    ("url", "ok"),
+    [
+        ("mqtt://broker", True),
+        ("mqtts://10.0.0.5:8883/", True),
+        ("mqtt://broker:65535", True),
+        ("mqtt://broker:99999", False),  # passed the check before, failed at the first run
+        ("mqtt://broker:0", False),
+        ("mqtt://broker:65536", False),
+        ("mqtt://broker:1883:1", False),
+        ("http://broker", False),
+    ],
+)
+def test_the_mqtt_url_is_a_url_with_a_port_that_exists(tmp_path: Path, url: str, ok: bool) -> None:
+    text = MINIMAL + f'\n[plant]\nmqtt_url = "{url}"\n'
+    if ok:
+        assert load_config(write(tmp_path, text))[0].plant.mqtt_url == url
+    else:
+        with pytest.raises(ConfigError, match=r"\[plant.mqtt_url\]"):
+            load_config(write(tmp_path, text))

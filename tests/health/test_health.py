@@ -264,3 +264,23 @@ def test_reprocess_with_the_recalibration_names_every_changed_rotor(
     changed = sorted(s for s, (b, a) in final.items() if b != a)
     assert sorted(out["recall"] + out["cleared"]) == changed
     assert len(final) == 200
+
+
+def test_a_series_makes_its_out_dir_and_refuses_a_file_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The docs' series command works on a fresh machine (the folder is made); a file where
+    the folder should be is one line, exit 2; the runs carry the rotor's serial."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    out = tmp_path / "new" / "runs"
+    args = ["simulate", "production-drift", "--series", "1", "--archive", url]
+    assert main([*args, "--out-dir", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["S-00001-a.h5", "S-00001-b.h5"]
+    runs = run_json(["history", "--archive", url], capsys)["runs"]
+    assert [r["serial"] for r in runs] == ["S-00001", "S-00001"]
+    assert runs[1]["checks_run"] == runs[0]["id"] and runs[0]["rotor_type"] == "auger-A"
+    (tmp_path / "file").write_text("x")
+    capsys.readouterr()
+    assert main([*args, "--out-dir", str(tmp_path / "file")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a folder" in err
