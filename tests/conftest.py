@@ -85,3 +85,25 @@ def postgres_url(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-u
             timeout=60,
         )
         shutil.rmtree(folder, ignore_errors=True)
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):  # type: ignore[no-untyped-def]
+    """At the run's end, what this machine could not test and how to enable it: each skip
+    reason (they name the package to install) with how many tests it left out."""
+    from collections import Counter
+
+    skipped = terminalreporter.stats.get("skipped", [])
+    reasons: Counter[str] = Counter()
+    for report in skipped:
+        longrepr = report.longrepr
+        reason = longrepr[2] if isinstance(longrepr, tuple) else str(longrepr)
+        reasons[reason.removeprefix("Skipped: ")] += 1
+    if not reasons:
+        return
+    terminalreporter.section("not tested on this machine, and how to enable it")
+    for reason, n in reasons.most_common():
+        terminalreporter.write_line(f"{n:4d} test{'s' if n > 1 else ' '}  {reason}")
+    terminalreporter.write_line(
+        "(.ci/run installs every system package the tests use: sudo apt-get install "
+        "postgresql mosquitto chromium chromium-driver poppler-utils)"
+    )
