@@ -224,6 +224,15 @@ def _supports(args: list[tuple[Any, ...]]) -> list[tuple[Phasor, Window, list[Di
     return [_support(*a) for a in args]
 
 
+def harmonic_ratio(ph: Phasor) -> tuple[float, float]:
+    """The 3x amplitude over the 1x, and the least that ratio can be within both readings'
+    95 % radii (the 3x read from the same samples in the same noise: the 1x's radius).  A
+    ratio of two amplitudes at the noise's level is anything; its lower bound is then 0."""
+    r = ph.radius95_m_s2
+    h3, a1 = abs(ph.harmonics_m_s2.get(3, 0j)), abs(ph.A_m_s2)
+    return h3 / max(a1, 1e-300), max(h3 - r, 0.0) / max(a1 + r, 1e-300)
+
+
 def judge_support(
     node: int, ph: Phasor, window: Window, ratio: float, sensor: tuple[float, float]
 ) -> tuple[Phasor, list[Diagnostic]]:
@@ -258,14 +267,16 @@ def judge_support(
             )
         )
         ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
-    odd = abs(ph.harmonics_m_s2.get(3, 0j)) / max(abs(ph.A_m_s2), 1e-300)
-    if odd > HARMONIC_WARN and abs(ph.A_m_s2) > ph.radius95_m_s2:  # against a real 1x only
+    odd, odd_low = harmonic_ratio(ph)
+    # against a real 1x only, and judged with its interval: two noise levels never warn
+    if abs(ph.A_m_s2) > ph.radius95_m_s2 and odd_low > HARMONIC_WARN:
         warnings.append(
             Diagnostic(
                 "strong_3x",
-                f"node {node}: 3x is {100 * odd:.0f} % of 1x: the supports may not be linear "
-                "(dry friction, a clearance) or the drive is misaligned; the model assumes "
-                "linear supports, so the result may be off",
+                f"node {node}: 3x is {100 * odd:.0f} % of 1x (at least {100 * odd_low:.0f} % "
+                "within the 95 % intervals): the supports may not be linear (dry friction, a "
+                "clearance) or the drive is misaligned; the model assumes linear supports, "
+                "so the result may be off",
                 odd,
             )
         )
