@@ -16,6 +16,7 @@ import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, file_digest
@@ -48,7 +49,7 @@ def _config(path: str | None) -> tuple[ConfigText | None, str | None]:
         return None, None
     file_digest(path)  # names an unreadable file in one line
     try:
-        text = open(path, encoding="utf-8").read()
+        text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise UsageError(f"--config {path}: cannot read it as text ({exc})") from exc
     config = ConfigText(text, path)
