@@ -75,8 +75,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     out = p.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print one JSON object")
     out.add_argument("--report", metavar="FILE.html",
-                     help="an HTML page: the recall list, the changed runs, new against "
-                     "archived residuals with the tolerance")  # fmt: skip
+                     help="an HTML page: the recall list, the changed runs, how far each "
+                     "answer moved against the tolerance")  # fmt: skip
 
 
 class Progress:
