@@ -63,6 +63,8 @@ class LocalEngine:
 
     def run(self, work: list[list[Item]], config: ConfigText | None) -> Iterator[list[Any]]:
         """Each task's outcomes, as it finishes."""
+        if not work:  # everything in the revision already: no process to start
+            return
         if self.workers == 1:
             if self.keep_memory:
                 keep_freed_memory()
@@ -72,7 +74,8 @@ class LocalEngine:
         one_blas_thread()  # the spawned interpreters inherit it: N processes, not N x cores
         context = multiprocessing.get_context("spawn")
         start = keep_freed_memory if self.keep_memory else None
-        with ProcessPoolExecutor(self.workers, context, initializer=start) as pool:
+        processes = min(self.workers, len(work))  # none idle from its start
+        with ProcessPoolExecutor(processes, context, initializer=start) as pool:
             futures = [pool.submit(rejudge_chunk, chunk, config) for chunk in work]
             try:
                 for f in as_completed(futures):
