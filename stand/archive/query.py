@@ -55,7 +55,8 @@ def _where(f: Filters) -> list[Any]:
     return conds
 
 
-def _plane(p: Any) -> dict[str, Any]:
+def plane_json(p: Any) -> dict[str, Any]:
+    """A plane row (the archive's or a revision's) as the JSON shows it: g mm, degrees."""
     U = complex(p.U_re_kg_m, p.U_im_kg_m)
     return {
         "plane": p.plane,
@@ -127,7 +128,7 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
         by_run: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
         checked_by: dict[int, list[int]] = {i: [] for i in ids}
         for p in plane_rows(conn, ids, f.revision):
-            by_run[p.run_id].append(_plane(p))
+            by_run[p.run_id].append(plane_json(p))
         for part in chunks(ids):
             for c in conn.execute(
                 sa.select(runs.c.id, runs.c.checks_run_id).where(runs.c.checks_run_id.in_(part))
@@ -191,7 +192,7 @@ def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
         ids = [row.id] + ([row.checks_run_id] if row.checks_run_id is not None else [])
         found: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
         for p in plane_rows(conn, ids):
-            found[p.run_id].append(_plane(p))
+            found[p.run_id].append(plane_json(p))
     run = _run_dict(row, found[row.id])
     run["initial"] = found[ids[-1]]
     run["result"] = json.loads(row.result_json)

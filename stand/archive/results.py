@@ -163,14 +163,23 @@ def verify(url: str) -> tuple[int, list[dict[str, Any]]]:
         listed = conn.execute(sa.select(runs.c.id, runs.c.run_file, runs.c.file_sha256)).all()
     problems = []
     for run_id, path, digest in listed:
-        p = Path(path)
-        if not p.is_file():
-            problems.append({"id": run_id, "run_file": path, "problem": "missing"})
-            continue
-        try:
-            same = file_digest(p) == digest
-        except StandError:
-            same = False  # unreadable counts as altered: it no longer gives the run
-        if not same:
-            problems.append({"id": run_id, "run_file": path, "problem": "altered"})
+        status, _reason = file_status(path, digest)
+        if status != "ok":  # unreadable counts as altered: it no longer gives the run
+            problem = "missing" if status == "missing" else "altered"
+            problems.append({"id": run_id, "run_file": path, "problem": problem})
     return len(listed), problems
+
+
+def file_status(path: str | Path, digest: str) -> tuple[str, str | None]:
+    """Is the file at ``path`` still the run archived with ``digest``: ``("ok", None)``, or
+    ``("missing" | "unreadable" | "altered", why)``."""
+    p = Path(path)
+    if not p.is_file():
+        return "missing", f"no file at {p}"
+    try:
+        found = file_digest(p)
+    except StandError as exc:
+        return "unreadable", str(exc)
+    if found != digest:
+        return "altered", f"{p}: SHA-256 {found[:12]}, archived {digest[:12]}"
+    return "ok", None

@@ -11,18 +11,17 @@ list: the serials that passed and now fail.
 
 from __future__ import annotations
 
-import cmath
-import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from stand.archive import Archive, file_digest
-from stand.archive.query import chunks
+from stand.archive import Archive
+from stand.archive.query import chunks, plane_json, plane_rows
 from stand.archive.revisions import STATUSES, add_revised, open_revision, revised_ids
-from stand.archive.schema import revised, revised_planes
+from stand.archive.schema import revised
+from stand.drivers.files import check_input
 from stand.drivers.recording import config_digest
 from stand.errors import UsageError
 from stand.reprocess.engine import tasks
@@ -47,7 +46,7 @@ def _config(path: str | None) -> tuple[ConfigText | None, str | None]:
     """The config's text (read here: a worker elsewhere cannot read the client's file)."""
     if not path:
         return None, None
-    file_digest(path)  # names an unreadable file in one line
+    check_input(path)  # a missing, special or unreadable file: one line naming it
     try:
         text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -82,7 +81,7 @@ def reprocess(
             done += len(outcomes)
             if progress is not None:
                 progress(done, total)
-        after = _revised(archive, rid, [a.run_id for a in found])
+        after = _revised(archive, rid, req.revision, [a.run_id for a in found])
     out = summary(found, after)
     out["revision"] = req.revision
     out["counts"]["solved_now"] = total
@@ -90,7 +89,7 @@ def reprocess(
     return out
 
 
-def _revised(archive: Archive, rid: int, ids: list[int]) -> dict[int, dict[str, Any]]:
+def _revised(archive: Archive, rid: int, name: str, ids: list[int]) -> dict[int, dict[str, Any]]:
     """The revision's rows of these runs: ``{run_id: {"status", "reason", "verdict",
     "planes"}}``."""
     import sqlalchemy as sa
@@ -103,27 +102,18 @@ def _revised(archive: Archive, rid: int, ids: list[int]) -> dict[int, dict[str, 
                     revised.c.revision_id == rid, revised.c.run_id.in_(part))):  # fmt: skip
                 out[r.run_id] = {"status": r.status, "reason": r.reason,
                                  "verdict": r.verdict, "planes": []}  # fmt: skip
-            for p in conn.execute(sa.select(revised_planes).where(
-                    revised_planes.c.revision_id == rid, revised_planes.c.run_id.in_(part))
-                    .order_by(revised_planes.c.plane)):  # fmt: skip
-                out[p.run_id]["planes"].append(p)
+        for p in plane_rows(conn, ids, name):
+            out[p.run_id]["planes"].append(p)
     return out
+
+
+PLANE_KEYS = ("plane", "unbalance_g_mm", "angle_deg", "uncertainty_g_mm", "permissible_g_mm",
+              "pass")  # fmt: skip
+"""What a re-judged run shows of each plane (of :func:`stand.archive.query.plane_json`)."""
 
 
 def _planes(rows: Any) -> list[dict[str, Any]]:
-    out = []
-    for p in rows:
-        U = complex(p.U_re_kg_m, p.U_im_kg_m)
-        out.append({
-            "plane": p.plane,
-            "unbalance_g_mm": round(abs(U) * 1e6, 3),
-            "angle_deg": round(math.degrees(-cmath.phase(U)) % 360, 3),
-            "uncertainty_g_mm": round(p.radius95_kg_m * 1e6, 3),
-            "permissible_g_mm": None if p.permissible_kg_m is None
-            else round(p.permissible_kg_m * 1e6, 3),
-            "pass": p.passed,
-        })  # fmt: skip
-    return out
+    return [{k: v for k, v in plane_json(p).items() if k in PLANE_KEYS} for p in rows]
 
 
 def _change(before: Any, after: Any) -> list[float | None]:

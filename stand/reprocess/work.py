@@ -20,7 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from stand.archive import file_digest, rows
+from stand.archive import file_status, rows
 from stand.errors import RecordingError, StandError
 from stand.reprocess.selection import Item
 from stand.solve import ConfigText, solve_recording
@@ -34,22 +34,16 @@ def _outcome(item: Item, status: str, reason: str | None = None) -> dict[str, An
 def rejudge(item: Item, config: ConfigText | None) -> dict[str, Any]:
     """One run re-solved with ``config`` (None: the run file's stored config)."""
     path = Path(item.run_file)
-    if not path.is_file():
-        return _outcome(item, "missing", f"no file at {path}")
-    try:
-        digest = file_digest(path)
-    except StandError as exc:
-        return _outcome(item, "unreadable", str(exc))
-    if digest != item.file_sha256:
-        return _outcome(item, "altered", f"{path}: SHA-256 {digest[:12]}, archived "
-                        f"{item.file_sha256[:12]}")  # fmt: skip
+    status, reason = file_status(path, item.file_sha256)
+    if status != "ok":
+        return _outcome(item, status, reason)
     try:
         result = solve_recording(str(path), config)
     except RecordingError as exc:
         return _outcome(item, "unreadable", str(exc))
     except StandError as exc:
         return _outcome(item, "refused", f"{path}: {exc}")
-    run, planes = rows(result, digest, None)
+    run, planes = rows(result, item.file_sha256, None)
     return {
         "run_id": item.run_id,
         "status": "ok",
