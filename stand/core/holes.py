@@ -114,6 +114,16 @@ def _gap(a: float, b: float) -> float:
     return min(d, 360.0 - d)
 
 
+def sector_span(lo: float, hi: float) -> float:
+    """The arc ``lo..hi`` covers, counted in the angles' sense [deg], 0..360.
+
+    ``[350, 10]`` wraps through 0 (20 deg); ``[0, 360]`` (or any two ends a nonzero
+    multiple of 360 apart) is the whole circle; ``[a, a]`` is no arc.
+    """
+    span = (hi - lo) % 360.0
+    return 360.0 if span == 0.0 and hi != lo else span
+
+
 def allowed_angles(plane: Plane) -> np.ndarray:
     """The allowed angles on a grid (sectors) or as given (positions) [deg]; empty when
     every angle is allowed."""
@@ -121,7 +131,7 @@ def allowed_angles(plane: Plane) -> np.ndarray:
         return np.unique(_wrap(np.asarray(plane.positions, dtype=float)))
     out: list[np.ndarray] = []
     for lo, hi in plane.sectors:
-        span = (hi - lo) % 360.0 or (360.0 if hi != lo else 0.0)
+        span = sector_span(lo, hi)
         n = int(span // GRID_STEP_DEG)
         out.append(lo + GRID_STEP_DEG * np.arange(n + 1))
         out.append(np.array([lo + span]))
@@ -135,7 +145,7 @@ def is_allowed(angle_deg: float, plane: Plane) -> bool:
     if plane.positions:
         return any(_gap(angle_deg, p) < 1e-9 for p in plane.positions)
     for lo, hi in plane.sectors:
-        if (angle_deg - lo) % 360.0 <= (hi - lo) % 360.0 + 1e-9:
+        if (angle_deg - lo) % 360.0 <= sector_span(lo, hi) + 1e-9:
             return True
     return False
 
@@ -282,7 +292,7 @@ def _slot_at(
 def _in_sector(phi: float, arc_deg: float, lo: float, hi: float) -> tuple[float, float]:
     """The centre [deg] nearest ``phi`` of a slot of ``arc_deg`` inside the sector
     ``lo..hi``, and the longest arc there [rad]."""
-    span = (hi - lo) % 360.0
+    span = sector_span(lo, hi)
     half = min(arc_deg, span) / 2
     rel = (phi - lo) % 360.0
     if rel > span:  # outside: to the nearer end

@@ -15,7 +15,15 @@ from hypothesis import strategies as st
 
 from stand.cli import main
 from stand.core.drill import Drill, cap_height, depth_for, hole, min_depth, slot_arc, slot_moment
-from stand.core.holes import Plane, is_allowed, pitch_deg, plan_holes, plan_slot
+from stand.core.holes import (
+    Plane,
+    allowed_angles,
+    is_allowed,
+    pitch_deg,
+    plan_holes,
+    plan_slot,
+    sector_span,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL_CFG = ROOT / "examples" / "demo-drill.toml"
@@ -280,3 +288,21 @@ def test_drilled_holes_close_the_loop(tmp_path: Path, capsys: pytest.CaptureFixt
         assert urr >= 0.95, urr
         assert abs(a["unbalance_g_mm"] - b["leftover_g_mm"]) <= a["uncertainty_g_mm"] + 1.0
     assert all(p["pass"] for p in after["tolerance"]["planes"])
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "span"),
+    [(0.0, 360.0, 360.0), (10.0, 370.0, 360.0), (350.0, 10.0, 20.0), (-10.0, 10.0, 20.0),
+     (40.0, 40.0, 0.0), (40.0, 80.0, 40.0)],
+)  # fmt: skip
+def test_a_sector_s_span_and_what_it_allows(lo: float, hi: float, span: float) -> None:
+    """[0, 360] is the whole circle (every angle allowed, as the grid of angles says),
+    [a, a] no arc, [350, 10] wraps through 0."""
+    assert sector_span(lo, hi) == pytest.approx(span)
+    plane = Plane(0.09, sectors=((lo, hi),))
+    inside = [a for a in range(0, 360, 5) if (a - lo) % 360 <= span]
+    assert all(is_allowed(float(a), plane) for a in inside)
+    assert len(allowed_angles(plane)) >= (1 if span == 0 else 2)
+    if span < 360:
+        outside = [a for a in range(0, 360, 5) if (a - lo) % 360 > span + 1e-9]
+        assert not any(is_allowed(float(a), plane) for a in outside)

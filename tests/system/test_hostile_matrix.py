@@ -18,6 +18,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
+from hostile import registry
 
 from stand.cli import main
 from stand.drivers import read_recording
@@ -30,15 +31,7 @@ CFG = (ROOT / "examples" / "demo-stand.toml").read_text()
 
 Case = Callable[[Path, Path], tuple[list[str], str]]
 """(work dir, a good demo run) -> (stand's arguments, what the one line must say; "" = ok)."""
-CASES: dict[str, Case] = {}
-
-
-def case(name: str) -> Callable[[Case], Case]:
-    def put(fn: Case) -> Case:
-        CASES[name] = fn
-        return fn
-
-    return put
+CASES, case = registry()
 
 
 @functools.cache

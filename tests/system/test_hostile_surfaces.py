@@ -1,0 +1,164 @@
+"""The second hostile matrix: the surfaces added after the readers' matrix
+(``test_hostile_matrix.py``): drill and mill configs, the tooling store, influence
+files, archive rows, Q-DAS, OPC UA, MQTT, ``health`` and ``calibrate``.
+
+Every case ends in one of two ways: exit 2 with one line on stderr that starts
+``stand: error:`` and names the key, file, row or server (``says``), or exit 0 with
+a flag in what the command prints (``flags``).  No case may let a Python warning
+through, end in "internal error" or a traceback, or take longer than its limit.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+from hostile import registry
+
+from stand.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+CFG = (ROOT / "examples" / "demo-stand.toml").read_text()
+DRILL = (ROOT / "examples" / "demo-drill.toml").read_text()
+LIMIT_S = 30.0
+"""No case may take longer (the slowest, a 50-drill plan, takes about 1 s)."""
+
+
+@dataclass(frozen=True)
+class Outcome:
+    argv: list[str]
+    says: str = ""
+    """What the one line on stderr names (exit 2) ..."""
+    flags: str = ""
+    """... or what stdout must carry (exit 0)."""
+
+
+Case = Callable[[Path, Path], Outcome]
+"""(work dir, a good demo run) -> the command and what it must answer."""
+CASES, case = registry()
+
+
+def _write(d: Path, text: str, name: str = "cfg.toml") -> str:
+    (d / name).write_text(text)
+    return str(d / name)
+
+
+def _drill(d: Path, old: str, new: str) -> str:
+    assert old in DRILL, old
+    return _write(d, DRILL.replace(old, new, 1))
+
+
+# -- drill and mill configs: sizes and values bounded, keys that do not apply refused --
+
+_DRILL_CASES = [
+    ("10^4 drills", "[[correction.drills]]",
+     "[[correction.drills]]\ndiameter_mm = 8.0\nmax_depth_mm = 20.0\n" * 10_000
+     + "[[correction.drills]]", "[correction.drills]"),
+    ("density 1e300", "density_kg_m3 = 7850.0", "density_kg_m3 = 1e300",
+     "[correction.density_kg_m3]"),
+    ("density 1e-300", "density_kg_m3 = 7850.0", "density_kg_m3 = 1e-300",
+     "[correction.density_kg_m3]"),
+    ("entry radius 100 m on a 90 mm plane", "entry_radius_mm = 90.0",
+     "entry_radius_mm = 100000.0", "[correction.plane1.entry_radius_mm]"),
+    ("entry radius 10 m on a 90 mm plane", "entry_radius_mm = 90.0",
+     "entry_radius_mm = 10000.0", "[correction.plane1.entry_radius_mm]"),
+    ("positions in drill mode", 'mode = "drill"', 'mode = "drill"\npositions = 6',
+     "[correction.positions]"),
+    ("weights_g in drill mode", 'mode = "drill"', 'mode = "drill"\nweights_g = [1.0, 2.0]',
+     "[correction.weights_g]"),
+    ("a [correction.mill] in drill mode", "[correction.plane1]",
+     "[correction.mill]\nwidth_mm = 10.0\ndepth_mm = 5.0\n[correction.plane1]",
+     "[correction.mill]"),
+    ("10^4 positions_deg", "min_pitch_deg = 20.0",
+     "min_pitch_deg = 20.0\npositions_deg = [" + ", ".join(["1.0"] * 10_000) + "]",
+     "[correction.plane1.positions_deg]"),
+    ("a sector of no arc", "min_pitch_deg = 20.0",
+     "min_pitch_deg = 20.0\nsectors = [[40.0, 40.0]]", "[correction.plane1.sectors]"),
+    ("a drill depth of inf", "max_depth_mm = 25.0", "max_depth_mm = inf",
+     "[correction.drills.0.max_depth_mm]"),
+    ("a drill diameter of nan", "diameter_mm = 20.0", "diameter_mm = nan",
+     "[correction.drills.0.diameter_mm]"),
+]  # fmt: skip
+
+_MILL = DRILL.replace('mode = "drill"', 'mode = "mill"').split("[[correction.drills]]")[0] + (
+    "[correction.mill]\nwidth_mm = 12.0\ndepth_mm = 4.0\n"
+)
+
+_MILL_CASES = [
+    ("a slot 100 m wide", "width_mm = 12.0", "width_mm = 100000.0", "[correction.mill.width_mm]"),
+    ("a slot 1 m wide on a 90 mm plane", "width_mm = 12.0", "width_mm = 1000.0",
+     "[correction.mill.width_mm]"),
+    ("drills in mill mode", "[correction.mill]",
+     "[[correction.drills]]\ndiameter_mm = 8.0\nmax_depth_mm = 20.0\n[correction.mill]",
+     "[correction.drills]"),
+    ("positions_deg in mill mode", "[correction.mill]",
+     "[correction.plane1]\npositions_deg = [0.0, 90.0]\n[correction.mill]",
+     "[correction.plane1.positions_deg]"),
+    ("max_holes in mill mode", 'mode = "mill"', 'mode = "mill"\nmax_holes = 3',
+     "[correction.max_holes]"),
+]  # fmt: skip
+
+for _surface, _base, _cases in (("drill", DRILL, _DRILL_CASES), ("mill", _MILL, _MILL_CASES)):
+    for _name, _old, _new, _says in _cases:
+        assert _old in _base, _old
+
+        def _config_case(
+            d: Path, run: Path, text: str = _base.replace(_old, _new, 1), says: str = _says
+        ) -> Outcome:
+            return Outcome(["solve", str(run), "--config", _write(d, text)], says)
+
+        case(f"{_surface}: {_name}")(_config_case)
+
+
+@case("drill: a sector list covering every angle is planned")
+def _full_circle(d: Path, run: Path) -> Outcome:
+    cfg = _drill(d, "min_pitch_deg = 20.0", "min_pitch_deg = 20.0\nsectors = [[0.0, 360.0]]")
+    return Outcome(["solve", str(run), "--config", cfg], flags="drill")
+
+
+@case("remove mode: a drill table is refused")
+def _drills_in_remove(d: Path, run: Path) -> Outcome:
+    old = "positions = 0"
+    assert old in CFG
+    text = CFG.replace(old, old + "\ndrills = [{diameter_mm = 8.0, max_depth_mm = 20.0}]")
+    return Outcome(["solve", str(run), "--config", _write(d, text)], "[correction.drills]")
+
+
+# -- the matrix --
+
+OUTCOMES: dict[str, str] = {}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_hostile_surface_ends_cleanly(
+    name: str, demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    want = CASES[name](tmp_path, demo_run)
+    capsys.readouterr()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(want.argv)
+    took = time.perf_counter() - t0
+    out, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    OUTCOMES[name] = "clean" if code == 2 else "flagged" if code == 0 else "wrong"
+    assert not caught, [str(w.message) for w in caught]
+    assert "internal error" not in err and "Traceback" not in err, err
+    assert took < LIMIT_S, f"{took:.1f} s"
+    if want.says:
+        assert code == 2 and len(lines) == 1 and lines[0].startswith("stand: error: "), err
+        assert want.says in lines[0], err
+    else:
+        assert code == 0, err
+        assert want.flags in out, out
+
+
+def test_the_second_matrix_counts() -> None:
+    """Every surface the issue names carries cases."""
+    surfaces = {name.split(":")[0] for name in CASES}
+    assert {"drill", "mill"} <= surfaces, surfaces
