@@ -247,6 +247,21 @@ class ArchiveError(StandError, OSError):
         super().__init__(f"archive {url}: {message}")
 
 
+class ArchiveRowError(ArchiveError, ValueError):
+    """A row read from the archive holds what no run of this software wrote (another
+    program, another version, a damaged database): refused, the row named.
+
+    Attributes
+    ----------
+    table, row, column : str
+        Where: the table, the row (``run 17``), the column.
+    """
+
+    def __init__(self, message: str, *, url: str, table: str, row: str, column: str):
+        self.table, self.row, self.column = table, row, column
+        super().__init__(f"table {table}, {row}, column {column}: {message}", url=url)
+
+
 class ClusterError(StandError, ConnectionError):
     """A compute cluster (a Dask scheduler) cannot be reached, or is not usable.
 

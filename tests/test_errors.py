@@ -23,6 +23,8 @@ SAMPLES = {
     "BusError": {"channel": "virtual:x", "frames_received": 5},
     "BusTimeoutError": {"channel": "virtual:x", "timeout_s": 2.0},
     "ArchiveError": {"url": "sqlite:///a.sqlite"},
+    "ArchiveRowError": {"url": "sqlite:///a.sqlite", "table": "runs", "row": "run 17",
+                        "column": "verdict"},
     "ClusterError": {"address": "tcp://10.0.0.1:8786"},
     "StationBusyError": {"running": "the check run of A-1"},
     "TooLargeError": {"what": "run.log", "needed_bytes": 10**11, "available_bytes": 10**10},

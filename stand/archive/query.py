@@ -13,6 +13,7 @@ from typing import Any
 from stand.archive.revisions import revision_id_in
 from stand.archive.schema import planes, revised, revised_planes, runs
 from stand.archive.store import Archive
+from stand.archive.validate import checked_planes, checked_runs, run_row, shown_url
 
 
 @dataclass(frozen=True)
@@ -90,10 +91,11 @@ def select_runs(conn: Any, f: Filters) -> list[Any]:
             revised.c.run_id == runs.c.id, revised.c.revision_id == rid,
             revised.c.status == "ok"))  # fmt: skip
     q = q.where(*_where(f))
+    url = shown_url(conn)
     if f.limit is not None:  # the newest N, still listed oldest first
         newest = q.order_by(runs.c.start_time.desc(), runs.c.id.desc()).limit(f.limit)
-        return list(conn.execute(newest).all())[::-1]
-    return list(conn.execute(q.order_by(runs.c.start_time, runs.c.id)).all())
+        return checked_runs(conn.execute(newest).all(), url)[::-1]
+    return checked_runs(conn.execute(q.order_by(runs.c.start_time, runs.c.id)).all(), url)
 
 
 def chunks(ids: list[int]) -> Iterator[list[int]]:
@@ -104,17 +106,21 @@ def chunks(ids: list[int]) -> Iterator[list[int]]:
 
 def plane_rows(conn: Any, ids: list[int], revision: str | None = None) -> Iterator[Any]:
     """The plane rows of these runs, plane 1 before plane 2 within each run (as the
-    revision ``revision`` re-judged them, if one is named)."""
+    revision ``revision`` re-judged them, if one is named), each checked
+    (:mod:`stand.archive.validate`)."""
     import sqlalchemy as sa
 
     table, where = planes, []
     if revision is not None:
         table = revised_planes
         where = [revised_planes.c.revision_id == revision_id_in(conn, revision)]
+    raw = sa.type_coerce(table.c.passed, sa.types.NullType()).label("passed_raw")
+    url = shown_url(conn)
     for part in chunks(ids):
-        yield from conn.execute(
-            sa.select(table).where(table.c.run_id.in_(part), *where).order_by(table.c.plane)
+        found = conn.execute(
+            sa.select(table, raw).where(table.c.run_id.in_(part), *where).order_by(table.c.plane)
         )
+        yield from checked_planes(found, url, str(table.name))
 
 
 def history(url: str, f: Filters) -> list[dict[str, Any]]:
@@ -189,13 +195,14 @@ def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
         row = conn.execute(q.order_by(runs.c.id.desc()).limit(1)).first()
         if row is None:
             return None
+        run_row(row, shown_url(conn))
         ids = [row.id] + ([row.checks_run_id] if row.checks_run_id is not None else [])
         found: dict[int, list[dict[str, Any]]] = {i: [] for i in ids}
         for p in plane_rows(conn, ids):
             found[p.run_id].append(plane_json(p))
     run = _run_dict(row, found[row.id])
     run["initial"] = found[ids[-1]]
-    run["result"] = json.loads(row.result_json)
+    run["result"] = json.loads(row.result_json)  # checked as strict JSON above
     return run
 
 

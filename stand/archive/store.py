@@ -17,11 +17,15 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive.schema import corrections, planes, runs
+from stand.archive.validate import correction_row
 from stand.config import data_folder
 from stand.errors import ArchiveError
 
 BUSY_TIMEOUT_S = 60.0
 """A writer waits this long for another to finish before giving up [s]."""
+CONNECT_TIMEOUT_S = 10
+"""A database server must answer a new connection within this [s] (libpq's
+``connect_timeout``; a URL's own ``?connect_timeout=`` wins)."""
 MIGRATIONS = Path(__file__).resolve().parent / "migrations"
 
 
@@ -71,7 +75,10 @@ class Archive:
                         "(postgresql+psycopg://user@host/db)",
                         url=self.shown,
                     )
-            self.engine = sa.create_engine(self.url, future=True)
+            connect = {}
+            if u.get_driver_name() in ("psycopg", "psycopg2") and "connect_timeout" not in u.query:
+                connect["connect_timeout"] = CONNECT_TIMEOUT_S
+            self.engine = sa.create_engine(self.url, future=True, connect_args=connect)
         except (ArgumentError, NoSuchModuleError, ValueError, OSError) as exc:
             raise ArchiveError(f"not a usable database URL ({exc})", url=self.shown) from exc
         if self.sqlite:
@@ -170,7 +177,8 @@ class Archive:
         return self._insert_once(corrections, "check_sha256", row, "calibration datum")
 
     def correction_rows(self, stand: str | None = None, rotor_type: str | None = None) -> list[Any]:
-        """The correction data, oldest first, of a stand and a rotor type (None: any)."""
+        """The correction data, oldest first, of a stand and a rotor type (None: any), each
+        checked (:func:`stand.archive.validate.correction_row`)."""
         import sqlalchemy as sa
 
         q = sa.select(corrections).order_by(corrections.c.start_time, corrections.c.id)
@@ -179,7 +187,10 @@ class Archive:
         if rotor_type is not None:
             q = q.where(corrections.c.rotor_type == rotor_type)
         with self.transaction() as conn:
-            return list(conn.execute(q).mappings())
+            found = list(conn.execute(q).mappings())
+        for row in found:
+            correction_row(row, self.shown)
+        return found
 
     def run_id(self, file_sha256: str) -> int | None:
         """The id of the run with this file digest, if archived."""
@@ -256,4 +267,7 @@ def _sqlite_pragmas(engine: Any) -> None:
 def _reason(exc: Exception) -> str:
     """The database's own words, on one line."""
     orig = getattr(exc, "orig", None) or exc
-    return " ".join(str(orig).split())[:300]
+    words = " ".join(str(orig).split())[:300]
+    if "timeout expired" in words:
+        return f"the server did not answer within its connect timeout ({words})"
+    return words

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from stand.archive import url_for
+from stand.archive import Archive, url_for
 from stand.cli.common import add_archive_argument
 from stand.config import load_config
 from stand.errors import UsageError
@@ -54,8 +54,10 @@ def run(args: argparse.Namespace) -> int:
     if args.config:
         cfg = load_config(args.config)[0]
     stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)
+    url = url_for(args.archive, cfg)
+    Archive(url).close()  # an archive that is no database: said now, not served on
     server = ResultServer(
-        url_for(args.archive, cfg),
+        url,
         stand,
         args.host,
         args.port,

@@ -30,6 +30,7 @@ import errno
 import hmac
 import json
 import logging
+import sys
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -170,6 +171,7 @@ class ResultServer:
 
         archive: Any = None
         seen: int | None = -1
+        said = ""  # the archive's last error, said once on stderr
         assert self._stop is not None
         while not self._stop.is_set():
             state = "NotExecuting"
@@ -180,8 +182,11 @@ class ResultServer:
                     run = latest(archive, self.stand_id)
                     await self._publish(nodes, events, run, fire=seen != -1 and run is not None)
                     seen = now
-            except ArchiveError:
+            except ArchiveError as exc:
                 state = "OutOfService"
+                if str(exc) != said:
+                    said = str(exc)
+                    print(f"stand opcua: out of service: {said}", file=sys.stderr, flush=True)
                 if archive is not None:
                     archive.close()
                 archive = None

@@ -136,9 +136,10 @@ def _polar(U: complex) -> tuple[float, float]:
 
 def value_line(part: dict[str, Any]) -> list[str]:
     """One run's value line, and the ``K0014/0`` serial after it."""
-    when = dt.datetime.fromisoformat(part["start_time"]).astimezone(dt.UTC)
+    start = part["start_time"]  # ISO 8601 or "" (checked as read: stand.archive.validate)
+    when = dt.datetime.fromisoformat(start).astimezone(dt.UTC) if start else None
     common = {
-        "K0004": when.strftime(DATE_FORMAT),
+        "K0004": "" if when is None else when.strftime(DATE_FORMAT),
         "K0006": _text(part["order"]),
         "K0008": _text(part["operator"]),
         "K0010": _text(part["stand"]),
@@ -170,6 +171,7 @@ def parts(url: str, rotor_type: str, filters: Any) -> tuple[list[dict[str, Any]]
         for extra in (list(planes), earlier):
             for p in plane_rows(conn, extra, f.revision):
                 planes.setdefault(p.run_id, [None, None])[p.plane - 1] = p
+    _one_ident_per_serial(rows)
     out, per = [], [None, None]
     for r in rows:
         own = planes[r.id]
@@ -188,6 +190,22 @@ def parts(url: str, rotor_type: str, filters: Any) -> tuple[list[dict[str, Any]]
             "residual": [(complex(p.U_re_kg_m, p.U_im_kg_m), p.radius95_kg_m) for p in own],
         })  # fmt: skip
     return out, per
+
+
+def _one_ident_per_serial(rows: list[Any]) -> None:
+    """Refuse two serials that Windows-1252 makes one part ident (they differ only in
+    characters it cannot write): Q-DAS would count two rotors as one."""
+    seen: dict[str, str] = {}
+    for r in rows:
+        if not r.serial:
+            continue
+        ident = _text(r.serial)
+        other = seen.setdefault(ident, r.serial)
+        if other != r.serial:
+            raise UsageError(
+                f"serials {other!r} and {r.serial!r} are one part ident in Q-DAS's "
+                f"Windows-1252 ({ident!r}): nothing exported"
+            )
 
 
 def dfq_text(rotor_type: str, found: list[dict[str, Any]], per: list[Any]) -> str:

@@ -10,6 +10,10 @@ through, end in "internal error" or a traceback, or take longer than its limit.
 
 from __future__ import annotations
 
+import shutil
+import socket
+import sqlite3
+import threading
 import time
 import warnings
 from collections.abc import Callable
@@ -128,6 +132,110 @@ def _drills_in_remove(d: Path, run: Path) -> Outcome:
     return Outcome(["solve", str(run), "--config", _write(d, text)], "[correction.drills]")
 
 
+# -- archive rows: what no run of this software wrote, refused and named --
+
+
+@pytest.fixture(scope="module")
+def archive(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Four rotors of the production-drift scene balanced, corrected and checked: eight
+    runs, sixteen plane rows, four calibration data."""
+    d = tmp_path_factory.mktemp("archive")
+    url = f"sqlite:///{d / 'a.sqlite'}"
+    args = ["simulate", "production-drift", "--series", "4", "--out-dir", str(d / "runs")]
+    assert main([*args, "--archive", url]) == 0
+    return d / "a.sqlite"
+
+
+ARCHIVE: dict[str, Path] = {}
+"""The module's archive, set by the matrix's test for the cases that need it."""
+
+
+def _tampered(d: Path, sql: str, *params: object) -> str:
+    """A copy of the series' archive with one statement run on it; its URL."""
+    copy = d / "a.sqlite"
+    shutil.copy(ARCHIVE["series"], copy)
+    with sqlite3.connect(copy) as conn:
+        assert conn.execute(sql, params).rowcount >= 1, sql
+    return f"sqlite:///{copy}"
+
+
+_QDAS = ["export", "qdas", "--rotor-type", "auger-A", "-o"]
+_ROW_CASES = [
+    ("a verdict 'maybe'", "UPDATE runs SET verdict = 'maybe' WHERE id = 3", (), ["history"],
+     "table runs, run 3, column verdict"),
+    ("a time 'yesterday' in Q-DAS", "UPDATE runs SET start_time = 'yesterday' WHERE id = 2", (),
+     _QDAS, "table runs, run 2, column start_time"),
+    ("an infinite unbalance in Q-DAS", "UPDATE planes SET U_re_kg_m = 9e999 WHERE run_id = 1",
+     (), _QDAS, "table planes, run 1 plane 1, column U_re_kg_m"),
+    ("a radius 'NaN'", "UPDATE planes SET radius95_kg_m = 'NaN' WHERE run_id = 4 AND plane = 2",
+     (), ["history"], "column radius95_kg_m"),
+    ("a pass 'maybe'", "UPDATE planes SET passed = 'maybe' WHERE run_id = 2", (), ["history"],
+     "column passed"),
+    ("a speed 'fast' in stats", "UPDATE runs SET rpm = 'fast' WHERE id = 5", (),
+     ["stats", "--rotor-type", "auger-A"], "table runs, run 5, column rpm"),
+    ("a serial of 10^5 characters", "UPDATE runs SET serial = ? WHERE id = 1", ("S" * 10**5,),
+     ["history"], "column serial"),
+    ("a digest that is not one", "UPDATE runs SET file_sha256 = 'x' WHERE id = 6", (),
+     ["history"], "column file_sha256"),
+    ("a correction mode 'weld'", "UPDATE runs SET correction_mode = 'weld' WHERE id = 7", (),
+     ["history"], "column correction_mode"),
+    ("two serials one in Windows-1252", "UPDATE runs SET serial = CASE WHEN id < 5 "
+     "THEN 'A-\u03a91' ELSE 'A-\u03a81' END", (), _QDAS, "one part ident"),
+    ("an empty start time in Q-DAS", "UPDATE runs SET start_time = '' WHERE id = 2", (),
+     _QDAS, ""),
+    ("a calibration datum that is not JSON", "UPDATE corrections SET datum_json = 'oops' "
+     "WHERE id = 2", (), ["health"], "table corrections, datum 2, column datum_json"),
+    ("a calibration datum with NaN", "UPDATE corrections SET datum_json = "
+     "replace(datum_json, '\"omega_rad_s\": ', '\"omega_rad_s\": NaN, \"x\": ') WHERE id = 1",
+     (), ["health"], "column datum_json"),
+    ("a calibration datum without A1", "UPDATE corrections SET datum_json = "
+     "replace(datum_json, '\"A1\"', '\"B1\"') WHERE id = 3", (),
+     ["calibrate", "--from-archive", "--config", str(ROOT / "examples/demo-stand.toml")],
+     "column datum_json"),
+    ("a calibration datum at -900 rpm", "UPDATE corrections SET rpm = -900 WHERE id = 4", (),
+     ["health"], "table corrections, datum 4, column rpm"),
+]  # fmt: skip
+
+for _name, _sql, _params, _argv, _says in _ROW_CASES:
+
+    def _row_case(
+        d: Path, run: Path, sql: str = _sql, params: tuple = _params, argv: list = _argv,
+        says: str = _says,
+    ) -> Outcome:  # fmt: skip
+        url = _tampered(d, sql, *params)
+        tail = [str(d / "out.dfq")] if argv is _QDAS else []
+        return Outcome([*argv, *tail, "--archive", url], says)
+
+    case(f"archive: {_name}")(_row_case)
+
+
+def silent_server() -> int:
+    """A TCP port on loopback that accepts connections and never says a word; its port."""
+    listener = socket.create_server(("127.0.0.1", 0))
+    held: list[socket.socket] = []
+
+    def accept() -> None:
+        while True:
+            conn, _ = listener.accept()
+            held.append(conn)
+
+    threading.Thread(target=accept, daemon=True).start()
+    return int(listener.getsockname()[1])
+
+
+@case("archive: a PostgreSQL server that accepts and stays silent")
+def _silent_postgres(d: Path, run: Path) -> Outcome:
+    url = f"postgresql+psycopg://stand@127.0.0.1:{silent_server()}/stand"
+    return Outcome(["history", "--archive", url], "did not answer within its connect timeout")
+
+
+@case("opcua: an archive that is no database")
+def _opcua_not_a_database(d: Path, run: Path) -> Outcome:
+    (d / "notes.sqlite").write_text("these are notes, not a database\n" * 100)
+    url = f"sqlite:///{d / 'notes.sqlite'}"
+    return Outcome(["opcua", "--archive", url, "--port", "48999"], "not a database")
+
+
 # -- the matrix --
 
 OUTCOMES: dict[str, str] = {}
@@ -135,8 +243,14 @@ OUTCOMES: dict[str, str] = {}
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_a_hostile_surface_ends_cleanly(
-    name: str, demo_run: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    name: str,
+    demo_run: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    request: pytest.FixtureRequest,
 ) -> None:
+    if name.startswith("archive:"):
+        ARCHIVE["series"] = request.getfixturevalue("archive")
     want = CASES[name](tmp_path, demo_run)
     capsys.readouterr()
     t0 = time.perf_counter()
@@ -161,4 +275,4 @@ def test_a_hostile_surface_ends_cleanly(
 def test_the_second_matrix_counts() -> None:
     """Every surface the issue names carries cases."""
     surfaces = {name.split(":")[0] for name in CASES}
-    assert {"drill", "mill"} <= surfaces, surfaces
+    assert {"drill", "mill", "archive"} <= surfaces, surfaces

@@ -1,0 +1,217 @@
+"""Every row read from the archive is checked before it is used.
+
+With PostgreSQL, rows come from other processes, other versions of this
+software, other programs; with SQLite, a column holds whatever was put in
+it.  A row that no run of this software could have written (a verdict
+``maybe``, a time ``yesterday``, an unbalance of ``inf``, a result that is not
+JSON) is refused with :class:`stand.errors.ArchiveRowError`, naming the
+table, the row and the column, never shown or exported as it is.
+
+The bounds are the writers' (:mod:`stand.archive.results`,
+:mod:`stand.health.monitor`): what they write always passes.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import math
+import re
+from collections.abc import Iterable, Iterator
+from typing import Any
+
+from stand.core.model import MAX_SPEED_RPM
+from stand.errors import ArchiveRowError
+
+VERDICTS = frozenset({"pass", "fail", "none"})
+MODES = frozenset({"remove", "add", "drill", "mill"})
+STATUSES = frozenset({"ok", "missing", "altered", "unreadable", "refused"})
+SHA256 = re.compile(r"[0-9a-f]{64}")
+MAX_UNBALANCE_KG_M = 1e3
+"""No rotor a stand balances carries more (1 t at 1 m) [kg m]."""
+TEXT_COLUMNS = {"serial": 64, "order_no": 64, "operator": 64, "rotor_type": 64,
+                "stand_id": 64, "software": 64, "note": 4000, "matrix": 4000,
+                "confirmed_by": 64}  # fmt: skip
+
+
+class _Row:
+    """One row being checked: where it is, and a failure naming its column."""
+
+    def __init__(self, row: Any, table: str, url: str, key: str = "id", label: str = "run"):
+        self.row, self.table, self.url = row, table, url
+        ident = row._mapping.get(key) if hasattr(row, "_mapping") else row.get(key)
+        self.name = f"{label} {ident!r}"
+
+    def get(self, column: str) -> Any:
+        m = self.row._mapping if hasattr(self.row, "_mapping") else self.row
+        return m[column] if column in m else None
+
+    def has(self, column: str) -> bool:
+        m = self.row._mapping if hasattr(self.row, "_mapping") else self.row
+        return column in m
+
+    def fail(self, column: str, message: str) -> ArchiveRowError:
+        return ArchiveRowError(
+            message, url=self.url, table=self.table, row=self.name, column=column
+        )
+
+    def number(self, column: str, lo: float, hi: float, *, none: bool = False) -> None:
+        if not self.has(column):
+            return
+        v = self.get(column)
+        if v is None and none:
+            return
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.fail(column, f"{v!r} is not a finite number")
+        if not lo <= v <= hi:
+            raise self.fail(column, f"{v!r} is outside {lo:g} .. {hi:g}")
+
+    def choice(self, column: str, allowed: frozenset[Any], *, none: bool = False) -> None:
+        if not self.has(column):
+            return
+        v = self.get(column)
+        if v is None and none:
+            return
+        if v not in allowed:
+            raise self.fail(column, f"{v!r} is not one of {', '.join(sorted(map(str, allowed)))}")
+
+    def text(self, column: str, longest: int) -> None:
+        if not self.has(column):
+            return
+        v = self.get(column)
+        if v is not None and (not isinstance(v, str) or len(v) > longest):
+            raise self.fail(column, f"{str(v)[:40]!r} is not a text of at most {longest} chars")
+
+    def time(self, column: str, *, empty: bool = False) -> None:
+        if not self.has(column):
+            return
+        v = self.get(column)
+        if empty and v == "":
+            return
+        try:
+            when = dt.datetime.fromisoformat(v) if isinstance(v, str) else None
+        except ValueError:
+            when = None
+        if when is None:
+            raise self.fail(column, f"{str(v)[:40]!r} is not an ISO 8601 date and time")
+
+    def digest(self, column: str) -> None:
+        if self.has(column) and not (
+            isinstance(self.get(column), str) and SHA256.fullmatch(self.get(column))
+        ):
+            raise self.fail(column, f"{str(self.get(column))[:70]!r} is not a SHA-256 digest")
+
+    def flag(self, column: str) -> None:
+        """A boolean: ``passed_raw`` is ``passed`` as stored, before SQLAlchemy makes any
+        non-zero SQLite value True."""
+        v = self.get(column)
+        if self.has(column) and not (v is None or (type(v) in (bool, int) and v in (0, 1))):
+            name = column.removesuffix("_raw")
+            raise self.fail(name, f"{v!r} is not true, false or empty")
+
+    def json_object(self, column: str, *, none: bool = False) -> dict[str, Any] | None:
+        v = self.get(column)
+        if v is None and none:
+            return None
+        try:
+            doc = json.loads(v, parse_constant=_no_constant) if isinstance(v, str) else None
+        except ValueError as exc:
+            raise self.fail(column, f"not strict JSON ({exc})") from exc
+        if not isinstance(doc, dict):
+            raise self.fail(column, "not a JSON object")
+        return doc
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def shown_url(conn: Any) -> str:
+    """The archive's URL as errors show it (no password), from an open connection."""
+    return str(conn.engine.url.render_as_string(hide_password=True))
+
+
+def run_row(row: Any, url: str) -> Any:
+    """A ``runs`` row, checked (the columns it carries); the row."""
+    r = _Row(row, "runs", url)
+    r.number("id", 1, 2**63)
+    r.text("run_file", 4000)
+    r.digest("file_sha256")
+    r.time("start_time", empty=True)
+    r.number("rpm", 1e-9, MAX_SPEED_RPM)
+    r.choice("verdict", VERDICTS)
+    r.choice("correction_mode", MODES)
+    r.number("checks_run_id", 1, 2**63, none=True)
+    for part in ("static_re_kg_m", "static_im_kg_m", "couple_re_kg_m", "couple_im_kg_m"):
+        r.number(part, -MAX_UNBALANCE_KG_M, MAX_UNBALANCE_KG_M)
+    for column, longest in TEXT_COLUMNS.items():
+        r.text(column, longest)
+    if r.has("result_json"):
+        r.json_object("result_json")
+    return row
+
+
+def plane_row(row: Any, url: str, table: str = "planes") -> Any:
+    """A ``planes`` (or ``revised_planes``) row, checked; the row."""
+    r = _Row(row, table, url, key="run_id")
+    r.name += f" plane {r.get('plane')!r}"
+    r.choice("plane", frozenset({1, 2}))
+    for part in ("U_re_kg_m", "U_im_kg_m"):
+        r.number(part, -MAX_UNBALANCE_KG_M, MAX_UNBALANCE_KG_M)
+    r.number("radius95_kg_m", 0.0, MAX_UNBALANCE_KG_M)
+    r.number("permissible_kg_m", 1e-15, MAX_UNBALANCE_KG_M, none=True)
+    r.flag("passed_raw" if r.has("passed_raw") else "passed")
+    r.number("leftover_kg_m", 0.0, MAX_UNBALANCE_KG_M)
+    r.number("urr", -1e6, 1e6, none=True)
+    return row
+
+
+def checked_runs(rows: Iterable[Any], url: str) -> list[Any]:
+    """:func:`run_row` over many."""
+    return [run_row(r, url) for r in rows]
+
+
+def checked_planes(rows: Iterable[Any], url: str, table: str = "planes") -> Iterator[Any]:
+    """:func:`plane_row` over many, as they come."""
+    for r in rows:
+        yield plane_row(r, url, table)
+
+
+def correction_row(row: Any, url: str) -> dict[str, Any]:
+    """A ``corrections`` row, checked, its datum parsed and checked too; the datum."""
+    r = _Row(row, "corrections", url, label="datum")
+    r.digest("initial_sha256")
+    r.digest("check_sha256")
+    r.number("rpm", 1e-9, MAX_SPEED_RPM)
+    r.digest("config_sha256")
+    r.time("start_time", empty=True)
+    for column in ("stand_id", "rotor_type", "confirmed_by"):
+        r.text(column, TEXT_COLUMNS[column])
+    d = r.json_object("datum_json")
+    assert d is not None
+    _datum(r, d)
+    return d
+
+
+def _datum(r: _Row, d: dict[str, Any]) -> None:
+    """The datum's keys: a speed, four phasors, two 4 x 4 covariances, two unbalances."""
+    shapes = {"A0": (2, 2), "A1": (2, 2), "dU_kg_m": (2, 2), "cov0": (4, 4), "cov1": (4, 4)}
+    w = d.get("omega_rad_s")
+    if isinstance(w, bool) or not isinstance(w, (int, float)) or not 0 < w < 1e5:
+        raise r.fail("datum_json", f"omega_rad_s {w!r} is not a speed")
+    for key, (n, m) in shapes.items():
+        v = d.get(key)
+        ok = (
+            isinstance(v, list)
+            and len(v) == n
+            and all(isinstance(x, list) and len(x) == m for x in v)
+            and all(
+                isinstance(y, (int, float)) and not isinstance(y, bool) and abs(y) < 1e12
+                for x in v
+                for y in x
+            )
+        )
+        if not ok:
+            raise r.fail("datum_json", f"{key} is not {n} x {m} finite numbers")
+    if not isinstance(d.get("config_toml"), str):
+        raise r.fail("datum_json", "config_toml is not a text")
