@@ -19,6 +19,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _ids(ids: list[int], most: int = 8) -> str:
+    shown = ", ".join(map(str, ids[:most]))
+    return shown + (f" and {len(ids) - most} more" if len(ids) > most else "")
+
+
 def run(args: argparse.Namespace) -> int:
 
     out = health_json(health(correction_rows(url_for(args.archive), args.stand, args.rotor_type)))
@@ -34,6 +39,16 @@ def run(args: argparse.Namespace) -> int:
     for g in out["groups"]:
         who = f"stand {g['stand'] or '?'}, rotor type {g['rotor_type'] or '?'}"
         print(f"{who} at {g['rpm']:.0f} rpm: {g['data']} corrected rotors")
+        if g["repeats"]:
+            print(
+                f"  {len(g['repeats'])} data left out: each repeats an earlier one (the same "
+                f"phasors under another digest; corrections {_ids(g['repeats'])})"
+            )
+        if g["outliers"]:
+            print(
+                f"  ALARM: {len(g['outliers'])} data beyond any chance of the calibrated stand "
+                f"(rotors {_ids(g['outliers'])}): check the stand and these corrections"
+            )
         if not g["alarm"]:
             print(
                 f"  as calibrated (CUSUM {g['cusum']:.1f}, alarm above {g['threshold']:g}; "
@@ -41,6 +56,9 @@ def run(args: argparse.Namespace) -> int:
             )
             continue
         m = g["moved"]
+        if m is None and g["outliers"]:
+            print("  recalibrate only once the stand and these corrections are checked")
+            continue
         print(
             f"  ALARM at rotor {g['alarm_at']} (the change from about rotor {g['change_at']}): "
             "the stand no longer matches its calibration"

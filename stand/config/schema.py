@@ -337,18 +337,26 @@ def config_toml(cfg: Config) -> str:
 
 
 def updated_toml(text: str, cfg: Config) -> str:
-    """The configuration text ``text`` with the values that ``cfg`` changed, its comments,
-    order and layout kept (tomlkit); a table ``text`` lacks is added at its end."""
+    """The configuration text ``text`` with only the values ``cfg`` changed from what the
+    text says (its defaults included), its comments, order and layout kept (tomlkit); a
+    table ``text`` lacks is added at its end."""
     import tomlkit
 
     doc = tomlkit.parse(text)
+    before = config_from_dict(tomllib.loads(text), source="(the file updated)")[0]
+    was = before.model_dump(exclude_none=True)
     for name, table in cfg.model_dump(exclude_none=True).items():
+        if not isinstance(table, dict):
+            if was.get(name) != table:
+                doc[name] = table
+            continue
+        changed = {k: v for k, v in table.items() if was.get(name, {}).get(k) != v}
+        if not changed:
+            continue
         if name not in doc:
             doc[name] = tomlkit.table()
-        current = doc[name]
-        for key, value in table.items():
-            if key not in current or current[key] != value:
-                current[key] = value
+        for key, value in changed.items():
+            doc[name][key] = value
     return tomlkit.dumps(doc)
 
 

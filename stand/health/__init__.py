@@ -5,6 +5,7 @@ while the stand is drifted; :mod:`stand.health.evaluate` measures the solve's ac
 over a simulated scene.
 """
 
-from stand.health.monitor import datum_row, health, health_json, refit, with_drift
+from stand.health.data import datum_row
+from stand.health.monitor import health, health_json, refit, with_drift
 
 __all__ = ["datum_row", "health", "health_json", "refit", "with_drift"]

@@ -13,7 +13,6 @@ parameters from them (``stand calibrate --from-archive``).
 
 from __future__ import annotations
 
-import cmath
 import dataclasses
 import json
 import math
@@ -30,15 +29,16 @@ from stand.core.drift import (
     CUSUM_H,
     FALSE_ALARM,
     RUN_LENGTH,
-    Datum,
     cusum,
     fit,
     fit_many,
+    outliers,
     scores,
     single_fits,
     whitened,
 )
-from stand.errors import ConfigError, UsageError
+from stand.errors import ConfigError, ModelError, UsageError
+from stand.health.data import Group, groups, parse_datum
 from stand.solve.pipeline import calibration_radius
 
 SCATTER_PCT = 2.0
@@ -54,121 +54,6 @@ PART = {
     "gain1": "the accelerometer of support 1 (its gain)",
     "gain2": "the accelerometer of support 2 (its gain)",
 }
-
-
-def applied_unbalance(masses: Sequence[tuple[int, float, float, float]]) -> np.ndarray:
-    """The unbalance put on per plane [kg m] from ``(plane, grams, angle_deg, radius_m)``
-    (grams < 0: material taken off), ``m r e^{-i angle}``."""
-    U = np.zeros(2, complex)
-    for plane, grams, angle, radius in masses:
-        U[plane - 1] += grams * 1e-3 * radius * cmath.exp(-1j * math.radians(angle))
-    return U
-
-
-def _pairs(z: np.ndarray) -> list[list[float]]:
-    return [[float(x.real), float(x.imag)] for x in np.asarray(z)]
-
-
-def datum_row(
-    initial: Any,
-    check: Any,
-    masses: Sequence[tuple[int, float, float, float]],
-    *,
-    initial_sha256: str,
-    check_sha256: str,
-    confirmed_by: str | None,
-    applied: str,
-) -> dict[str, Any]:
-    """The archive row of one correction datum: the initial run's and the check's results
-    (:class:`stand.solve.result.Result`), the masses put on, both runs' digests."""
-    m0, m1 = initial.measurement, check.measurement
-    if abs(m1.omega_rad_s / m0.omega_rad_s - 1) > SAME_SPEED:
-        raise UsageError(
-            "the check ran at another speed than the run it checks: not a calibration datum"
-        )
-    if m0.cov_A_m2_s4 is None or m1.cov_A_m2_s4 is None:
-        raise UsageError("a run without its noise estimate is not a calibration datum")
-    prov = check.provenance
-    if initial.provenance.config_sha256 != prov.config_sha256:
-        raise UsageError(
-            "the check was solved with another calibration than the run it checks: not a "
-            "calibration datum"
-        )
-    datum = {
-        "omega_rad_s": m0.omega_rad_s,
-        "A0": _pairs(np.array([ph.A_m_s2 for ph in m0.supports])),
-        "A1": _pairs(np.array([ph.A_m_s2 for ph in m1.supports])),
-        "cov0": np.asarray(m0.cov_A_m2_s4).tolist(),
-        "cov1": np.asarray(m1.cov_A_m2_s4).tolist(),
-        "dU_kg_m": _pairs(applied_unbalance(masses)),
-        "masses": [list(m) for m in masses],
-        "config_toml": prov.config_toml,
-    }
-    return {
-        "initial_sha256": initial_sha256,
-        "check_sha256": check_sha256,
-        "stand_id": prov.stand_id or None,
-        "rotor_type": prov.rotor_type or None,
-        "rpm": float(rad_s_to_rpm(m1.omega_rad_s)),
-        "config_sha256": prov.config_sha256,
-        "confirmed_by": confirmed_by,
-        "applied": applied,
-        "start_time": prov.start_time,
-        "datum_json": json.dumps(datum, allow_nan=False),
-    }
-
-
-def _datum(row: Any) -> tuple[Datum, dict[str, Any]]:
-    d = json.loads(row["datum_json"])
-
-    def cx(pairs: list[list[float]]) -> np.ndarray:
-        return np.array([complex(a, b) for a, b in pairs])
-
-    return (
-        Datum(
-            d["omega_rad_s"],
-            cx(d["A0"]),
-            cx(d["A1"]),
-            np.array(d["cov0"]),
-            np.array(d["cov1"]),
-            cx(d["dU_kg_m"]),
-        ),
-        d,
-    )
-
-
-@dataclass(frozen=True)
-class Group:
-    """One stand's data for one rotor type, at one speed, with one calibration."""
-
-    stand_id: str | None
-    rotor_type: str | None
-    rpm: float
-    config_sha256: str
-    rows: tuple[Any, ...]
-
-
-def groups(rows: Sequence[Any]) -> list[Group]:
-    """The data split so that nothing is mixed: stand, rotor type, calibration, speed
-    (within 5 %); in order of each group's first datum."""
-    out: list[list[Any]] = []
-    for r in rows:
-        for g in out:
-            f = g[0]
-            same = (f["stand_id"], f["rotor_type"], f["config_sha256"]) == (
-                r["stand_id"],
-                r["rotor_type"],
-                r["config_sha256"],
-            )
-            if same and abs(r["rpm"] / f["rpm"] - 1) <= SAME_SPEED:
-                g.append(r)
-                break
-        else:
-            out.append([r])
-    return [
-        Group(g[0]["stand_id"], g[0]["rotor_type"], g[0]["rpm"], g[0]["config_sha256"], tuple(g))
-        for g in out
-    ]
 
 
 def _params(group: Group) -> Any:
@@ -194,6 +79,9 @@ class GroupHealth:
     fitted: tuple[Any, ...]
     """The parameter that explains the data since the change, and those alike it, refitted
     (a stiffness first)."""
+    outliers: tuple[int, ...] = ()
+    """The data beyond any chance of the calibrated stand, whatever their direction
+    (:func:`stand.core.drift.outliers`): an alarm of their own."""
 
 
 def judge(
@@ -203,18 +91,24 @@ def judge(
     the data since the change best, refitted with its interval."""
     cfg, p = _params(group)
     del cfg
-    data = [_datum(r)[0] for r in group.rows]
+    data = [parse_datum(r)[0] for r in group.rows]
     sc = (scatter_pct / 100, math.radians(scatter_deg))
     zs, Js = whitened(p, data, *sc)  # the whole group at once
     c = cusum(scores(zs, Js))
+    far = tuple(int(k) for k in outliers(zs))
     if c.alarm_at is None or c.change_at is None:
+        if far:
+            return GroupHealth(group, c.top, far[0], far[0], None, (), far)
         return GroupHealth(group, c.top, None, None, None, ())
     start = c.change_at
     best = single_fits(zs[start:], Js[start:])[0]
     names = [best.name, *(n for n in best.alike if n in ("C1", "C2", "M1", "M2"))]
     names.sort(key=lambda n: n not in ("C1", "C2"))  # a stiffness first: rubber ages
-    fits = tuple(fit(p, data[start:], n, *sc) for n in names)
-    return GroupHealth(group, c.top, c.alarm_at, start, best, fits)
+    try:
+        fits = tuple(fit(p, data[start:], n, *sc) for n in names)
+    except ModelError:  # no drift of one parameter explains them: the alarm stands alone
+        return GroupHealth(group, c.top, c.alarm_at, start, None, (), far)
+    return GroupHealth(group, c.top, c.alarm_at, start, best, fits, far)
 
 
 def _change(f: Any) -> dict[str, Any]:
@@ -239,6 +133,8 @@ def health_json(results: Sequence[GroupHealth]) -> dict[str, Any]:
             "rpm": round(g.rpm, 1),
             "config_sha256": g.config_sha256,
             "data": len(g.rows),
+            "repeats": list(g.repeats),
+            "outliers": [k + 1 for k in h.outliers],
             "alarm": h.alarm_at is not None,
             "alarm_at": None if h.alarm_at is None else h.alarm_at + 1,
             "change_at": None if h.change_at is None else h.change_at + 1,
@@ -292,9 +188,17 @@ def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) 
     group = mine[-1]
     judged = judge(group)
     start = judged.change_at or 0
+    if names is None and judged.alarm_at is not None and not judged.fitted:
+        shown = ", ".join(str(k + 1) for k in judged.outliers[:8]) or str(judged.alarm_at + 1)
+        raise UsageError(
+            f"the data from rotor {shown.split(',')[0]} on lie beyond any chance of the "
+            f"calibrated stand (rotors {shown}), and no drift of one of its parameters "
+            "explains them: check the stand and these corrections before recalibrating (or "
+            "name what to fit: --fit)"
+        )
     if names is None:
         names = [judged.fitted[0].name] if judged.fitted else ["C1", "C2"]
-    data = [_datum(r)[0] for r in group.rows[start:]]
+    data = [parse_datum(r)[0] for r in group.rows[start:]]
     if len(data) < 2 * len(names):
         raise UsageError(f"{len(data)} data since the change: too few to fit {', '.join(names)}")
     sc = (SCATTER_PCT / 100, math.radians(SCATTER_DEG))
@@ -302,6 +206,12 @@ def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) 
     after = params
     for f in fits:
         if f.name in ("C1", "C2", "M1", "M2"):
+            if not 1 + f.change > 0:
+                raise UsageError(
+                    f"the data since datum {start + 1} would put {f.name} at "
+                    f"{100 * f.change:+.0f} %: no drift of {f.name} explains them; check the "
+                    "stand and these corrections (stand health)"
+                )
             after = dataclasses.replace(after, **{f.name: getattr(params, f.name) * (1 + f.change)})
     return Refit(tuple(fits), params, after, group, start)
 
@@ -311,7 +221,7 @@ def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
 
     out = []
     for row in refit_.group.rows[-last:]:
-        d = _datum(row)[0]
+        d = parse_datum(row)[0]
         entry = {"check_sha256": row["check_sha256"][:12]}
         for key, p in (("old", refit_.before), ("new", refit_.after)):
             U = solve_unbalance(p, d.omega_rad_s, d.A0, max_split_condition=math.inf).U_kg_m

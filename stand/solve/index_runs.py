@@ -16,16 +16,34 @@ import numpy as np
 from stand.config import SAME_SPEED
 from stand.core import rad_s_to_rpm
 from stand.core.balance import index_split
+from stand.core.same import is_same_data
 from stand.drivers.recording import config_digest
-from stand.errors import ConfigError
+from stand.errors import ConfigError, UsageError
 from stand.solve.recordings import measure_recording
 from stand.solve.tooling import TOOLING_NAME, Tooling
+
+
+def _two_runs(m0: Any, m180: Any, run_0: str, run_180: str) -> None:
+    """Refuse two index runs that are one: the support phasors alike beyond what noise
+    can make (:mod:`stand.core.same`; a byte copy, a run recorded once and kept twice)."""
+    a0 = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m0.supports]).ravel()
+    a1 = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m180.supports]).ravel()
+    if m0.cov_A_m2_s4 is None or m180.cov_A_m2_s4 is None:
+        return
+    cov = np.asarray(m0.cov_A_m2_s4) + np.asarray(m180.cov_A_m2_s4)
+    if is_same_data(a1 - a0, cov):
+        raise UsageError(
+            f"{run_0} and {run_180} are the same data (their 1x alike beyond any chance of "
+            f"noise): the 180 deg run must be the rotor turned half a revolution on its tooling"
+        )
 
 
 def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | None) -> Any:
     """The tooling's unbalance from its two index runs (the rotor at 0 deg, then turned
     180 deg on the tooling), neither compensated; returns ``(Tooling, rotor U, rotor
     covariance, config)``.  The name is ``name`` or the config's ``[tooling] name``."""
+    if Path(run_0).resolve() == Path(run_180).resolve():
+        raise UsageError(f"the same run given twice ({run_0}): give the 0 and the 180 deg runs")
     m0, cfg, _, text = measure_recording(run_0, config, compensate=False)
     m180, _, _, text180 = measure_recording(run_180, config, compensate=False)
     if config_digest(text) != config_digest(text180):
@@ -38,6 +56,7 @@ def measure_tooling(run_0: str, run_180: str, config: str | None, name: str | No
             f"({rad_s_to_rpm(m0.omega_rad_s):.0f} and {rad_s_to_rpm(m180.omega_rad_s):.0f} rpm)",
             source=run_180,
         )
+    _two_runs(m0, m180, run_0, run_180)
     name = name or (cfg.tooling.name if cfg.tooling else None)
     if not name:
         raise ConfigError("name the tooling: --name NAME, or [tooling] name in the config")

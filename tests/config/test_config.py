@@ -203,6 +203,13 @@ def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
     back, _ = config_from_dict(tomllib.loads(new), source="new")
     assert back.stand.C1 == 46123.5 and back.stand.reference_angle_deg == 1.25
     assert back.sensors.gain == [1.02, 0.98] and back.rotor == cfg.rotor
+    # only what changed is written: the diff is the three values, no default spelled out
+    import difflib
+
+    added = [d for d in difflib.unified_diff(text.splitlines(), new.splitlines(), n=0, lineterm="")
+             if d.startswith("+") and not d.startswith("+++")]  # fmt: skip
+    keys = sorted(d[1:].split("=")[0].strip() for d in added if "=" in d)
+    assert keys == ["C1", "gain", "reference_angle_deg"], added
 
 
 @pytest.mark.parametrize(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from stand.cli import main
@@ -86,10 +87,22 @@ def test_recalibration_from_production_recovers_c1_and_the_answers(
 
 
 def test_groups_keep_rotor_types_speeds_and_calibrations_apart() -> None:
-    from stand.health.monitor import groups
+    from stand.health.data import groups
+
+    rng = np.random.default_rng(1)
 
     def row(rt: str, rpm: float, cfg: str = "a") -> dict:
-        return {"stand_id": "s", "rotor_type": rt, "rpm": rpm, "config_sha256": cfg}
+        pairs = lambda: rng.normal(size=(2, 2)).tolist()  # noqa: E731
+        datum = {
+            "omega_rad_s": rpm * np.pi / 30,
+            "A0": pairs(),
+            "A1": pairs(),
+            "cov0": np.eye(4).tolist(),
+            "cov1": np.eye(4).tolist(),
+            "dU_kg_m": pairs(),
+        }
+        return {"id": len(rt) + rpm, "stand_id": "s", "rotor_type": rt, "rpm": rpm,
+                "config_sha256": cfg, "datum_json": json.dumps(datum)}  # fmt: skip
 
     rows = [row("A", 900), row("B", 900), row("A", 1200), row("A", 910), row("A", 900, "b")]
     got = [(g.rotor_type, round(g.rpm), g.config_sha256, len(g.rows)) for g in groups(rows)]

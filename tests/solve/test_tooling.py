@@ -6,6 +6,7 @@ from __future__ import annotations
 import cmath
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -95,14 +96,23 @@ def test_tooling_bad_input_is_one_line(tmp_path: Path, capsys: pytest.CaptureFix
     assert any("NOT subtracted" in w and "stand tooling measure" in w for w in out["warnings"])
     assert main(["tooling", "measure", run]) == 2
     assert "two runs" in capsys.readouterr().err
-    assert main(["tooling", "measure", run, run]) == 0
-    assert main(["tooling", "measure", run, run]) == 2  # kept already: --force replaces it
+    turned = _sim(tmp_path, "r180.h5", cfg, "--index", "180")
+    capsys.readouterr()
+    # the same run twice, or a byte copy of it, is no index pair: refused, nothing kept
+    copy = tmp_path / "copy.h5"
+    shutil.copy(run, copy)
+    for second, says in ((run, "the same run given twice"), (str(copy), "the same data")):
+        assert main(["tooling", "measure", run, second]) == 2
+        assert says in capsys.readouterr().err
+    assert not (tmp_path / "toolings" / "mandrel-A.json").exists()
+    assert main(["tooling", "measure", run, turned]) == 0
+    assert main(["tooling", "measure", run, turned]) == 2  # kept already: --force replaces it
     assert "exists" in capsys.readouterr().err
-    assert main(["tooling", "measure", run, run, "--force"]) == 0
+    assert main(["tooling", "measure", run, turned, "--force"]) == 0
     (tmp_path / "toolings" / "mandrel-A.json").write_text("{")
     assert main(["solve", run]) == 2
     assert "mandrel-A.json: not a tooling file" in capsys.readouterr().err
-    assert main(["tooling", "measure", run, run, "--name", "../escape"]) == 2
+    assert main(["tooling", "measure", run, turned, "--name", "../escape"]) == 2
     assert "[tooling.name]" in capsys.readouterr().err
     assert not (tmp_path / "escape.json").exists()
     bad = tmp_path / "bad.toml"

@@ -10,6 +10,7 @@ through, end in "internal error" or a traceback, or take longer than its limit.
 
 from __future__ import annotations
 
+import json
 import shutil
 import socket
 import sqlite3
@@ -229,6 +230,105 @@ def _silent_postgres(d: Path, run: Path) -> Outcome:
     return Outcome(["history", "--archive", url], "did not answer within its connect timeout")
 
 
+def _edited_data(d: Path, edit: Callable[[sqlite3.Connection], None]) -> str:
+    """A copy of the series' archive with its calibration data edited; its URL."""
+    copy = d / "a.sqlite"
+    shutil.copy(ARCHIVE["series"], copy)
+    with sqlite3.connect(copy) as conn:
+        edit(conn)
+    return f"sqlite:///{copy}"
+
+
+def _scale_response(conn: sqlite3.Connection, ids: tuple[int, ...], k: float) -> None:
+    """The stand's response to the correction (A1 - A0) of these data times ``k``."""
+    for i in ids:
+        (text,) = conn.execute("SELECT datum_json FROM corrections WHERE id = ?", (i,)).fetchone()
+        datum = json.loads(text)
+        datum["A1"] = [[a0 + k * (a1 - a0) for a0, a1 in zip(p0, p1, strict=True)]
+                       for p0, p1 in zip(datum["A0"], datum["A1"], strict=True)]  # fmt: skip
+        conn.execute("UPDATE corrections SET datum_json = ? WHERE id = ?", (json.dumps(datum), i))
+
+
+def _copies(conn: sqlite3.Connection) -> None:
+    """Three corrections, and the first copied 40 times under other check digests."""
+    conn.execute("DELETE FROM corrections WHERE id = 4")
+    cols = [r[1] for r in conn.execute("PRAGMA table_info(corrections)") if r[1] != "id"]
+    row = conn.execute(f"SELECT {', '.join(cols)} FROM corrections WHERE id = 1").fetchone()
+    for k in range(40):
+        copy = dict(zip(cols, row, strict=True)) | {"check_sha256": f"{k:064x}"}
+        marks = ", ".join("?" * len(cols))
+        conn.execute(f"INSERT INTO corrections ({', '.join(cols)}) VALUES ({marks})",
+                     [copy[c] for c in cols])  # fmt: skip
+
+
+_DEMO = str(ROOT / "examples" / "demo-stand.toml")
+_SERIES_CFG: dict[str, str] = {}
+
+
+def _series_config(d: Path) -> str:
+    """The calibration the series' data were made with (its first run's stored config)."""
+    run = sorted((ARCHIVE["series"].parent / "runs").glob("*.h5"))[0]
+    out = d / "series.toml"
+    assert main(["inspect", str(run), "--config-out", str(out)]) == 0
+    return str(out)
+
+
+@case("health: a change a million times the model's")
+def _huge_change(d: Path, run: Path) -> Outcome:
+    url = _edited_data(d, lambda c: _scale_response(c, (3, 4), 1e6))
+    return Outcome(["health", "--archive", url], flags="ALARM")
+
+
+@case("calibrate: a change a million times the model's")
+def _huge_refit(d: Path, run: Path) -> Outcome:
+    url = _edited_data(d, lambda c: _scale_response(c, (3, 4), 1e6))
+    cfg = _series_config(d)
+    argv = ["calibrate", "--from-archive", "--config", cfg, "--archive", url]
+    return Outcome(argv, "beyond any chance of the calibrated stand")
+
+
+@case("health: 40 copies of one datum under other digests")
+def _copied_health(d: Path, run: Path) -> Outcome:
+    return Outcome(["health", "--archive", _edited_data(d, _copies)], flags="40 data left out")
+
+
+@case("calibrate: three corrections and 40 copies under other digests")
+def _copied_refit(d: Path, run: Path) -> Outcome:
+    url, cfg = _edited_data(d, _copies), _series_config(d)
+    argv = ["calibrate", "--from-archive", "--config", cfg, "--archive", url]
+    return Outcome(argv, "3 data since the change: too few")
+
+
+def _tooling_runs(d: Path, *second: str) -> tuple[str, str, str]:
+    """A tooling config and its two index runs (the second with ``second``'s options)."""
+    cfg = _write(d, CFG + f'\n[tooling]\nname = "mandrel-A"\nfolder = "{d / "toolings"}"\n')
+    runs = []
+    for name, extra in (("r0.h5", ()), ("r180.h5", ("--index", "180", *second))):
+        runs.append(str(d / name))
+        assert main(["simulate", "tooling", "--out", runs[-1], "--config", cfg, *extra]) == 0
+    return cfg, runs[0], runs[1]
+
+
+@case("tooling: the same run twice")
+def _tooling_twice(d: Path, run: Path) -> Outcome:
+    cfg, r0, _ = _tooling_runs(d)
+    return Outcome(["tooling", "measure", r0, r0, "--config", cfg], "the same run given twice")
+
+
+@case("tooling: a byte copy as the 180 deg run")
+def _tooling_copy(d: Path, run: Path) -> Outcome:
+    cfg, r0, _ = _tooling_runs(d)
+    shutil.copy(r0, d / "copy.h5")
+    argv = ["tooling", "measure", r0, str(d / "copy.h5"), "--config", cfg]
+    return Outcome(argv, "are the same data")
+
+
+@case("tooling: index runs at two speeds")
+def _tooling_speeds(d: Path, run: Path) -> Outcome:
+    cfg, r0, r180 = _tooling_runs(d, "--rpm", "800")
+    return Outcome(["tooling", "measure", r0, r180, "--config", cfg], "differ in speed")
+
+
 @case("opcua: an archive that is no database")
 def _opcua_not_a_database(d: Path, run: Path) -> Outcome:
     (d / "notes.sqlite").write_text("these are notes, not a database\n" * 100)
@@ -275,4 +375,4 @@ def test_a_hostile_surface_ends_cleanly(
 def test_the_second_matrix_counts() -> None:
     """Every surface the issue names carries cases."""
     surfaces = {name.split(":")[0] for name in CASES}
-    assert {"drill", "mill", "archive"} <= surfaces, surfaces
+    assert {"drill", "mill", "archive", "tooling", "health", "calibrate", "opcua"} <= surfaces
