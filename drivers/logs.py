@@ -17,6 +17,7 @@ import re
 import sqlite3
 import time
 from collections.abc import Iterable, Iterator
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
@@ -135,6 +136,25 @@ def _foreign_lines(path: Path) -> Diagnostic | None:
     )
 
 
+def _reader(path: Path, stack: ExitStack) -> Any:
+    """python-can's reader of the file, given a file this function opened where the reader
+    takes one (binary or text): its constructor may raise on a bad header, and the file it
+    opened itself would then be left open until the garbage collector's warning."""
+    import locale
+
+    import can
+    from can.io.generic import BinaryIOMessageReader, TextIOMessageReader
+    from can.io.player import MESSAGE_READERS
+
+    cls = MESSAGE_READERS.get(path.suffix.lower())
+    if cls is not None and issubclass(cls, BinaryIOMessageReader):
+        return cls(stack.enter_context(path.open("rb")))
+    if cls is not None and issubclass(cls, TextIOMessageReader):
+        encoding = locale.getpreferredencoding(False)  # as python-can opens it itself
+        return cls(stack.enter_context(path.open(encoding=encoding)))
+    return can.LogReader(path)
+
+
 def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
     """Read any python-can log (format by extension); candump ``.log`` takes the fast path.
 
@@ -147,10 +167,9 @@ def read_log(path: str | Path, warn: list[Diagnostic] | None = None) -> Frames:
     check_input(path)
     if path.suffix.lower() == ".log":
         return read_candump(path, warn)
-    import can
-
     try:
-        with can.LogReader(path) as reader:
+        with ExitStack() as stack:
+            reader = stack.enter_context(_reader(path, stack))
             frames = frames_from_messages(reader)
             check_timestamps(frames.t_s, path)
             size = getattr(reader, "file_size", None)  # BLF: the header says how long it is

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
+from pydantic import BaseModel, Field, FiniteFloat
 
 from stand.calib.influence import (
     TRIAL_CHANGE,
@@ -20,6 +20,7 @@ from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
 from stand.config import STRICT, read_toml, validate
 from stand.config.matrix import Pair, matrix_document, parse_matrix, read_matrix
+from stand.config.tables import Rpm, TrialMass, TrialRadius
 from stand.config.typed import positive_float
 from stand.core import rad_s_to_rpm
 from stand.core.influence import InfluenceMap
@@ -38,9 +39,9 @@ MAX_PLANES = 16
 class TrialTable(BaseModel):
     model_config = STRICT
     plane: Annotated[int, Field(ge=1, le=MAX_PLANES)]
-    mass_g: PositiveFloat
-    angle_deg: FiniteFloat
-    radius_mm: PositiveFloat | None = None
+    mass_g: TrialMass
+    angle_deg: Annotated[FiniteFloat, Field(ge=-360.0, le=720.0)]
+    radius_mm: TrialRadius | None = None
 
 
 class RunEntry(BaseModel):
@@ -49,7 +50,7 @@ class RunEntry(BaseModel):
     model_config = STRICT
     sensors: list[Pair] | None = None
     file: str | Annotated[list[str], Field(min_length=1)] | None = None
-    speeds_rpm: list[PositiveFloat] | None = None
+    speeds_rpm: list[Rpm] | None = None
     trial: TrialTable | None = None
     trial_left_on: bool = False
 
@@ -62,7 +63,7 @@ class RunsFile(BaseModel):
     ) = None
     """Influence coefficients typed in: a row per reading, ``[amplitude, phase_deg]`` per
     plane (reading per g at the trial radius)."""
-    weights: list[PositiveFloat] | None = None
+    weights: list[Annotated[FiniteFloat, Field(gt=0.0, le=1e12)]] | None = None
     """Per reading, for ``--method wls`` (and ``minmax``)."""
 
 

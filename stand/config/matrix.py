@@ -20,6 +20,7 @@ import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat
 
 from stand.config.schema import STRICT, validate
+from stand.config.tables import Reading, Rpm
 from stand.core import Diagnostic, rad_s_to_rpm
 from stand.core.influence import InfluenceMap
 from stand.drivers.files import check_input
@@ -33,7 +34,7 @@ it checks, an influence matrix and the run it solves.  The unbalance is the same
 speed, but the stand's response (each influence coefficient, about as the speed's square
 on a soft-bearing stand) and its errors are not."""
 
-Pair = Annotated[list[FiniteFloat], Field(min_length=2, max_length=2)]
+Pair = Annotated[list[Reading], Field(min_length=2, max_length=2)]
 
 
 class StoredMatrix(BaseModel):
@@ -47,9 +48,9 @@ class StoredMatrix(BaseModel):
     """Support acceleration [m/s^2]: usable on the stand; typed in: another instrument's units."""
     alpha_per_kg_m: Annotated[list[list[Pair]], Field(min_length=1)]
     """``dA / dU`` [reading per kg m], ``U = q R e^{-i phi}``."""
-    cov_alpha: list[list[FiniteFloat]] | None = None
-    rpm: FiniteFloat | None = None
-    speeds_rpm: list[FiniteFloat | None] | None = None
+    cov_alpha: list[list[Annotated[FiniteFloat, Field(ge=-1e24, le=1e24)]]] | None = None
+    rpm: Rpm | None = None
+    speeds_rpm: list[Rpm | None] | None = None
     """Each row's speed, for a matrix of readings at several speeds (``stand influence`` in
     N planes); None: one speed (``rpm``)."""
     rotor_type: str | None = None

@@ -109,7 +109,8 @@ class ToolingTable(BaseModel):
 
 PORT = r"([1-9]\d{0,3}|[1-5]\d{4}|6[0-4]\d{3}|65[0-4]\d{2}|655[0-2]\d|6553[0-5])"
 """A TCP port, 1 to 65535, as a pattern."""
-MQTT_URL = rf"^mqtts?://[^\s/:]+(:{PORT})?/?$"
+MQTT_URL = rf"^mqtts?://[A-Za-z0-9](?:[A-Za-z0-9.-]{{0,252}})(:{PORT})?/?$"
+"""``mqtt[s]://host[:port][/]``: a host name or IPv4 address (letters, digits, dots, hyphens)."""
 
 
 class PlantTable(BaseModel):

@@ -41,6 +41,7 @@ from stand.archive import Archive
 from stand.archive.query import latest, latest_id
 from stand.errors import ArchiveError, UsageError
 from stand.plant.safety import is_local
+from stand.plant.ua_call import guarded
 
 NAMESPACE = "urn:rotor-stand:balancing-stand"
 """The stand's OPC UA namespace URI."""
@@ -152,8 +153,8 @@ class ResultServer:
             where = planes[int(parent[-1])] if parent else latest
             vtype = ua.VariantType.Int64 if key == "ResultId" else None
             nodes[key] = await where.add_variable(idx, name, value, varianttype=vtype)
-        await results.add_method(idx, "GetLatestResult", self._get_latest, [],
-                                 [ua.VariantType.String])  # fmt: skip
+        call = guarded("GetLatestResult", [], self._get_latest)
+        await results.add_method(idx, "GetLatestResult", call, [], [ua.VariantType.String])
         etype = await server.create_custom_event_type(
             idx, "ResultReadyEventType", ua.ObjectIds.BaseEventType,
             [("ResultId", ua.VariantType.Int64), ("RotorSerial", ua.VariantType.String),
@@ -162,7 +163,7 @@ class ResultServer:
         events = await server.get_event_generator(etype, stand)
         return server, nodes, events, stand
 
-    async def _get_latest(self, parent: Any) -> list[Any]:
+    async def _get_latest(self) -> list[Any]:
         from asyncua import ua
 
         return [ua.Variant(self._json, ua.VariantType.String)]

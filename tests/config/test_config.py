@@ -223,6 +223,13 @@ def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
         ("mqtt://broker:65536", False),
         ("mqtt://broker:1883:1", False),
         ("http://broker", False),
+        ("mqtt://10.0.0.5:1883", True),
+        ("mqtt://broker.plant-3.example", True),
+        ("mqtt://bro ker", False),
+        ("mqtt://user@broker", False),  # credentials do not belong in a config's URL
+        ("mqtt://broker?x=1", False),
+        ("mqtt://-broker", False),
+        ("mqtt://", False),
     ],
 )
 def test_the_mqtt_url_is_a_url_with_a_port_that_exists(tmp_path: Path, url: str, ok: bool) -> None:

@@ -40,7 +40,7 @@ async def _browse(client: Any, stand: str) -> tuple[int, Any]:
 
 
 def test_browse_read_call_subscribe_and_the_event_within_a_second(
-    tmp_path: Path, demo_result: Any
+    tmp_path: Path, demo_result: Any, capfd: pytest.CaptureFixture[str]
 ) -> None:
     from stand.archive import Archive, archive_result
     from stand.plant import ResultServer
@@ -54,6 +54,9 @@ def test_browse_read_call_subscribe_and_the_event_within_a_second(
         asyncio.run(_client(f"opc.tcp://127.0.0.1:{port}/stand/", url, demo_result))
     finally:
         server.stop()
+    err = capfd.readouterr().err
+    assert "Traceback" not in err, err
+    assert "GetLatestResult: 1 arguments, it takes 0 (BadTooManyArguments)" in err, err
 
     del archive_result
 
@@ -108,6 +111,10 @@ async def _client(endpoint: str, url: str, result: Any) -> None:
         method = await results.get_child([f"{idx}:GetLatestResult"])
         called = json.loads(await results.call_method(method))
         assert called["job"]["serial"] == "UA-7" and called["planes"] == out["planes"]
+        # a call the method does not take: the specification's status code, one line
+        with pytest.raises(ua.UaStatusCodeError) as bad:
+            await results.call_method(method, ua.Variant(7, ua.VariantType.Int64))
+        assert bad.value.code == ua.StatusCodes.BadTooManyArguments
         rid = await latest.get_child([f"{idx}:ResultId"])
         with pytest.raises(ua.UaError):  # read-only for every client
             await rid.write_value(ua.Variant(5, ua.VariantType.Int64))
@@ -196,3 +203,39 @@ def test_the_station_serves_opcua_beside_its_screens(tmp_path: Path) -> None:
     finally:
         proc.terminate()
         proc.wait(15)
+
+
+def test_a_guarded_method_answers_each_bad_call_with_its_status_code(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """OPC 10000-4's Call results, one stderr line each, never a traceback."""
+    from asyncua import ua
+
+    from stand.errors import UsageError
+    from stand.plant.ua_call import guarded
+
+    async def by_id(rid: int) -> list:
+        if rid < 0:
+            raise UsageError(f"no result {rid}")
+        if rid == 0:
+            raise KeyError("the method's own fault")
+        return [ua.Variant(str(rid), ua.VariantType.String)]
+
+    call = guarded("GetResultById", [ua.VariantType.Int64], by_id)
+    i64 = lambda v: ua.Variant(v, ua.VariantType.Int64)  # noqa: E731
+    cases = [
+        ((), "BadArgumentsMissing"),
+        ((i64(1), i64(2)), "BadTooManyArguments"),
+        ((ua.Variant("1", ua.VariantType.String),), "BadInvalidArgument"),
+        ((i64(-1),), "BadInvalidArgument"),
+        ((i64(0),), "BadInternalError"),
+    ]
+    for args, code in cases:
+        res = asyncio.run(call(None, *args))
+        assert res.StatusCode.value == getattr(ua.StatusCodes, code), (args, res)
+    mismatch = asyncio.run(call(None, ua.Variant("1", ua.VariantType.String)))
+    assert [s.value for s in mismatch.InputArgumentResults] == [ua.StatusCodes.BadTypeMismatch]
+    assert asyncio.run(call(None, i64(5)))[0].Value == "5"
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == len(cases) + 1 and all(ln.startswith("stand opcua: ") for ln in lines)
+    assert "Traceback" not in "\n".join(lines)

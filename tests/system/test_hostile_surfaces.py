@@ -329,6 +329,44 @@ def _tooling_speeds(d: Path, run: Path) -> Outcome:
     return Outcome(["tooling", "measure", r0, r180, "--config", cfg], "differ in speed")
 
 
+GOODMAN = (ROOT / "examples" / "published" / "goodman-1964.toml").read_text()
+_ENTRY, _READINGS = "[[3, 0], [2, 180]]", "sensors = [[1, 0], [1, 180], [0, 0]]"
+_INFLUENCE_CASES = [
+    ("a matrix entry of 1e308", _ENTRY, "[[1e308, 0], [2, 180]]", "[matrix.0.0.0]"),
+    ("a matrix entry of 1e300", _ENTRY, "[[1e300, 0], [2, 180]]", "[matrix.0.0.0]"),
+    ("a phase of inf", _ENTRY, "[[3, inf], [2, 180]]", "[matrix.0.0.1]"),
+    ("readings of 1e308", _READINGS, "sensors = [[1e308, 0], [1e308, 180], [0, 0]]",
+     "[runs.0.sensors.0.0]"),
+]  # fmt: skip
+
+for _name, _old, _new, _says in _INFLUENCE_CASES:
+    assert _old in GOODMAN, _old
+
+    def _influence_case(d: Path, run: Path, text: str = GOODMAN.replace(_old, _new, 1),
+                        says: str = _says) -> Outcome:  # fmt: skip
+        return Outcome(["influence", _write(d, text, "runs.toml")], says)
+
+    case(f"influence: {_name}")(_influence_case)
+
+
+@case("influence: entries and readings of 1e12 (the bound) are solved")
+def _influence_at_bound(d: Path, run: Path) -> Outcome:
+    text = GOODMAN.replace(_ENTRY, "[[1e12, 0], [2, 180]]").replace(
+        _READINGS, "sensors = [[1e12, 0], [1e12, 180], [0, 0]]"
+    )
+    return Outcome(["influence", _write(d, text, "runs.toml")], flags="condition number")
+
+
+@case("influence: a stored matrix of 1e308")
+def _stored_matrix(d: Path, run: Path) -> Outcome:
+    saved = d / "m.json"
+    assert main(["influence", _write(d, GOODMAN, "runs.toml"), "--save", str(saved)]) == 0
+    doc = json.loads(saved.read_text())
+    doc["alpha_per_kg_m"][0][0] = [1e308, 0.0]
+    saved.write_text(json.dumps(doc))
+    return Outcome(["solve", str(run), "--matrix", str(saved)], "[alpha_per_kg_m.0.0.0]")
+
+
 @case("opcua: an archive that is no database")
 def _opcua_not_a_database(d: Path, run: Path) -> Outcome:
     (d / "notes.sqlite").write_text("these are notes, not a database\n" * 100)
@@ -375,4 +413,13 @@ def test_a_hostile_surface_ends_cleanly(
 def test_the_second_matrix_counts() -> None:
     """Every surface the issue names carries cases."""
     surfaces = {name.split(":")[0] for name in CASES}
-    assert {"drill", "mill", "archive", "tooling", "health", "calibrate", "opcua"} <= surfaces
+    assert {
+        "drill",
+        "mill",
+        "archive",
+        "tooling",
+        "health",
+        "calibrate",
+        "opcua",
+        "influence",
+    } <= surfaces
