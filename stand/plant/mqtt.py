@@ -51,8 +51,8 @@ def publish(result: Result, url: str) -> str:
     except (OSError, ValueError, RuntimeError) as exc:
         raise ArchiveError(f"cannot publish the result ({exc})", url=where) from exc
     finally:
-        client.loop_stop()
-        client.disconnect()
+        client.disconnect()  # first: it wakes the network thread, which loop_stop joins
+        client.loop_stop()  # (the other way round waits out the 30 s keepalive)
     return name
 
 

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from stand.config import data_folder
+from stand.core.model import MAX_SPEED_RPM, rpm_to_rad_s
 from stand.drivers.files import output
 from stand.errors import ConfigError, RecordingError
 from stand.measuring import with_unbalance_covariance
@@ -72,19 +73,41 @@ def tooling_file(name: str, where: Path) -> Path:
     return where / f"{name}.json"
 
 
+MAX_FILE_BYTES = 1 << 20
+"""A tooling file is under 4 kB; one over 1 MiB is not read."""
+MAX_TOOLING_KG_M = 1.0
+"""No tooling (a mandrel, an adapter) carries 1 kg m of unbalance: 1 kg at 1 m."""
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
+
+
+def _bounded(U: list[complex], cov: np.ndarray, omega_rad_s: float) -> None:
+    """Refuse values no measured tooling has (ValueError, said as "not a tooling file")."""
+    if not all(abs(u) <= MAX_TOOLING_KG_M for u in U):
+        raise ValueError(f"an unbalance beyond {MAX_TOOLING_KG_M:g} kg m")
+    if not (np.allclose(cov, cov.T) and np.all(np.diag(cov) >= 0) and np.all(np.abs(cov) <= 1)):
+        raise ValueError("its covariance is not one (symmetric, variances >= 0, <= 1 kg^2 m^2)")
+    if not 0 < omega_rad_s <= float(rpm_to_rad_s(MAX_SPEED_RPM)):
+        raise ValueError(f"a speed of {omega_rad_s!r} rad/s")
+
+
 def load_tooling(name: str, where: Path) -> Tooling:
     """The stored tooling ``name`` (ConfigError, naming ``[tooling.name]``, when it has not
     been measured; RecordingError when its file is not a tooling)."""
     path = tooling_file(name, where)
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ValueError(f"{path.stat().st_size} bytes; one is under 4 kB")
+        data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constant)
     except FileNotFoundError:
         raise ConfigError(
             f"the tooling {name!r} has not been measured (no {path}): run `stand tooling "
             "measure RUN_0 RUN_180` first",
             key="tooling.name",
         ) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except (OSError, ValueError) as exc:  # unreadable, not UTF-8, not strict JSON, too large
         raise RecordingError(f"not a tooling file ({exc})", path=str(path)) from None
     try:
         if data["tooling_version"] != TOOLING_VERSION or data["name"] != name:
@@ -93,6 +116,7 @@ def load_tooling(name: str, where: Path) -> Tooling:
         cov = np.asarray(data["cov_U"], dtype=float)
         if len(U) != 2 or cov.shape != (4, 4) or not np.all(np.isfinite(cov)):
             raise ValueError("two planes and a 4 x 4 covariance expected")
+        _bounded(U, cov, float(data["omega_rad_s"]))
         return Tooling(
             name,
             (U[0], U[1]),
