@@ -22,6 +22,7 @@ from stand.archive.results import (
     result_of,
     rows,
     url_for,
+    verdict,
     verify,
 )
 from stand.archive.store import Archive, default_url
@@ -39,5 +40,6 @@ __all__ = [
     "result_of",
     "rows",
     "url_for",
+    "verdict",
     "verify",
 ]

@@ -35,6 +35,8 @@ class Filters:
     limit: int | None = None
     stand: str | None = None
     revision: str | None = None
+    kind: str | None = None
+    """``production`` or ``tooling`` (a tooling's index runs); None: both."""
 
 
 def _where(f: Filters) -> list[Any]:
@@ -46,6 +48,7 @@ def _where(f: Filters) -> list[Any]:
         (runs.c.operator, f.operator),
         (runs.c.verdict if f.revision is None else revised.c.verdict, f.verdict),
         (runs.c.stand_id, f.stand),
+        (runs.c.kind, f.kind),
     ):
         if value is not None:
             conds.append(column == value)
@@ -157,6 +160,7 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
             "planes": by_run[r.id],
             "run_file": r.run_file,
             "file_sha256": r.file_sha256,
+            "kind": r.kind,
         }
         for r in found
     ]
@@ -177,7 +181,7 @@ def _run_dict(r: Any, planes_: list[dict[str, Any]]) -> dict[str, Any]:
         "id": r.id, "start_time": r.start_time, "serial": r.serial, "order": r.order_no,
         "operator": r.operator, "rotor_type": r.rotor_type, "stand": r.stand_id, "rpm": r.rpm,
         "verdict": r.verdict, "checks_run": r.checks_run_id, "planes": planes_,
-        "run_file": r.run_file, "file_sha256": r.file_sha256,
+        "run_file": r.run_file, "file_sha256": r.file_sha256, "kind": r.kind,
     }  # fmt: skip
 
 

@@ -56,7 +56,9 @@ def file_digest(path: str | Path) -> str:
     return h.hexdigest()
 
 
-def _verdict(out: dict[str, Any]) -> str:
+def verdict(out: dict[str, Any]) -> str:
+    """A run's overall verdict from its JSON form: ``pass`` (every plane within tolerance),
+    ``fail``, or ``none`` (no tolerance given): the archive's and the plant's."""
     t = out.get("tolerance")
     if t is None:
         return "none"
@@ -82,7 +84,7 @@ def rows(
         "config_sha256": p.config_sha256,
         "matrix": p.matrix,
         "correction_mode": result.correction_mode,
-        "verdict": _verdict(out),
+        "verdict": verdict(out),
         "checks_run_id": checks_run_id,
         "static_re_kg_m": result.static_kg_m.real,
         "static_im_kg_m": result.static_kg_m.imag,

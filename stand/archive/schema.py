@@ -1,14 +1,15 @@
 """The archive's tables: the one home of its schema (SQLAlchemy Core).
 
 One row per run (its job, its file and digest, its verdict, the run it
-checks), one row per plane (the unbalance as a complex number in kg m, its
-95 % radius, the tolerance and the URR when it was a check), and one row
-per confirmed correction with its check (the calibration datum of
-:mod:`stand.health.monitor`); and the revisions ``stand reprocess`` makes: a named
-re-judgement (its config's digest, the software), a row per run it re-solved (its status,
-verdict and JSON) and one per plane, beside the originals, which are never changed.  SI units and
-complex parts in columns; the whole result as JSON beside them, so that a
-report can be made again without the run file.  Changes go through a
+checks, its kind: production or a tooling's index run), one row per plane
+(the unbalance as a complex number in kg m, its 95 % radius, the tolerance
+and the URR when it was a check), and one row per confirmed correction with
+its check (the calibration datum of :mod:`stand.health.monitor`); and the
+revisions ``stand reprocess`` makes: a named re-judgement (its config's
+digest, the software), a row per run it re-solved (its status, verdict and
+JSON) and one per plane, beside the originals, which are never changed.  SI
+units and complex parts in columns; the whole result as JSON beside them, so
+that a report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
 here alone.
 """
@@ -59,6 +60,8 @@ runs = Table(
     Column("software", String(64), nullable=False),
     Column("result_json", Text, nullable=False),
     Column("stand_id", String(64)),  # the stand that recorded it (revision 0002)
+    # production, or tooling: an index run of the tooling (revision 0005)
+    Column("kind", String(12), nullable=False, server_default="production"),
 )
 Index("ix_runs_serial", runs.c.serial)
 Index("ix_runs_rotor_type_start", runs.c.rotor_type, runs.c.start_time)

@@ -169,7 +169,7 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
     """The statistics of one rotor type's archived runs (JSON-ready, g mm and degrees)."""
 
     f = filters or Filters()
-    f = Filters(**{**f.__dict__, "rotor_type": rotor_type, "limit": None})
+    f = Filters(**{**f.__dict__, "rotor_type": rotor_type, "limit": None, "kind": "production"})
     with Archive(url) as archive, archive.transaction() as conn:
         rows = select_runs(conn, f)
         ids = [r.id for r in rows]

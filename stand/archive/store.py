@@ -192,6 +192,22 @@ class Archive:
             correction_row(row, self.shown)
         return found
 
+    def mark_tooling(self, file_sha256s: list[str]) -> list[int]:
+        """Mark the archived runs with these file digests as a tooling's index runs (kind
+        ``tooling``: out of production statistics and exports); their ids, oldest first
+        (none when they were never archived)."""
+        import sqlalchemy as sa
+
+        with self.transaction() as conn:
+            ids = sorted(
+                conn.execute(
+                    sa.select(runs.c.id).where(runs.c.file_sha256.in_(file_sha256s))
+                ).scalars()
+            )
+            if ids:
+                conn.execute(runs.update().where(runs.c.id.in_(ids)).values(kind="tooling"))
+        return [int(i) for i in ids]  # fmt: skip
+
     def run_id(self, file_sha256: str) -> int | None:
         """The id of the run with this file digest, if archived."""
         import sqlalchemy as sa

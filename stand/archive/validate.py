@@ -26,6 +26,7 @@ from stand.errors import ArchiveRowError
 VERDICTS = frozenset({"pass", "fail", "none"})
 MODES = frozenset({"remove", "add", "drill", "mill"})
 STATUSES = frozenset({"ok", "missing", "altered", "unreadable", "refused"})
+KINDS = frozenset({"production", "tooling"})
 SHA256 = re.compile(r"[0-9a-f]{64}")
 MAX_UNBALANCE_KG_M = 1e3
 """No rotor a stand balances carries more (1 t at 1 m) [kg m]."""
@@ -141,6 +142,7 @@ def run_row(row: Any, url: str) -> Any:
     r.number("rpm", 1e-9, MAX_SPEED_RPM)
     r.choice("verdict", VERDICTS)
     r.choice("correction_mode", MODES)
+    r.choice("kind", KINDS)
     r.number("checks_run_id", 1, 2**63, none=True)
     for part in ("static_re_kg_m", "static_im_kg_m", "couple_re_kg_m", "couple_im_kg_m"):
         r.number(part, -MAX_UNBALANCE_KG_M, MAX_UNBALANCE_KG_M)

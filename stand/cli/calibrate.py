@@ -16,7 +16,8 @@ from stand.archive import correction_rows, url_for
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
 from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
 from stand.cli.format import dump_json
-from stand.config.schema import STRICT, load_config, read_toml, updated_toml, validate
+from stand.config.edit import updated_toml
+from stand.config.schema import STRICT, load_config, read_toml, validate
 from stand.drivers.files import check_output
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.health.monitor import answers, refit

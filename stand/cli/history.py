@@ -22,7 +22,7 @@ from stand.errors import UsageError
 CSV_COLUMNS = (
     "id", "start_time", "serial", "order", "operator", "rotor_type", "rpm", "verdict",
     "plane1_g_mm", "plane1_angle_deg", "plane2_g_mm", "plane2_angle_deg",
-    "urr1", "urr2", "checks_run", "run_file",
+    "urr1", "urr2", "checks_run", "run_file", "kind",
 )  # fmt: skip
 
 
@@ -78,7 +78,7 @@ def _row(r: dict[str, Any]) -> list[Any]:
         r["id"], r["start_time"], r["serial"], r["order"], r["operator"], r["rotor_type"],
         r["rpm"], r["verdict"], p1.get("unbalance_g_mm"), p1.get("angle_deg"),
         p2.get("unbalance_g_mm"), p2.get("angle_deg"), p1.get("urr"), p2.get("urr"),
-        r["checks_run"], r["run_file"],
+        r["checks_run"], r["run_file"], r["kind"],
     ]  # fmt: skip
 
 
@@ -115,4 +115,5 @@ def _table(found: list[dict[str, Any]]) -> None:
             f"{r['rpm']:7.1f}  {p1.get('unbalance_g_mm', 0):9.1f} {p1.get('angle_deg', 0):5.0f}° "
             f"{p2.get('unbalance_g_mm', 0):9.1f} {p2.get('angle_deg', 0):5.0f}°  "
             f"{r['verdict']:7}  {urr:16} {r['checks_run'] or '-'}"
+            + ("  (tooling index run)" if r["kind"] == "tooling" else "")
         )

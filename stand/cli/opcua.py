@@ -12,7 +12,7 @@ from typing import Any
 
 from stand.archive import Archive, url_for
 from stand.cli.common import add_archive_argument
-from stand.config import load_config
+from stand.config import default_stand_id, load_config
 from stand.errors import UsageError
 from stand.plant import Access, ResultServer
 
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     cfg = None
     if args.config:
         cfg = load_config(args.config)[0]
-    stand = args.stand or (cfg.stand.stand_id() if cfg is not None else None)
+    stand = args.stand or (cfg.stand.stand_id() if cfg is not None else default_stand_id())
     url = url_for(args.archive, cfg)
     Archive(url).close()  # an archive that is no database: said now, not served on
     server = ResultServer(

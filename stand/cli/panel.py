@@ -243,6 +243,6 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
     if not args.quiet:
         print(f"archived as run {run_id}", file=sys.stderr)
 
-    said = publish_archived(result, cfg)
+    said = publish_archived(result, run_id, cfg)
     if said and (not args.quiet or said.startswith("not")):
         print(said, file=sys.stderr)

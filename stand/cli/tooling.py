@@ -6,6 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from stand.archive import Archive, file_digest, url_for
+from stand.cli.common import add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config
 from stand.core import unbalance_to_polar
@@ -34,6 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "in the user's data folder)",
     )
     p.add_argument("--force", action="store_true", help="replace a tooling measured before")
+    add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -61,6 +64,8 @@ def _measure(args: argparse.Namespace) -> int:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
     tooling, U_r, cov_r, cfg = measure_tooling(args.runs[0], args.runs[1], args.config, args.name)
     path = save_tooling(tooling, _where(args, cfg), force=args.force)
+    with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production
+        marked = archive.mark_tooling([file_digest(r) for r in args.runs])
     doc = {
         "name": tooling.name,
         "file": str(path),
@@ -70,6 +75,7 @@ def _measure(args: argparse.Namespace) -> int:
         "runs": list(tooling.runs),
         "tooling": _planes(tooling.U_kg_m, tooling.cov_U),
         "rotor": _planes(U_r, cov_r),
+        "archived_as_tooling": marked,
     }
     if args.json:
         dump_json(doc)
@@ -84,6 +90,9 @@ def _measure(args: argparse.Namespace) -> int:
         )
     print(f"({ANGLE_NOTE}, the rotor at 0 deg on its tooling)")
     print(f'every run whose config says [tooling] name = "{tooling.name}" has it subtracted')
+    if marked:
+        print(f"archived runs {', '.join(map(str, marked))}: tooling index runs now, out of "
+              "production statistics and exports")  # fmt: skip
     return 0
 
 

@@ -45,6 +45,12 @@ from stand.core.shaft import shaft_rotor
 from stand.errors import ConfigError, ModelError, ParameterError
 
 
+def default_stand_id() -> str:
+    """The stand id without ``[stand] id``: this computer's host name (at most 64
+    characters), the same for the CLI, the station, the archive, OPC UA, MQTT and Q-DAS."""
+    return socket.gethostname()[:64] or "stand"
+
+
 class StandTable(BaseModel):
     """``[stand]``: the supports (kg, N/m, N s/m) and the reference sensor (deg)."""
 
@@ -67,7 +73,7 @@ class StandTable(BaseModel):
     def stand_id(self) -> str:
         """``id``, else this computer's host name."""
 
-        return self.id or socket.gethostname()[:64] or "stand"
+        return self.id or default_stand_id()
 
     calibrated: Annotated[str, Field(pattern=r"^\d{4}-\d{2}-\d{2}$")] | None = None
     """The date of its last calibration (YYYY-MM-DD; stand calibrate writes it)."""
@@ -335,30 +341,6 @@ def _toml_value(value: Any) -> str:
 def config_toml(cfg: Config) -> str:
     """The configuration as TOML text (stored in run files)."""
     return to_toml({k: v for k, v in cfg.model_dump(exclude_none=True).items()})
-
-
-def updated_toml(text: str, cfg: Config) -> str:
-    """The configuration text ``text`` with only the values ``cfg`` changed from what the
-    text says (its defaults included), its comments, order and layout kept (tomlkit); a
-    table ``text`` lacks is added at its end."""
-    import tomlkit
-
-    doc = tomlkit.parse(text)
-    before = config_from_dict(tomllib.loads(text), source="(the file updated)")[0]
-    was = before.model_dump(exclude_none=True)
-    for name, table in cfg.model_dump(exclude_none=True).items():
-        if not isinstance(table, dict):
-            if was.get(name) != table:
-                doc[name] = table
-            continue
-        changed = {k: v for k, v in table.items() if was.get(name, {}).get(k) != v}
-        if not changed:
-            continue
-        if name not in doc:
-            doc[name] = tomlkit.table()
-        for key, value in changed.items():
-            doc[name][key] = value
-    return tomlkit.dumps(doc)
 
 
 def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:

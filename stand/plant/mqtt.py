@@ -1,22 +1,48 @@
 """Each archived result published over MQTT (paho-mqtt), for the plant's line systems.
 
-``[plant] mqtt_url = "mqtt://broker:1883"``: the result's own JSON form
-(:func:`stand.solve.result_json.to_json`) on the topic ``stand/<stand id>/result``, QoS 1 (the
-broker confirms it), retained (a system that subscribes later gets the latest).  A broker
-that does not answer costs at most :data:`TIMEOUT_S` and is said in a warning: the run and
-its archive row are kept whatever happens.
+``[plant] mqtt_url = "mqtt://broker:1883"``: one message per archived run on the topic
+``stand/<stand id>/result``, QoS 1 (the broker confirms it), retained (a system that
+subscribes later gets the latest).  The message (:func:`payload`) joins the other views:
+its ``schema``, the archive's run id (``stand history``'s ``id``), the OPC UA ResultId,
+the stand id, the overall verdict, the run file's absolute path and SHA-256, and the
+result's own JSON form (:func:`stand.solve.result_json.to_json`) under ``result``.  Its
+JSON Schema is :data:`SCHEMA_FILE` (published in ``docs/``).  A broker that does not
+answer costs at most :data:`TIMEOUT_S` and is said in a warning: the run and its archive
+row are kept whatever happens.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from stand.archive import file_digest, verdict
 from stand.errors import ArchiveError
 from stand.solve import Result, json_text, to_json
 
 TIMEOUT_S = 5.0
 """How long to wait for the broker to take a result [s]."""
+SCHEMA = "urn:rotor-stand:mqtt-result:1"
+"""The payload's ``schema`` field: its JSON Schema's ``$id``."""
+SCHEMA_FILE = Path(__file__).resolve().parent / "mqtt-result.schema.json"
+"""The payload's JSON Schema (draft 2020-12), shipped with the package."""
+
+
+def payload(result: Result, run_id: int) -> dict[str, Any]:
+    """The message of one archived run (``run_id``, the archive's)."""
+    out = to_json(result)
+    run_file = Path(result.provenance.run_file or "").resolve()
+    return {
+        "schema": SCHEMA,
+        "run_id": run_id,
+        "result_id": str(run_id),
+        "stand": result.provenance.stand_id or None,
+        "verdict": verdict(out),
+        "run_file": str(run_file),
+        "file_sha256": file_digest(run_file),
+        "result": out,
+    }
 
 
 def topic(stand_id: str) -> str:
@@ -25,8 +51,9 @@ def topic(stand_id: str) -> str:
     return f"stand/{safe}/result"
 
 
-def publish(result: Result, url: str) -> str:
-    """Publish one result; its topic.  ArchiveError (naming the broker) if it is not taken."""
+def publish(result: Result, run_id: int, url: str) -> str:
+    """Publish one archived result; its topic.  ArchiveError (naming the broker) if it is
+    not taken."""
     import paho.mqtt.client as mqtt
     from paho.mqtt.enums import CallbackAPIVersion, MQTTProtocolVersion
 
@@ -43,7 +70,7 @@ def publish(result: Result, url: str) -> str:
     try:
         client.connect(host, port, keepalive=30)
         client.loop_start()
-        info = client.publish(name, json_text(to_json(result)), qos=1, retain=True)
+        info = client.publish(name, json_text(payload(result, run_id)), qos=1, retain=True)
         info.wait_for_publish(TIMEOUT_S)
         if not info.is_published():
             raise ArchiveError(f"the broker did not take the result within {TIMEOUT_S:g} s",
@@ -56,13 +83,13 @@ def publish(result: Result, url: str) -> str:
     return name
 
 
-def publish_archived(result: Result, cfg: Any) -> str | None:
-    """Publish an archived result when the config names a broker; a note (never an error)
-    when it could not be: the run is archived and kept."""
+def publish_archived(result: Result, run_id: int, cfg: Any) -> str | None:
+    """Publish an archived result (``run_id``, the archive's) when the config names a
+    broker; a note (never an error) when it could not be: the run is archived and kept."""
     plant = getattr(cfg, "plant", None)
     if plant is None or not plant.mqtt_url:
         return None
     try:
-        return f"published on {publish(result, plant.mqtt_url)}"
+        return f"published on {publish(result, run_id, plant.mqtt_url)}"
     except ArchiveError as exc:
         return f"not published over MQTT: {exc}"

@@ -162,7 +162,8 @@ def parts(url: str, rotor_type: str, filters: Any) -> tuple[list[dict[str, Any]]
     """The archived runs of a rotor type as export parts (oldest first), and each plane's
     permissible unbalance in force (the latest run's) [g mm]."""
 
-    f = Filters(**{**filters.__dict__, "rotor_type": rotor_type, "limit": None})
+    f = Filters(**{**filters.__dict__, "rotor_type": rotor_type, "limit": None,
+                   "kind": "production"})  # fmt: skip
     with Archive(url) as archive, archive.transaction() as conn:
         rows = select_runs(conn, f)
         planes: dict[int, list[Any]] = {r.id: [None, None] for r in rows}

@@ -64,7 +64,8 @@ def select(archive: Archive, sel: Selection) -> list[Archived]:
     if sel.kind not in KINDS:
         raise UsageError(f"--kind {sel.kind}: one of {', '.join(KINDS)}")
     f = Filters(serial=sel.serial, rotor_type=sel.rotor_type, since=sel.since,
-                until=sel.until, stand=sel.stand)  # fmt: skip
+                until=sel.until, stand=sel.stand,
+                kind=None if sel.kind == "all" else "production")  # fmt: skip
     with archive.transaction() as conn:
         rows = [
             r for r in select_runs(conn, f)

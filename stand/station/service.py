@@ -293,7 +293,7 @@ class Station(ArchiveSide):
             notes.append(f"not archived ({exc}); the run is kept in {run}")
             return run_id, tuple(notes)
 
-        said = publish_archived(result, load_config_text(str(config))[0])
+        said = publish_archived(result, run_id, load_config_text(str(config))[0])
         if said and said.startswith("not"):
             notes.append(said)
         return run_id, tuple(notes)

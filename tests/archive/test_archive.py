@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from configs import with_type
 
 from stand.cli import main
 
@@ -28,7 +29,7 @@ def _url(tmp_path: Path) -> str:
 def _typed_config(folder: Path, rotor_type: str) -> Path:
     text = (ROOT / "examples" / "demo-stand.toml").read_text()
     path = folder / f"{rotor_type}.toml"
-    path.write_text(text.replace("[rotor]\n", f'[rotor]\ntype = "{rotor_type}"\n', 1))
+    path.write_text(with_type(text, rotor_type))
     return path
 
 
@@ -132,7 +133,7 @@ def test_the_migrated_database_is_the_schema(tmp_path: Path) -> None:
     with Archive(_url(tmp_path)) as archive, archive.engine.connect() as conn:
         diff = compare_metadata(MigrationContext.configure(conn), metadata)
         version = MigrationContext.configure(conn).get_current_revision()
-    assert diff == [] and version == "0004"
+    assert diff == [] and version == "0005"
 
 
 def _row(k: int, writer: int = 0) -> tuple[dict, list[dict]]:
@@ -213,7 +214,7 @@ def test_a_writer_killed_mid_run_leaves_the_archive_whole(
     before = _count(url)[0]
     code = f"""
 import os, sys
-sys.path.insert(0, {str(ROOT / "tests" / "archive")!r})
+sys.path[:0] = [{str(ROOT / "tests" / "archive")!r}, {str(ROOT / "tests" / "helpers")!r}]
 from test_archive import _row
 from stand.archive import Archive
 from stand.archive.schema import runs

@@ -189,7 +189,8 @@ def test_python_can_s_own_bus_options_and_list_valued_bus_tables(tmp_path: Path)
 
 def test_an_updated_config_keeps_the_user_s_comments(tmp_path: Path) -> None:
     """calibrate wrote the config anew and dropped every comment the user had put in it."""
-    from stand.config.schema import config_from_dict, updated_toml
+    from stand.config.edit import updated_toml
+    from stand.config.schema import config_from_dict
 
     text = (ROOT / "examples" / "demo-stand.toml").read_text()
     cfg, _ = load_config(write(tmp_path, text))

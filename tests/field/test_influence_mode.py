@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+from configs import with_type
 
 from stand.cli import main
 
@@ -15,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _config(folder: Path, rotor_type: str, *, add8: bool = False) -> Path:
     text = (ROOT / "examples" / "demo-stand.toml").read_text()
-    text = text.replace("[rotor]\n", f'[rotor]\ntype = "{rotor_type}"\n', 1)
+    text = with_type(text, rotor_type)
     if add8:
         text = text.replace('mode = "remove"', 'mode = "add"')
         text = text.replace("positions = 0", "positions = 8\nweights_g = [1, 2, 5, 10, 20]")

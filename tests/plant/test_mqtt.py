@@ -88,8 +88,75 @@ def test_a_balanced_run_is_published_as_its_json(
     client.loop_stop()  # type: ignore[attr-defined]
     assert len(got) == 1 and got[0]["topic"] == "stand/line-3_stand/result"
     message = got[0]["payload"]
-    assert message["planes"] == out["planes"] and message["job"]["serial"] == "M-1"
-    assert message["stand"]["id"] == "line-3/stand"
+    validate(message)
+    result = message["result"]
+    assert result["planes"] == out["planes"] and result["job"]["serial"] == "M-1"
+    assert result["stand"]["id"] == "line-3/stand" == message["stand"]
+    assert message["run_file"] == str((tmp_path / "r.h5").resolve())
+    assert message["verdict"] == "fail" and message["result_id"] == str(message["run_id"])
+    # the check run: its own message, its own run id, linked in the archive
+    got.clear()
+    client.loop_start()  # type: ignore[attr-defined]
+    check = ["balance", "--scene", "demo", "--config", str(cfg), "--archive", url, "--json",
+             "--out", str(tmp_path / "c.h5"), "--serial", "M-1", "--check",
+             str(tmp_path / "r.h5")]  # fmt: skip
+    assert main(check) == 0
+    capsys.readouterr()
+    end = time.monotonic() + 5
+    while not got and time.monotonic() < end:
+        time.sleep(0.05)
+    client.loop_stop()  # type: ignore[attr-defined]
+    assert len(got) == 1
+    second = got[0]["payload"]
+    validate(second)
+    assert main(["history", "--archive", url, "--json"]) == 0
+    first, checked = json.loads(capsys.readouterr().out)["runs"]
+    assert (first["id"], first["file_sha256"]) == (message["run_id"], message["file_sha256"])
+    assert (checked["id"], checked["checks_run"]) == (second["run_id"], first["id"])
+
+
+def validate(message: dict) -> None:
+    """The payload against its published JSON Schema, by jsonschema (written from the JSON
+    Schema specification, not by this project), and the docs' copy is that schema."""
+    import jsonschema
+
+    from stand.plant.mqtt import SCHEMA, SCHEMA_FILE
+
+    schema = json.loads(SCHEMA_FILE.read_text())
+    jsonschema.Draft202012Validator.check_schema(schema)
+    jsonschema.Draft202012Validator(schema).validate(message)
+    assert message["schema"] == SCHEMA == schema["$id"]
+
+
+def test_the_docs_publish_the_payload_s_schema() -> None:
+    """docs/plant.md carries the schema the package ships, key for key."""
+    from stand.plant.mqtt import SCHEMA_FILE
+
+    text = (ROOT / "docs" / "plant.md").read_text()
+    block = text.split("<!-- mqtt-result.schema.json -->", 1)[1].split("```json", 1)[1]
+    assert json.loads(block.split("```", 1)[0]) == json.loads(SCHEMA_FILE.read_text())
+
+
+def test_a_payload_that_breaks_the_schema_is_caught() -> None:
+    """The validation can fail: a payload without its run id, or with a relative path."""
+    import jsonschema
+
+    good = {"schema": "urn:rotor-stand:mqtt-result:1", "run_id": 3, "result_id": "3",
+            "stand": "s", "verdict": "pass", "run_file": "/r.h5", "file_sha256": "0" * 64,
+            "result": {"rpm": 900.0, "planes": [], "supports": [], "warnings": [],
+                       "job": {"serial": None, "order": None, "operator": None,
+                               "rotor_type": None},
+                       "provenance": {"software": "x", "run_file": "/r.h5",
+                                      "config_sha256": "0" * 64}}}  # fmt: skip
+    good["result"]["planes"] = [
+        {"plane": k, "unbalance_g_mm": 1.0, "angle_deg": 0.0, "uncertainty_g_mm": 0.1}
+        for k in (1, 2)
+    ]
+    validate(good)
+    for bad in ({k: v for k, v in good.items() if k != "run_id"}, good | {"run_file": "r.h5"},
+                good | {"verdict": "maybe"}):  # fmt: skip
+        with pytest.raises(jsonschema.ValidationError):
+            validate(bad)
 
 
 def test_a_broker_that_does_not_answer_is_a_note_not_a_failure(tmp_path: Path) -> None:
@@ -105,5 +172,5 @@ def test_a_broker_that_does_not_answer_is_a_note_not_a_failure(tmp_path: Path) -
         dead = s.getsockname()[1]  # nothing listens once closed
     cfg.write_text((ROOT / "examples" / "demo-stand.toml").read_text()
                    + f'\n[plant]\nmqtt_url = "mqtt://127.0.0.1:{dead}"\n')  # fmt: skip
-    said = publish_archived(solve_recording(str(run)), load_config(cfg)[0])
+    said = publish_archived(solve_recording(str(run)), 1, load_config(cfg)[0])
     assert said is not None and said.startswith("not published over MQTT") and str(dead) in said

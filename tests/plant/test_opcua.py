@@ -173,6 +173,7 @@ def test_the_station_serves_opcua_beside_its_screens(tmp_path: Path) -> None:
     import sys
 
     port, ua_port = _port(), _port()
+    host = socket.gethostname()[:64]
     env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
     env["XDG_DATA_HOME"] = str(tmp_path / "data")
     proc = subprocess.Popen(
@@ -189,7 +190,11 @@ def test_the_station_serves_opcua_beside_its_screens(tmp_path: Path) -> None:
         while True:
             try:
                 async with Client(f"opc.tcp://127.0.0.1:{ua_port}/stand/") as client:
-                    idx, stand = await _browse(client, "stand")
+                    # one identity: the machine is the stand id its runs are archived
+                    # under (no [stand] id: the host name), and so is its SerialNumber
+                    idx, stand = await _browse(client, host)
+                    serial = await stand.get_child([f"{idx}:Identification", f"{idx}:SerialNumber"])
+                    assert await serial.read_value() == host
                     node = await stand.get_child(
                         [f"{idx}:MachineryItemState", f"{idx}:CurrentState"]
                     )

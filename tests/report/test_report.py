@@ -6,6 +6,7 @@ import re
 from pathlib import Path
 
 import pytest
+from configs import with_type
 
 from stand.cli import main
 
@@ -62,7 +63,7 @@ def _check_pair(tmp_path: Path) -> tuple[Path, Path, Path]:
     """A rotor type's config with a stand name and calibration date; a run before the
     correction and a check run after it (the simulated rotor with the correction on)."""
     text = (Path(__file__).resolve().parents[2] / "examples" / "demo-stand.toml").read_text()
-    text = text.replace("[rotor]\n", '[rotor]\ntype = "auger-A"\n', 1)
+    text = with_type(text, "auger-A")
     text = text.replace("[stand]\n", '[stand]\nname = "stand 2"\ncalibrated = "2026-11-02"\n', 1)
     cfg = tmp_path / "typed.toml"
     cfg.write_text(text)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from configs import with_type
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -136,3 +137,29 @@ def test_the_split_undoes_the_index_and_turns_with_the_phases(u: list, deg: floa
     z = cmath.exp(1j * math.radians(deg))
     t2, _, r2, _ = index_split((U_r + U_t) * z, np.eye(4), (U_r - U_t) * z, np.eye(4))
     assert np.allclose(t2, t * z, atol=1e-15) and np.allclose(r2, r * z, atol=1e-15)
+
+
+def test_index_runs_are_archived_as_tooling_runs_out_of_production(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The two index runs, archived as any run, become tooling runs when the tooling is
+    measured from them: history shows them so, stats and Q-DAS leave them out."""
+    text = with_type(Path(_config(tmp_path)).read_text(), "T-1")
+    cfg = tmp_path / "typed.toml"
+    cfg.write_text(text)
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    r0 = _sim(tmp_path, "r0.h5", str(cfg))
+    r180 = _sim(tmp_path, "r180.h5", str(cfg), "--index", "180")
+    assert main(["archive", "import", r0, r180, "--archive", url]) == 0  # as any run
+    capsys.readouterr()
+    argv = ["tooling", "measure", r0, r180, "--config", str(cfg), "--archive", url, "--json"]
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["archived_as_tooling"] == [1, 2]
+    assert main(["history", "--archive", url, "--json"]) == 0
+    assert [r["kind"] for r in json.loads(capsys.readouterr().out)["runs"]] == ["tooling"] * 2
+    dfq = str(tmp_path / "t.dfq")
+    assert main(["export", "qdas", "--rotor-type", "T-1", "--archive", url, "-o", dfq]) == 2
+    assert "no archived run of rotor type 'T-1'" in capsys.readouterr().err
+    assert main(["stats", "--rotor-type", "T-1", "--archive", url, "--json"]) == 0
+    stats = json.loads(capsys.readouterr().out)
+    assert (stats["runs"], stats["rotors"], stats["not_checked_yet"]) == (0, 0, 0), stats
