@@ -70,6 +70,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.series is not None:
         return _series(args)
+    if args.archive or args.out_dir:  # never ignored: they belong to --series
+        raise UsageError(
+            "stand simulate: --archive and --out-dir go with --series N (archive one run "
+            "with stand archive import RUN)"
+        )
     if not args.out and not args.bus:
         raise UsageError("stand simulate: give --out FILE, --bus, or both")
     if args.out:

@@ -423,6 +423,12 @@ def _mqtt_silent(d: Path, run: Path) -> Outcome:
     return Outcome(argv, flags="not published over MQTT")
 
 
+@case("archive: simulate --archive without --series")
+def _simulate_archive(d: Path, run: Path) -> Outcome:
+    argv = ["simulate", "demo", "--out", str(d / "r.h5"), "--archive", f"sqlite:///{d}/a.db"]
+    return Outcome(argv, "--archive and --out-dir go with --series")
+
+
 @case("opcua: an archive that is no database")
 def _opcua_not_a_database(d: Path, run: Path) -> Outcome:
     (d / "notes.sqlite").write_text("these are notes, not a database\n" * 100)
