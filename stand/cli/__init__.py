@@ -55,6 +55,7 @@ SUBCOMMANDS: dict[str, str] = {
     "opcua": "the OPC UA result server: identification, state and latest result for the MES",
     "reprocess": "re-judge archived runs with a corrected config: what changed, the recall list",
     "health": "is the stand still as calibrated? drift alarms from the corrected rotors",
+    "autobalance": "a ball balancer on the rotor: the speeds where it balances, what it leaves",
     "tooling": "the tooling's own unbalance (index runs at 0 and 180 deg), subtracted from "
     "every run",
 }

@@ -34,6 +34,7 @@ from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError
 
+from stand.config.autobalancer import AutobalancerTable
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config.correction import check_correction
 from stand.config.rotor import SHAFT_AGREE
@@ -186,6 +187,7 @@ class Config(BaseModel):
     tooling: ToolingTable | None = None
     plant: PlantTable | None = None
     calibration: CalibrationTable = CalibrationTable()
+    autobalancer: AutobalancerTable | None = None
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measuring.measure.measure` needs from the configuration."""

@@ -1,0 +1,117 @@
+"""Where a ball balancer on the rotor balances it: the windows of speed, and the state it
+settles in (:mod:`stand.solve.autobalance`)."""
+
+from __future__ import annotations
+
+import argparse
+import cmath
+import math
+from typing import Any
+
+from stand.cli.format import ANGLE_NOTE, dump_json
+from stand.config import load_config, validate
+from stand.config.autobalancer import AutobalancerTable
+from stand.config.typed import parse_rpm, parse_unbalance, positive_float
+from stand.errors import ConfigError, UsageError
+from stand.sim import load_scene
+from stand.sim.scene import unbalance_kg_m
+from stand.solve.autobalance import predict
+
+BALL_KEYS = ("plane", "balls", "ball_g", "radius_mm")
+
+
+def _plane_unbalance(text: str) -> tuple[int, float, float]:
+    """``PLANE:G_MM@DEG``."""
+    plane, sep, rest = text.partition(":")
+    if not sep or plane not in ("1", "2"):
+        raise argparse.ArgumentTypeError(f"expected PLANE:G_MM@DEG (e.g. 1:5000@30), got {text!r}")
+    return (int(plane), *parse_unbalance(rest))
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--config", metavar="CFG", help="the stand's config ([autobalancer])")
+    where.add_argument("--scene", metavar="SCENE", help="a scene: its stand and unbalance")
+    p.add_argument("--plane", type=int, choices=(1, 2), help="the plane of the balls' race")
+    p.add_argument("--balls", type=int, help="how many balls (2 or more)")
+    p.add_argument("--ball-g", type=positive_float, help="each ball's mass [g]")
+    p.add_argument("--radius-mm", type=positive_float, help="the balls' running radius [mm]")
+    p.add_argument("--rpm", type=parse_rpm, help="the speed to judge the balanced state at")
+    p.add_argument(
+        "--unbalance", action="append", type=_plane_unbalance, metavar="PLANE:G_MM@DEG",
+        help="the rotor's unbalance in a plane, at an angle from the reference mark against "
+        "the direction of rotation (repeatable; default with --scene: the scene's)",
+    )  # fmt: skip
+    p.add_argument("--max-rpm", type=parse_rpm, help="seek windows up to this speed")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable:
+    """The config's ``[autobalancer]`` with the options over it (or the options alone)."""
+    given = {k: getattr(args, k) for k in BALL_KEYS if getattr(args, k) is not None}
+    base = cfg.autobalancer.model_dump() if cfg.autobalancer is not None else {}
+    missing = [k for k in BALL_KEYS if k not in {**base, **given}]
+    if missing:
+        flags = ", ".join("--" + k.replace("_", "-") for k in missing)
+        raise UsageError(f"stand autobalance: {source} has no [autobalancer]: give {flags}")
+    try:
+        return validate(AutobalancerTable, {**base, **given}, source)
+    except ConfigError as exc:  # named as the table's key, whether file or option
+        what = str(exc).split("]: ", 1)[-1]
+        raise ConfigError(what, source=source, key=f"autobalancer.{exc.key}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    U: list[complex] | None = None
+    if args.scene:
+        scene, params, source = load_scene(args.scene)
+        cfg = scene.config()
+        q, phi = unbalance_kg_m(scene)
+        U = [cmath.rect(m, -math.radians(a)) for m, a in zip(q, phi, strict=True)]
+    else:
+        cfg, params = load_config(args.config)
+        source = args.config
+    if args.unbalance:
+        U = [0j, 0j]
+        for plane, g_mm, deg in args.unbalance:
+            U[plane - 1] += cmath.rect(g_mm * 1e-6, -math.radians(deg))
+    table = _table(args, cfg, source)
+    doc = predict(params, table, rpm=args.rpm, unbalance_kg_m=U if args.rpm else None,
+                  max_rpm=args.max_rpm)  # fmt: skip
+    if args.json:
+        dump_json(doc)
+        return 0
+    _print(doc)
+    return 0
+
+
+def _print(doc: dict[str, Any]) -> None:
+    n = doc["balls"]
+    print(f"{n} balls of {doc['ball_g']:g} g on {doc['radius_mm']:g} mm in plane {doc['plane']}: "
+          f"capacity {doc['capacity_g_mm']:.0f} g mm")  # fmt: skip
+    nat = ", ".join(f"{x:.0f}" for x in doc["natural_rpm"])
+    anti = doc["antiresonance_rpm"]
+    print(f"natural speeds {nat} rpm; the race plane's antiresonance "
+          + ("none" if anti is None else f"{anti:.0f} rpm"))  # fmt: skip
+    for lo, hi in doc["windows_rpm"]:
+        print(f"  the balls balance from {lo:.0f} rpm "
+              + (f"to {hi:.0f} rpm" if hi is not None else "up (no upper edge)"))  # fmt: skip
+    b = doc["balanced"]
+    if b is None:
+        return
+    if not b["in_window"]:
+        print(f"at {b['rpm']:g} rpm: in no window: {b['note']}")
+        return
+    share = f"{100 * b['capacity_ratio']:.0f} % of capacity"
+    print(f"at {b['rpm']:g} rpm the balls make {b['balls_g_mm']:.1f} g mm at "
+          f"{b['balls_angle_deg']:.1f} deg ({share})")  # fmt: skip
+    if b["ball_angles_deg"]:
+        print("  balls at " + ", ".join(f"{a:.1f}" for a in b["ball_angles_deg"]) + " deg")
+    else:
+        print(f"  {b['ball_angles_note']}")
+    for r in b["residual"]:
+        print(f"  the stand then measures plane {r['plane']}: {r['unbalance_g_mm']:.1f} g mm "
+              f"at {r['angle_deg']:.1f} deg")  # fmt: skip
+    if "note" in b:
+        print(f"  {b['note']}")
+    print(f"({ANGLE_NOTE})")

@@ -1,0 +1,57 @@
+"""The ``[autobalancer]`` table: a ball (or roller) balancer on the rotor.
+
+::
+
+    [autobalancer]
+    plane = 1            # the correction plane its race lies in
+    balls = 2            # how many balls (2 or more)
+    ball_g = 50.0        # each ball's mass [g]
+    radius_mm = 60.0     # the radius the balls' centres run on [mm]
+    drag_n_s_m = 0.5     # viscous drag on a ball's motion relative to the race [N s/m]
+    rolling = 0.0        # rolling resistance, as a friction coefficient (0: none)
+    gravity = false      # gravity on the balls (a horizontal rotor)
+    start_deg = [0.0, 180.0]   # where the balls start, one angle per ball [deg]
+
+``stand autobalance`` predicts with it (closed forms); the keys of the balls' motion
+(``drag_n_s_m``, ``rolling``, ``gravity``, ``start_deg``) are the simulator's.  Every value
+is bounded by what a balancer can be; a bad one is one :class:`ConfigError` naming the key.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
+
+from stand.config.tables import STRICT
+
+Deg = Annotated[FiniteFloat, Field(ge=-360.0, le=720.0)]
+
+
+class AutobalancerTable(BaseModel):
+    """``[autobalancer]``: the balls, their race, what moves them."""
+
+    model_config = STRICT
+
+    plane: Literal[1, 2]
+    balls: Annotated[int, Field(ge=2, le=64)]
+    """Two or more: one ball cannot make less than its own unbalance."""
+    ball_g: Annotated[FiniteFloat, Field(gt=0.0, le=1e4)]
+    radius_mm: Annotated[FiniteFloat, Field(gt=0.0, le=5e3)]
+    drag_n_s_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e6)] = 0.0
+    rolling: Annotated[FiniteFloat, Field(ge=0.0, le=1.0)] = 0.0
+    gravity: bool = False
+    start_deg: Annotated[list[Deg], Field(max_length=64)] | None = None
+
+    @model_validator(mode="after")
+    def _one_start_per_ball(self) -> AutobalancerTable:
+        if self.start_deg is not None and len(self.start_deg) != self.balls:
+            raise ValueError(
+                f"start_deg: {len(self.start_deg)} angles for {self.balls} balls, one per ball"
+            )
+        return self
+
+    @property
+    def capacity_kg_m(self) -> float:
+        """``n m R``: the most unbalance the balls can make [kg m]."""
+        return self.balls * self.ball_g * 1e-3 * self.radius_mm * 1e-3
