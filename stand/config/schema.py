@@ -210,20 +210,29 @@ class Config(BaseModel):
 _UNION_MEMBERS = {"str", "int", "float", "bool"}
 
 
+SHOWN_CHARS = 80
+"""A refused value is quoted up to this many characters (a 10^4-entry list is no message)."""
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3] + "..."
+
+
 def _describe(err: dict[str, Any]) -> tuple[str, str]:
     loc = [str(x) for x in err["loc"]]
     if loc[0] == "bus" and loc[-1] in _UNION_MEMBERS:  # one error per member of the union
         key = ".".join(loc[:-1])
         return (
             key,
-            f"expected text, a number or true/false (a can.Bus option), got {err['input']!r}",
+            f"expected text, a number or true/false (a can.Bus option), got {_shown(err['input'])}",
         )
     key = ".".join(loc)
     msg = str(err["msg"])
     if err["type"] == "extra_forbidden":
         msg = "unknown key (not part of the configuration)" if len(loc) > 1 else "unknown table"
     elif err["type"] != "missing":
-        msg = f"{msg}, got {err['input']!r}"
+        msg = f"{msg}, got {_shown(err['input'])}"
     return key, msg
 
 

@@ -467,6 +467,7 @@ def test_a_hostile_surface_ends_cleanly(
     if want.says:
         assert code == 2 and len(lines) == 1 and lines[0].startswith("stand: error: "), err
         assert want.says in lines[0], err
+        assert len(lines[0]) < 600, f"a line of {len(lines[0])} characters"  # one line to read
     else:
         assert code == 0, err
         assert want.flags in out + err, (out, err)
