@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -12,7 +13,7 @@ from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
-from stand.errors import UsageError
+from stand.errors import ArchiveError, UsageError
 from stand.solve.index_runs import measure_tooling
 from stand.solve.tooling import folder, save_tooling, stored_toolings
 
@@ -64,8 +65,13 @@ def _measure(args: argparse.Namespace) -> int:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
     tooling, U_r, cov_r, cfg = measure_tooling(args.runs[0], args.runs[1], args.config, args.name)
     path = save_tooling(tooling, _where(args, cfg), force=args.force)
-    with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production
-        marked = archive.mark_tooling([file_digest(r) for r in args.runs])
+    marked: list[int] | None = None
+    try:
+        with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production
+            marked = archive.mark_tooling([file_digest(r) for r in args.runs])
+    except ArchiveError as exc:  # the tooling is kept: only the marking waits
+        print(f"the index runs are not marked as tooling runs ({exc}): measure the tooling "
+              "again with --force once the archive answers", file=sys.stderr)  # fmt: skip
     doc = {
         "name": tooling.name,
         "file": str(path),

@@ -163,3 +163,11 @@ def test_index_runs_are_archived_as_tooling_runs_out_of_production(
     assert main(["stats", "--rotor-type", "T-1", "--archive", url, "--json"]) == 0
     stats = json.loads(capsys.readouterr().out)
     assert (stats["runs"], stats["rotors"], stats["not_checked_yet"]) == (0, 0, 0), stats
+    # an archive that cannot be reached: the tooling is kept, the marking said to wait
+    (tmp_path / "file").write_text("x")
+    bad = f"sqlite:///{tmp_path / 'file' / 'a.sqlite'}"
+    argv = ["tooling", "measure", r0, r180, "--config", str(cfg), "--archive", bad, "--force"]
+    assert main([*argv, "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["archived_as_tooling"] is None
+    assert "not marked as tooling runs" in err and err.count("\n") == 1, err
