@@ -178,7 +178,8 @@ class Archive:
 
     def correction_rows(self, stand: str | None = None, rotor_type: str | None = None) -> list[Any]:
         """The correction data, oldest first, of a stand and a rotor type (None: any), each
-        checked (:func:`stand.archive.validate.correction_row`)."""
+        checked (:func:`stand.archive.validate.correction_row`): the row's columns, and its
+        datum parsed once under ``datum``."""
         import sqlalchemy as sa
 
         q = sa.select(corrections).order_by(corrections.c.start_time, corrections.c.id)
@@ -188,9 +189,7 @@ class Archive:
             q = q.where(corrections.c.rotor_type == rotor_type)
         with self.transaction() as conn:
             found = list(conn.execute(q).mappings())
-        for row in found:
-            correction_row(row, self.shown)
-        return found
+        return [{**row, "datum": correction_row(row, self.shown)} for row in found]
 
     def mark_tooling(self, file_sha256s: list[str]) -> list[int]:
         """Mark the archived runs with these file digests as a tooling's index runs (kind

@@ -3,7 +3,7 @@
 :func:`datum_row` makes the ``corrections`` row of one datum (both runs' phasors and
 covariances, the masses put on, the config); :func:`groups` splits the archive's rows
 so that nothing is mixed (stand, rotor type, calibration, speed) and leaves out a
-datum that repeats another (:func:`independent`): the same phasors under another
+datum that repeats another (:func:`repeated`): the same phasors under another
 digest are one rotor, not two, and would shrink every interval as if they were.
 """
 
@@ -88,7 +88,9 @@ def datum_row(
 
 
 def parse_datum(row: Any) -> tuple[Datum, dict[str, Any]]:
-    d = json.loads(row["datum_json"])
+    """A row's datum, and its JSON as a dict: the one parsed when the row was read and
+    checked (``datum``, :meth:`stand.archive.Archive.correction_rows`), else parsed here."""
+    d = row["datum"] if "datum" in row else json.loads(row["datum_json"])
 
     def cx(pairs: list[list[float]]) -> np.ndarray:
         return np.array([complex(a, b) for a, b in pairs])
@@ -109,13 +111,15 @@ def parse_datum(row: Any) -> tuple[Datum, dict[str, Any]]:
 @dataclass(frozen=True)
 class Group:
     """One stand's data for one rotor type, at one speed, with one calibration; ``rows``
-    the independent ones, ``repeats`` the ids of those left out as repeating another."""
+    the independent ones and ``data`` their data (parsed once), ``repeats`` the ids of those
+    left out as repeating another."""
 
     stand_id: str | None
     rotor_type: str | None
     rpm: float
     config_sha256: str
     rows: tuple[Any, ...]
+    data: tuple[Datum, ...]
     repeats: tuple[int, ...] = ()
 
 
@@ -138,10 +142,13 @@ def groups(rows: Sequence[Any]) -> list[Group]:
             out.append([r])
     found = []
     for g in out:
-        kept, repeats = independent(g)
+        data = [parse_datum(r)[0] for r in g]
+        repeats = repeated(data)
+        kept = [k for k in range(len(g)) if k not in repeats]
         f = g[0]
         found.append(Group(f["stand_id"], f["rotor_type"], f["rpm"], f["config_sha256"],
-                           tuple(kept), tuple(r["id"] for r in repeats)))  # fmt: skip
+                           tuple(g[k] for k in kept), tuple(data[k] for k in kept),
+                           tuple(g[k]["id"] for k in sorted(repeats))))  # fmt: skip
     return found
 
 
@@ -151,16 +158,15 @@ def _vector(d: Datum) -> np.ndarray:
                            np.column_stack([d.A1.real, d.A1.imag]).ravel()])  # fmt: skip
 
 
-def independent(rows: Sequence[Any]) -> tuple[list[Any], list[Any]]:
-    """The rows whose data no earlier row repeats, and those that do: both runs' phasors
-    alike beyond any chance of noise (:mod:`stand.core.same`), whatever their digests.
-    Candidates come from a k-d tree within one noise standard deviation; each is then
-    judged on both data's full covariances."""
+def repeated(data: Sequence[Datum]) -> set[int]:
+    """The indices of the data that repeat an earlier one: both runs' phasors alike beyond
+    any chance of noise (:mod:`stand.core.same`), whatever their rows' digests.  Candidates
+    come from a k-d tree within one noise standard deviation; each is then judged on both
+    data's full covariances."""
     from scipy.spatial import cKDTree
 
-    if len(rows) < 2:
-        return list(rows), []
-    data = [parse_datum(r)[0] for r in rows]
+    if len(data) < 2:
+        return set()
     v = np.array([_vector(d) for d in data])
     sd = np.array([np.sqrt(np.concatenate([np.diag(d.cov0), np.diag(d.cov1)])) for d in data])
     scale = np.median(sd, axis=0)
@@ -174,5 +180,4 @@ def independent(rows: Sequence[Any]) -> tuple[list[Any], list[Any]]:
         cov[4:, 4:] = data[i].cov1 + data[j].cov1
         if is_same_data(v[j] - v[i], cov):
             repeats.add(j)
-    kept = [r for k, r in enumerate(rows) if k not in repeats]
-    return kept, [rows[k] for k in sorted(repeats)]
+    return repeats

@@ -38,7 +38,7 @@ from stand.core.drift import (
     whitened,
 )
 from stand.errors import ConfigError, ModelError, UsageError
-from stand.health.data import Group, groups, parse_datum
+from stand.health.data import Group, groups
 from stand.solve.pipeline import calibration_radius
 
 SCATTER_PCT = 2.0
@@ -91,7 +91,7 @@ def judge(
     the data since the change best, refitted with its interval."""
     cfg, p = _params(group)
     del cfg
-    data = [parse_datum(r)[0] for r in group.rows]
+    data = list(group.data)
     sc = (scatter_pct / 100, math.radians(scatter_deg))
     zs, Js = whitened(p, data, *sc)  # the whole group at once
     c = cusum(scores(zs, Js))
@@ -198,7 +198,7 @@ def refit(rows: Sequence[Any], params: Any, names: Sequence[str] | None = None) 
         )
     if names is None:
         names = [judged.fitted[0].name] if judged.fitted else ["C1", "C2"]
-    data = [parse_datum(r)[0] for r in group.rows[start:]]
+    data = list(group.data[start:])
     if len(data) < 2 * len(names):
         raise UsageError(f"{len(data)} data since the change: too few to fit {', '.join(names)}")
     sc = (SCATTER_PCT / 100, math.radians(SCATTER_DEG))
@@ -220,8 +220,8 @@ def answers(refit_: Refit, last: int = 5) -> list[dict[str, Any]]:
     """The last rotors' initial unbalance with the old and the new calibration [g mm, deg]."""
 
     out = []
-    for row in refit_.group.rows[-last:]:
-        d = parse_datum(row)[0]
+    g = refit_.group
+    for row, d in zip(g.rows[-last:], g.data[-last:], strict=True):
         entry = {"check_sha256": row["check_sha256"][:12]}
         for key, p in (("old", refit_.before), ("new", refit_.after)):
             U = solve_unbalance(p, d.omega_rad_s, d.A0, max_split_condition=math.inf).U_kg_m
