@@ -10,6 +10,7 @@ in place; :func:`ensure_room` is asked before each append to a run file being re
 from __future__ import annotations
 
 import errno
+import json
 import os
 import resource
 import stat
@@ -17,6 +18,7 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -99,6 +101,16 @@ def check_input(path: str | Path) -> Path:
     if not stat.S_ISREG(mode):
         raise RecordingError(f"is {_kind(mode)}: not read", path=str(p))
     return p
+
+
+def strict_json(text: str) -> Any:
+    """JSON as the standard has it: ``NaN``, ``Infinity`` and ``-Infinity`` (which Python's
+    reader takes) are a ValueError, as any malformed text is."""
+    return json.loads(text, parse_constant=_no_constant)
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows")
 
 
 def check_timestamps(t_s: np.ndarray, path: str | Path, first_frame: int = 0) -> None:

@@ -14,13 +14,13 @@ The bounds are the writers' (:mod:`stand.archive.results`,
 from __future__ import annotations
 
 import datetime as dt
-import json
 import math
 import re
 from collections.abc import Iterable, Iterator
 from typing import Any
 
 from stand.core.model import MAX_SPEED_RPM
+from stand.drivers.files import strict_json
 from stand.errors import ArchiveRowError
 
 VERDICTS = frozenset({"pass", "fail", "none"})
@@ -39,17 +39,15 @@ class _Row:
     """One row being checked: where it is, and a failure naming its column."""
 
     def __init__(self, row: Any, table: str, url: str, key: str = "id", label: str = "run"):
-        self.row, self.table, self.url = row, table, url
-        ident = row._mapping.get(key) if hasattr(row, "_mapping") else row.get(key)
-        self.name = f"{label} {ident!r}"
+        self.table, self.url = table, url
+        self.m = getattr(row, "_mapping", row)  # a Row's columns, or a mapping as it is
+        self.name = f"{label} {self.m.get(key)!r}"
 
     def get(self, column: str) -> Any:
-        m = self.row._mapping if hasattr(self.row, "_mapping") else self.row
-        return m[column] if column in m else None
+        return self.m.get(column)
 
     def has(self, column: str) -> bool:
-        m = self.row._mapping if hasattr(self.row, "_mapping") else self.row
-        return column in m
+        return column in self.m
 
     def fail(self, column: str, message: str) -> ArchiveRowError:
         return ArchiveRowError(
@@ -115,16 +113,12 @@ class _Row:
         if v is None and none:
             return None
         try:
-            doc = json.loads(v, parse_constant=_no_constant) if isinstance(v, str) else None
+            doc = strict_json(v) if isinstance(v, str) else None
         except ValueError as exc:
             raise self.fail(column, f"not strict JSON ({exc})") from exc
         if not isinstance(doc, dict):
             raise self.fail(column, "not a JSON object")
         return doc
-
-
-def _no_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a number JSON allows")
 
 
 def shown_url(conn: Any) -> str:

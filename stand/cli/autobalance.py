@@ -12,7 +12,7 @@ from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config, validate
 from stand.config.autobalancer import AutobalancerTable
 from stand.config.typed import parse_rpm, parse_unbalance, positive_float
-from stand.errors import ConfigError, UsageError
+from stand.errors import UsageError
 from stand.sim import load_scene
 from stand.sim.scene import unbalance_kg_m
 from stand.solve.autobalance import predict
@@ -54,11 +54,7 @@ def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable
     if missing:
         flags = ", ".join("--" + k.replace("_", "-") for k in missing)
         raise UsageError(f"stand autobalance: {source} has no [autobalancer]: give {flags}")
-    try:
-        return validate(AutobalancerTable, {**base, **given}, source)
-    except ConfigError as exc:  # named as the table's key, whether file or option
-        what = str(exc).split("]: ", 1)[-1]
-        raise ConfigError(what, source=source, key=f"autobalancer.{exc.key}") from None
+    return validate(AutobalancerTable, {**base, **given}, source, prefix="autobalancer.")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -239,12 +239,13 @@ def _describe(err: dict[str, Any]) -> tuple[str, str]:
 M = TypeVar("M", bound=BaseModel)
 
 
-def validate(model: type[M], data: dict[str, Any], source: str) -> M:
+def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = "") -> M:
     """Validate parsed TOML against a pydantic model; one :class:`ConfigError` if it fails.
 
     The error names ``source``, the first bad key and what is wrong with it;
     an unknown key is reported first (it is usually a typo, and the cause of
-    a "missing" one).
+    a "missing" one).  ``prefix`` goes before the key (``"autobalancer."``: a table
+    validated on its own, named as in the file).
     """
     try:
         return model.model_validate(data)
@@ -253,7 +254,7 @@ def validate(model: type[M], data: dict[str, Any], source: str) -> M:
         described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
         key, msg = described[0]
         more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
-        raise ConfigError(msg + more, source=source, key=key) from None
+        raise ConfigError(msg + more, source=source, key=prefix + key) from None
 
 
 def parameters_of(cfg: Config, source: str) -> StandParameters:

@@ -21,7 +21,7 @@ import numpy as np
 
 from stand.config import data_folder
 from stand.core.model import MAX_SPEED_RPM, rpm_to_rad_s
-from stand.drivers.files import output
+from stand.drivers.files import output, strict_json
 from stand.errors import ConfigError, RecordingError
 from stand.measuring import with_unbalance_covariance
 
@@ -79,10 +79,6 @@ MAX_TOOLING_KG_M = 1.0
 """No tooling (a mandrel, an adapter) carries 1 kg m of unbalance: 1 kg at 1 m."""
 
 
-def _no_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a number JSON allows")
-
-
 def _bounded(U: list[complex], cov: np.ndarray, omega_rad_s: float) -> None:
     """Refuse values no measured tooling has (ValueError, said as "not a tooling file")."""
     if not all(abs(u) <= MAX_TOOLING_KG_M for u in U):
@@ -100,7 +96,7 @@ def load_tooling(name: str, where: Path) -> Tooling:
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
             raise ValueError(f"{path.stat().st_size} bytes; one is under 4 kB")
-        data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constant)
+        data = strict_json(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ConfigError(
             f"the tooling {name!r} has not been measured (no {path}): run `stand tooling "
