@@ -40,9 +40,9 @@ from stand.core.model import StandParameters, mass_matrix
 from stand.errors import ModelError
 
 ComplexArray = NDArray[np.complex128]
-EDGE_TOL = 1e-6
-"""Window edges hold to this relative tolerance on the speed (Brent's method is run to
-1e-10 of it: an undamped edge is a pole, approached from both sides)."""
+EDGE_RTOL = 1e-10
+"""Brent's method stops at this relative tolerance on the speed: an undamped edge is a pole,
+approached from both sides, and the edges must hold to 1e-6."""
 
 
 def plane_positions(p: StandParameters) -> tuple[float, float]:
@@ -83,7 +83,7 @@ def windows(
     """The speed intervals [rad/s] where ``Re H_PP < 0`` (the balls balance), up to
     ``omega_max_rad_s``: ``(low, high)``, ``high`` None when the window is still open at
     ``omega_max_rad_s``.  Sign changes are bracketed on a grid even in ``log omega`` and
-    each edge is found by Brent's method to :data:`EDGE_TOL` (an undamped stand's edge at
+    each edge is found by Brent's method to :data:`EDGE_RTOL` (an undamped stand's edge at
     a natural frequency is the pole's sign change)."""
     from scipy.optimize import brentq
 
@@ -95,7 +95,7 @@ def windows(
     edges: list[tuple[float, bool]] = []  # (speed, entering a window)
     for k in np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:])):
         lo, hi = float(grid[k]), float(grid[k + 1])
-        w = brentq(re, lo, hi, xtol=1e-10 * lo, rtol=1e-10)
+        w = brentq(re, lo, hi, xtol=EDGE_RTOL * lo, rtol=EDGE_RTOL)
         edges.append((float(w), bool(values[k + 1] < 0)))
     out: list[tuple[float, float | None]] = []
     start = float(grid[0]) if values[0] < 0 else None
