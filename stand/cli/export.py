@@ -7,6 +7,7 @@ import argparse
 from stand.archive import url_for
 from stand.archive.query import Filters
 from stand.cli.common import add_archive_argument, add_date_arguments, add_revision_argument
+from stand.config import load_config
 from stand.plant import export_qdas
 
 
@@ -19,11 +20,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_archive_argument(p)
     p.add_argument("-o", "--out", metavar="FILE.dfq", required=True, help="the file to write")
     p.add_argument("--force", action="store_true", help="replace FILE if it exists")
+    p.add_argument(
+        "--runs", action="store_true",
+        help="one value line per run (each labelled first or check), not one per rotor",
+    )  # fmt: skip
+    p.add_argument(
+        "--config", metavar="CFG", help="the stand's config: its [plant] qdas_timezone, archive"
+    )
+    p.add_argument(
+        "--timezone", metavar="ZONE",
+        help="IANA time zone of the dates (default: the config's [plant] qdas_timezone, else "
+        "this machine's)",
+    )  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
 
+    cfg = load_config(args.config)[0] if args.config else None
+    zone = args.timezone or (cfg.plant.qdas_timezone if cfg and cfg.plant else None)
     f = Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision)
-    _, n = export_qdas(url_for(args.archive), args.rotor_type, f, args.out, force=args.force)
-    print(f"wrote {args.out}: {n} runs of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)")
+    _, n = export_qdas(url_for(args.archive, cfg), args.rotor_type, f, args.out,
+                       force=args.force, runs=args.runs, timezone=zone)  # fmt: skip
+    what = "runs" if args.runs else "rotors"
+    print(
+        f"wrote {args.out}: {n} {what} of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)"
+    )
     return 0

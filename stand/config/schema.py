@@ -37,6 +37,7 @@ from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationErr
 from stand.config.autobalancer import AutobalancerTable
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config.correction import check_correction
+from stand.config.plant import PlantTable as PlantTable  # re-exported
 from stand.config.rotor import SHAFT_AGREE
 from stand.config.rotor import RotorTable as RotorTable  # re-exported
 from stand.config.tables import STRICT as STRICT  # re-exported: every table's model config
@@ -112,22 +113,6 @@ class ToolingTable(BaseModel):
     folder: Annotated[str, Field(min_length=1, max_length=4000)] | None = None
     """Where the tooling's measurement is kept (default: ``tooling/`` in the user's data
     folder, beside the archive)."""
-
-
-PORT = r"([1-9]\d{0,3}|[1-5]\d{4}|6[0-4]\d{3}|65[0-4]\d{2}|655[0-2]\d|6553[0-5])"
-"""A TCP port, 1 to 65535, as a pattern."""
-MQTT_URL = rf"^mqtts?://[A-Za-z0-9](?:[A-Za-z0-9.-]{{0,252}})(:{PORT})?/?$"
-"""``mqtt[s]://host[:port][/]``: a host name or IPv4 address (letters, digits, dots, hyphens)."""
-
-
-class PlantTable(BaseModel):
-    """``[plant]``: the plant's systems that take each archived result."""
-
-    model_config = STRICT
-
-    mqtt_url: Annotated[str, Field(pattern=MQTT_URL)] | None = None
-    """``mqtt://host[:port]`` (1883) or ``mqtts://`` (8883, TLS), the port 1 to 65535: each
-    archived result is published as JSON on ``stand/<stand id>/result``."""
 
 
 class CalibrationTable(BaseModel):

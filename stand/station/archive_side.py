@@ -16,6 +16,7 @@ from typing import Any
 
 from stand.archive import Archive, correction_rows, file_digest
 from stand.archive.query import Filters, history, run_file
+from stand.config import load_config
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.health import datum_row, health, health_json
@@ -73,9 +74,14 @@ class ArchiveSide:
 
     def export_qdas(self, rotor_type: str) -> bytes:
         """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
-        (:mod:`stand.plant.qdas`; UsageError when there is none)."""
+        (:mod:`stand.plant.qdas`; UsageError when there is none), its dates in the zone of
+        the type's config (``[plant] qdas_timezone``), else this machine's."""
 
-        data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None)
+        zone, path = None, self.config_dir / f"{rotor_type}.toml"
+        if path.is_file():
+            plant = load_config(str(path))[0].plant
+            zone = plant.qdas_timezone if plant is not None else None
+        data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None, timezone=zone)
         return data
 
     def report_file(self, run_id: int) -> Path:

@@ -1,12 +1,11 @@
-"""The Q-DAS export (AQDEF .dfq): 50 archived rotors, read back by a reader written here
-from the format's description alone, and compared with the archive field by field."""
+"""The Q-DAS export (AQDEF .dfq): 55 archived rotors and a tooling, read back by a reader
+written here from the format's description alone, and compared with the archive."""
 
 from __future__ import annotations
 
-import cmath
 import datetime as dt
 import hashlib
-import math
+import zoneinfo
 from pathlib import Path
 from typing import Any
 
@@ -15,73 +14,81 @@ import pytest
 
 from stand.cli import main
 
-N_ROTORS, CHECKED = 50, 20
+CORRECTED, AT_ONCE, OPEN = 40, 10, 5
+"""Rotors corrected and checked; within tolerance at their first run; failed, no check yet."""
+FIELDS = ["K0001", "K0002", "K0004", "K0005", "K0006", "K0007", "K0008", "K0010", "K0011",
+          "K0012"]  # fmt: skip
+"""A value set's fields in the order AQDEF gives them."""
 
 
-def _results(n: int) -> list[tuple[Any, int | None]]:
-    """``n`` rotors measured on the simulated demo stand (2 s runs), and a check run for
-    the first :data:`CHECKED` (their residual a few tens of g mm): (result, index of the
-    run it checks)."""
+def _result(sc: Any, p: Any, k: int, amount_g_mm: float, serial: str, day: int) -> Any:
+    """Rotor ``serial`` measured on the simulated demo stand (2 s) with ``amount_g_mm`` in
+    each plane at random angles, started on November ``day`` (July for k % 4 == 0: a
+    summer time)."""
     from stand.drivers import rebuild
-    from stand.sim import load_scene, simulate
+    from stand.sim import simulate
     from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 
-    sc, p, _ = load_scene("demo")
-    cfg = sc.config()
-    rng = np.random.default_rng(7)
-    out: list[tuple[Any, int | None]] = []
-
-    def one(k: int, U: np.ndarray, serial: str, minute: int, checks: int | None) -> None:
-        unb = {f"plane{i + 1}": {"g_mm": abs(u) * 1e6,
-                                 "angle_deg": math.degrees(-cmath.phase(u)) % 360}
-               for i, u in enumerate(U)}  # fmt: skip
-        run = sc.run.model_copy(update={"seconds": 2.0, "seed": 100 + k})
-        m = measure_streams(
-            rebuild(simulate(sc.model_copy(update={"run": run, "unbalance": sc.unbalance
-                    .model_validate(unb)}), p).frames), cfg, p, SolveOptions()
-        )  # fmt: skip
-        prov = Provenance(
-            software="test", run_file=f"q/{k}.h5", config_sha256="0" * 64,
-            config_source="scene", start_time=f"2026-11-{1 + k % 20:02d}T08:{minute:02d}:07+00:00",
-            job=Job(serial=serial, order=f"O-{k % 3}", operator=["kim", "lee", "Jürgen"][k % 3]),
-            rotor_type="auger", stand_id=f"stand-{k % 2}",
-        )  # fmt: skip
-        out.append((build_result(m, cfg, p, provenance=prov), checks))
-
-    for k in range(n):
-        U = 1e-3 * (rng.normal(size=2) + 1j * rng.normal(size=2))
-        one(k, U, f"R-{k:03d}", 0, None)
-    for k in range(CHECKED):  # checked after the correction: a little left
-        U = 20e-6 * (rng.normal(size=2) + 1j * rng.normal(size=2))
-        one(n + k, U, f"R-{k:03d}", 30, k)
-    return out
+    rng = np.random.default_rng(k)
+    unb = {f"plane{i}": {"g_mm": amount_g_mm, "angle_deg": float(rng.uniform(0, 360))}
+           for i in (1, 2)}  # fmt: skip
+    run = sc.run.model_copy(update={"seconds": 2.0, "seed": 100 + k})
+    scene = sc.model_copy(update={"run": run, "unbalance": sc.unbalance.model_validate(unb)})
+    m = measure_streams(rebuild(simulate(scene, p).frames), sc.config(), p, SolveOptions())
+    month = 7 if k % 4 == 0 else 11
+    prov = Provenance(
+        software="test", run_file=f"q/{k}.h5", config_sha256="0" * 64, config_source="scene",
+        start_time=f"2026-{month:02d}-{day:02d}T08:{k % 60:02d}:07+00:00",
+        job=Job(serial=serial, order=f"O-{k % 3}", operator=["kim", "lee", "Jürgen"][k % 3]),
+        rotor_type="auger", stand_id=f"stand-{k % 2}",
+    )  # fmt: skip
+    return build_result(m, sc.config(), p, provenance=prov)
 
 
-def _archive(url: str) -> None:
+def _archive(url: str) -> dict[str, list[int]]:
+    """The 55 rotors (first runs on day 1-2, checks on day 3) and a tooling's two index runs
+    (marked as tooling); the archive ids per serial, oldest first."""
     from stand.archive import Archive, rows
+    from stand.sim import load_scene
 
+    sc, p, _ = load_scene("demo")
+    ids: dict[str, list[int]] = {}
+    plan = ([("R", k, 5000.0) for k in range(CORRECTED)]
+            + [("G", k, 150.0) for k in range(AT_ONCE)]
+            + [("F", k, 5000.0) for k in range(OPEN)])  # fmt: skip
     with Archive(url) as archive:
-        ids: list[int] = []
-        for r, checks in _results(N_ROTORS):
+
+        def add(k: int, amount: float, serial: str, day: int, checks: int | None) -> int:
+            r = _result(sc, p, k, amount, serial, day)
             digest = hashlib.sha256(r.provenance.run_file.encode()).hexdigest()
-            ids.append(archive.add(*rows(r, digest, None if checks is None else ids[checks])))
+            run_id = archive.add(*rows(r, digest, checks))
+            ids.setdefault(serial, []).append(run_id)
+            return run_id
+
+        for n, (kind, k, amount) in enumerate(plan):
+            add(n, amount, f"{kind}-{k:03d}", 1 + n % 2, None)
+        for k in range(CORRECTED):  # the corrected rotors' checks: a little left
+            serial = f"R-{k:03d}"
+            add(100 + k, 20.0, serial, 3, ids[serial][0])
+        tooling = [add(200 + j, 3000.0, "T-INDEX", 2, None) for j in range(2)]
+        digests = [hashlib.sha256(f"q/{200 + j}.h5".encode()).hexdigest() for j in range(2)]
+        assert archive.mark_tooling(digests) == tooling
+    return ids
 
 
 def read_dfq(data: bytes) -> dict[str, Any]:
     """An independent reader of AQDEF: K-lines ``Kxxxx[/n] value`` of the description; value
-    lines of value sets separated by 0x0F, fields by 0x14 (K0001 K0002 K0004 K0005 K0006
-    K0007 K0008 K0010 K0011 K0012); a ``Kxxxx/0`` line after a value line applies to it."""
+    lines of value sets separated by 0x0F, fields by 0x14 (:data:`FIELDS`); a
+    ``Kxxxx/0`` line after a value line applies to it."""
     text = data.decode("cp1252")
     assert "\n" not in text.replace("\r\n", "")  # CR LF line ends only
     head: dict[str, dict[int, str]] = {}
     parts: list[dict[str, Any]] = []
-    order = ["K0001", "K0002", "K0004", "K0005", "K0006", "K0007", "K0008", "K0010", "K0011",
-             "K0012"]  # fmt: skip
     for line in text.split("\r\n"):
         if not line:
             continue
         if "\x0f" in line or "\x14" in line:
-            sets = [dict(zip(order, s.split("\x14"), strict=True)) for s in line.split("\x0f")]
+            sets = [dict(zip(FIELDS, s.split("\x14"), strict=True)) for s in line.split("\x0f")]
             parts.append({"sets": sets, "keys": {}})
             continue
         key, _, value = line.partition(" ")
@@ -93,54 +100,101 @@ def read_dfq(data: bytes) -> dict[str, Any]:
     return {"head": head, "parts": parts}
 
 
-def test_the_dfq_of_50_rotors_reads_back_as_the_archive(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _expected(run: dict[str, Any], plane: int, zone: zoneinfo.ZoneInfo) -> list[tuple[Any, ...]]:
+    """A run's plane as two value sets (value, attribute, local date)."""
+    p = run["planes"][plane]
+    when = dt.datetime.fromisoformat(run["start_time"]).astimezone(zone)
+    stamp = when.strftime("%d.%m.%Y/%H:%M:%S")
+    angle_attr = 129 if p["unbalance_g_mm"] <= p["uncertainty_g_mm"] else 0
+    return [(p["unbalance_g_mm"], 0, stamp), (p["angle_deg"], angle_attr, stamp)]
+
+
+@pytest.fixture(scope="module")
+def archive55(tmp_path_factory: pytest.TempPathFactory) -> tuple[str, dict[str, list[int]]]:
+    url = f"sqlite:///{tmp_path_factory.mktemp('qdas') / 'a.sqlite'}"
+    return url, _archive(url)
+
+
+def test_one_value_line_per_rotor_initial_first_residual_last_check(
+    archive55: tuple[str, dict[str, list[int]]], tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """55 rotors give 55 lines: the initial characteristics hold 55 values, the residual
+    ones 50 (40 checks, 10 first runs that passed) within their limits, and 5 "no value"
+    (attribute 255, empty); the tooling's runs appear nowhere; dates are Berlin's local
+    time (summer and winter) and the remark says so; K2022 is the decimals written."""
     from stand.archive.query import Filters, history
 
-    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
-    _archive(url)
+    url, ids = archive55
+    zone = zoneinfo.ZoneInfo("Europe/Berlin")
     out = tmp_path / "auger.dfq"
-    assert main(["export", "qdas", "--rotor-type", "auger", "--archive", url, "-o", str(out)]) == 0
-    assert "70 runs" in capsys.readouterr().out
+    argv = ["export", "qdas", "--rotor-type", "auger", "--archive", url, "-o", str(out)]
+    assert main([*argv, "--timezone", "Europe/Berlin"]) == 0
+    assert "55 rotors" in capsys.readouterr().out
     dfq = read_dfq(out.read_bytes())
     head = dfq["head"]
     assert head["K0100"][0] == "8" and head["K1001"][1] == "auger"
+    assert "Europe/Berlin (UTC+01:00, UTC+02:00)" in head["K1900"][1]
     names = [head["K2002"][k] for k in range(1, 9)]
-    assert names[:4] == [
-        "plane 1 initial unbalance",
-        "plane 1 initial unbalance angle",
-        "plane 1 residual unbalance",
-        "plane 1 residual unbalance angle",
-    ]
+    kinds = ("initial unbalance", "initial unbalance angle", "residual unbalance",
+             "residual unbalance angle")  # fmt: skip
+    assert names[:4] == [f"plane 1 {w}" for w in kinds]
     assert all(head["K2008"][k] == "18" for k in range(1, 9))
-    assert [head["K2142"][k] for k in (1, 2)] == ["g mm", "deg"]
-    runs = history(url, Filters(rotor_type="auger"))
-    by_id = {r["id"]: r for r in runs}
-    assert len(dfq["parts"]) == len(runs) == N_ROTORS + CHECKED
-    for k in (3, 7):  # the residual amounts' upper limits: the planes' permissible values
-        plane = (k - 3) // 4
-        assert float(head["K2111"][k]) == pytest.approx(
-            runs[-1]["planes"][plane]["permissible_g_mm"], abs=1e-3
-        )
-    for part, r in zip(dfq["parts"], runs, strict=True):
-        assert part["keys"]["K0014"] == r["serial"]
-        before = by_id[r["checks_run"]] if r["checks_run"] else r
-        when = dt.datetime.fromisoformat(r["start_time"]).strftime("%d.%m.%Y/%H:%M:%S")
-        values = []
-        for i in range(2):
-            for run in (before, r):
-                p = run["planes"][i]
-                values += [(p["unbalance_g_mm"], 0),
-                           (p["angle_deg"], 255 if p["unbalance_g_mm"] <= p["uncertainty_g_mm"]
-                            else 0)]  # fmt: skip
+    assert sorted(head["K2111"]) == [3, 7]  # only the residual amounts are limited
+    listed = history(url, Filters(rotor_type="auger", kind="production"))
+    for k in (3, 7):  # the tolerance in force: the latest run's, to the 2 decimals written
+        latest = listed[-1]["planes"][(k - 3) // 4]["permissible_g_mm"]
+        assert float(head["K2111"][k]) == pytest.approx(latest, abs=0.005 + 5e-4)
+    runs = {r["id"]: r for r in listed}
+    parts = dfq["parts"]
+    assert len(parts) == CORRECTED + AT_ONCE + OPEN
+    assert "T-INDEX" not in {p["keys"]["K0014"] for p in parts}
+    counts = [0] * 8
+    for part in parts:
+        serial = part["keys"]["K0014"]
+        first = runs[ids[serial][0]]
+        last = runs[ids[serial][-1]] if serial.startswith("R") else first
         assert len(part["sets"]) == 8
-        for s, (value, attr) in zip(part["sets"], values, strict=True):
-            assert float(s["K0001"]) == pytest.approx(value, abs=1.5e-3)
-            assert int(s["K0002"]) == attr
-            assert s["K0004"] == when
-            assert s["K0006"] == r["order"] and s["K0008"] == r["operator"]
-            assert s["K0010"] == r["stand"]
+        for i in range(2):
+            sets = part["sets"][4 * i : 4 * i + 4]
+            want = _expected(first, i, zone)
+            want += (_expected(last, i, zone) if not serial.startswith("F")
+                     else [("", 255, ""), ("", 255, "")])  # fmt: skip
+            for k, (s, (value, attr, stamp)) in enumerate(zip(sets, want, strict=True)):
+                decimals = int(head["K2022"][4 * i + k + 1])
+                assert int(s["K0002"]) == attr and s["K0004"] == stamp
+                if value == "":
+                    assert s["K0001"] == ""
+                    continue
+                counts[4 * i + k] += 1
+                assert len(s["K0001"].partition(".")[2]) == decimals
+                # written with `decimals` places: within half a unit of the last one (the
+                # archive's own rounding to 1e-3 adds at most 5e-4)
+                assert float(s["K0001"]) == pytest.approx(value, abs=0.5 * 10**-decimals + 5e-4)
+                if k == 2:  # a residual amount of a rotor that passed: within its limit
+                    assert float(s["K0001"]) <= float(head["K2111"][4 * i + 3])
+    assert counts == [55, 55, 50, 50] * 2
+
+
+def test_one_line_per_run_labelled_first_or_check(
+    archive55: tuple[str, dict[str, list[int]]], tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """`--runs`: 95 lines (55 first runs, 40 checks), each labelled; a first run's values are
+    its initial (and its residual when it passed), a check's its residual only: no initial
+    value is counted twice."""
+    url, _ = archive55
+    out = tmp_path / "runs.dfq"
+    argv = ["export", "qdas", "--rotor-type", "auger", "--archive", url, "-o", str(out), "--runs"]
+    assert main([*argv, "--timezone", "UTC"]) == 0
+    assert "95 runs" in capsys.readouterr().out
+    parts = read_dfq(out.read_bytes())["parts"]
+    labels = [p["keys"]["K0054"] for p in parts]
+    assert labels.count("first") == 55 and labels.count("check") == 40
+    filled = [[s["K0001"] != "" for s in p["sets"]] for p in parts]
+    assert sum(f[0] for f in filled) == 55 and sum(f[2] for f in filled) == 50
+    for p, f in zip(parts, filled, strict=True):
+        assert f[0] == (p["keys"]["K0054"] == "first")
 
 
 def test_an_unknown_type_or_an_empty_range_exports_nothing(
@@ -159,3 +213,24 @@ def test_an_unknown_type_or_an_empty_range_exports_nothing(
     assert "from 2030-01-01" in capsys.readouterr().err
     assert not out.exists()
     assert main([*base, "--rotor-type", "auger", "--since", "yesterday"]) == 2
+
+
+def test_a_zone_nobody_knows_is_one_line(
+    archive55: tuple[str, dict[str, list[int]]], tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """`--timezone Mars/Olympus` and a config's unknown `[plant] qdas_timezone`: exit 2, one
+    line, nothing written."""
+    url, _ = archive55
+    out = tmp_path / "x.dfq"
+    argv = ["export", "qdas", "--rotor-type", "auger", "--archive", url, "-o", str(out)]
+    assert main([*argv, "--timezone", "Mars/Olympus"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'Mars/Olympus': no such IANA zone" in err
+    cfg = tmp_path / "c.toml"
+    demo = (Path(__file__).parents[2] / "examples" / "demo-stand.toml").read_text()
+    cfg.write_text(demo + '\n[plant]\nqdas_timezone = "Europe/Atlantis"\n')
+    assert main([*argv, "--config", str(cfg)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "qdas_timezone" in err and "Europe/Atlantis" in err
+    assert not out.exists()
