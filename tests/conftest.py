@@ -1,4 +1,5 @@
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -9,6 +10,26 @@ settings.register_profile(
 )
 settings.register_profile("thorough", max_examples=5000, deadline=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
+
+RUN_FILES_BEFORE = pytest.StashKey[set[Path]]()
+"""The run files in the folder the suite runs in, when it started."""
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    session.config.stash[RUN_FILES_BEFORE] = set(Path.cwd().glob("run-*.h5"))
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Tests write into their own temporary folders, never a run file into the folder the
+    suite runs in (a command's default ``run-<time>.h5`` lands there): the whole session
+    fails if one did (judged once, by the controlling process, after every worker)."""
+    if hasattr(session.config, "workerinput"):
+        return
+    left = set(Path.cwd().glob("run-*.h5")) - session.config.stash.get(RUN_FILES_BEFORE, set())
+    if left:
+        names = ", ".join(sorted(p.name for p in left))
+        print(f"\nFAILED: tests left run files in {Path.cwd()}: {names}", file=sys.stderr)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
 
 
 @pytest.fixture(scope="session")

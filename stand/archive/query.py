@@ -198,10 +198,13 @@ def _run_dict(r: Any, planes_: list[dict[str, Any]]) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
-    """The latest run in an open archive (of one stand, or of any) as :func:`history` gives
-    it, with ``initial``, the planes of the run it checks (its own when it checks none), and
-    ``result``, its whole JSON form; None in an empty archive."""
+def latest(
+    archive: Archive, stand: str | None = None, run_id: int | None = None
+) -> dict[str, Any] | None:
+    """The latest run in an open archive (of one stand, or of any), or the run ``run_id``
+    (of that stand), as :func:`history` gives it, with ``initial``, the planes of the run
+    it checks (its own when it checks none), and ``result``, its whole JSON form; None
+    when there is none."""
 
     import sqlalchemy as sa
 
@@ -209,6 +212,8 @@ def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
         q = sa.select(runs)
         if stand is not None:
             q = q.where(runs.c.stand_id == stand)
+        if run_id is not None:
+            q = q.where(runs.c.id == run_id)
         row = conn.execute(q.order_by(runs.c.id.desc()).limit(1)).first()
         if row is None:
             return None
@@ -218,9 +223,24 @@ def latest(archive: Archive, stand: str | None = None) -> dict[str, Any] | None:
         for p in plane_rows(conn, ids):
             found[p.run_id].append(plane_json(p))
     run = _run_dict(row, found[row.id])
-    run["initial"] = found[ids[-1]]
+    run["initial"] = found[ids[-1]] if len(found[ids[-1]]) == len(found[row.id]) else found[row.id]
     run["result"] = json.loads(row.result_json)  # checked as strict JSON above
     return run
+
+
+def newest_ids(archive: Archive, stand: str | None = None, limit: int | None = None) -> list[int]:
+    """The ids of an open archive's runs (of one stand, or of any), newest first; at most
+    ``limit`` of them."""
+    import sqlalchemy as sa
+
+    with archive.transaction() as conn:
+        q = sa.select(runs.c.id)
+        if stand is not None:
+            q = q.where(runs.c.stand_id == stand)
+        q = q.order_by(runs.c.id.desc())
+        if limit:
+            q = q.limit(limit)
+        return [int(i) for i in conn.execute(q).scalars()]
 
 
 def latest_id(archive: Archive, stand: str | None = None) -> int | None:

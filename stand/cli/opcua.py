@@ -1,5 +1,5 @@
-"""The OPC UA result server on its own: identification, state and the latest result of the
-stand, for a line's MES (:mod:`stand.plant.opcua`)."""
+"""The OPC UA result server on its own: the stand as a machine of OPC 40001-1 with its
+results by OPC 40001-101, for a line's MES (:mod:`stand.plant.opcua`)."""
 
 from __future__ import annotations
 
@@ -30,6 +30,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_archive_argument(p)
     p.add_argument("--user", help="the one user a client must log in as")
     p.add_argument("--password-file", metavar="FILE", help="the user's password (first line)")
+    p.add_argument(
+        "--cert-dir", metavar="DIR",
+        help="where the server's certificate and key are kept, made on first start (beyond "
+        "this machine only; default: opcua/ in the user's data folder)",
+    )  # fmt: skip
 
 
 def read_access(args: argparse.Namespace) -> Any:
@@ -62,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         args.host,
         args.port,
         read_access(args),
+        cert_dir=Path(args.cert_dir) if args.cert_dir else None,
     )
 
     async def main() -> None:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from stand.archive import url_for
 from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
-from stand.config import data_folder, default_stand_id
+from stand.config import data_folder
 from stand.errors import UsageError
 from stand.plant import ResultServer, check_bind, read_token
 from stand.solve.pipeline import precision_targets
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         def state() -> str:
             return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"
 
-        ua = ResultServer(url, default_stand_id(), "127.0.0.1", args.opcua_port, state=state)
+        ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state)
         ua.run_in_thread()
         print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
     where = f"http://{args.host}:{args.port}/" + (f"?token={token}" if token else "")

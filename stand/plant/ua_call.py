@@ -37,11 +37,17 @@ def _bad(name: str, code: str, why: str, per_argument: list[str] | None = None) 
     return res
 
 
+def _kinds(declared: Any) -> tuple[Any, ...]:
+    """The VariantTypes an argument may have."""
+    return declared if isinstance(declared, tuple) else (declared,)
+
+
 def guarded(
     name: str, inputs: Sequence[Any], method: Callable[..., Awaitable[list[Any]]]
 ) -> Callable[..., Awaitable[Any]]:
     """``method(*values)`` (the arguments' values, checked against ``inputs``, their
-    ``ua.VariantType`` s) as an asyncua method callback that never raises."""
+    ``ua.VariantType`` s, or for an argument several a tuple of them) as an asyncua method
+    callback that never raises."""
 
     async def call(parent: Any, *args: Any) -> Any:
         if len(args) < len(inputs):
@@ -49,12 +55,13 @@ def guarded(
         if len(args) > len(inputs):
             return _bad(name, "BadTooManyArguments", f"{len(args)} arguments, it takes "
                         f"{len(inputs)}")  # fmt: skip
-        wrong = [a.VariantType != t for a, t in zip(args, inputs, strict=True)]
+        wrong = [a.VariantType not in _kinds(t) for a, t in zip(args, inputs, strict=True)]
         if any(wrong):
             k = wrong.index(True)
             return _bad(
                 name, "BadInvalidArgument",
-                f"argument {k + 1} is a {args[k].VariantType.name}, not a {inputs[k].name}",
+                f"argument {k + 1} is a {args[k].VariantType.name}, not a "
+                + " or ".join(t.name for t in _kinds(inputs[k])),
                 ["BadTypeMismatch" if w else "Good" for w in wrong],
             )  # fmt: skip
         try:

@@ -102,6 +102,12 @@ class Provenance:
     rotor_type: str | None = None
     stand_id: str = ""
 
+    @property
+    def simulated(self) -> bool:
+        """Whether the frames came from the simulator: a simulated scene's recording, or
+        python-can's ``virtual`` bus the simulator plays on (no real stand uses it)."""
+        return self.source.startswith(("simulated", "virtual:"))
+
 
 @dataclass(frozen=True)
 class Tolerance:

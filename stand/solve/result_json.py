@@ -286,6 +286,8 @@ def to_json(r: Result) -> dict[str, Any]:
         "config_sha256": p.config_sha256,
         "config_source": p.config_source,
         "start_time": p.start_time,
+        "source": p.source,
+        "simulated": p.simulated,
         "frames": p.frames,
         "duration_s": round(p.duration_s, 6),
         "influence_matrix": p.matrix,

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import archive_result, drift_rows
+from stand.config import default_stand_id, load_config
 from stand.drivers.bus import ALLOW_URL
 from stand.drivers.files import output
 from stand.errors import StandError, StationBusyError, UsageError
@@ -94,6 +95,19 @@ class Station(ArchiveSide):
     def rotor_types(self) -> list[str]:
         """The rotor types: the configuration files in ``config_dir``, by name."""
         return sorted(p.stem for p in self.config_dir.glob("*.toml") if p.is_file())
+
+    def stand_id(self) -> str:
+        """The stand id its runs are archived under: its rotor types' ``[stand] id`` (the
+        same in each, else this is not one stand), else the host name; for OPC UA."""
+        ids = {
+            load_config(str(self.config_path(t)))[0].stand.stand_id() for t in self.rotor_types()
+        }
+        if len(ids) > 1:
+            raise UsageError(
+                f"{self.config_dir}: the rotor types name different stands "
+                f"({', '.join(sorted(ids))}): one station is one stand ([stand] id)"
+            )
+        return ids.pop() if ids else default_stand_id()
 
     def config_path(self, rotor_type: str) -> Path:
         """The configuration of ``rotor_type`` (only names from :meth:`rotor_types`)."""

@@ -397,3 +397,22 @@ def test_the_live_chart_draws_the_circles_where_they_are() -> None:
         # angles are sent rounded to 1e-3 deg: at most 5e-4 deg x 7000 g mm = 0.06 g mm off
         assert np.allclose(abs(z - z0), radius, rtol=0, atol=0.07)
     assert opts["radiusAxis"]["max"] >= 7000.0  # the goal circle fits
+
+
+def test_one_station_is_one_stand(tmp_path: Path) -> None:
+    """The stand id OPC UA serves is the rotor types' [stand] id (its runs are archived
+    under it), the host name without one; rotor types naming two stands are refused."""
+    import socket
+
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    text = (ROTORS / "demo-auger.toml").read_text()
+    st = Station(folder, tmp_path / "runs", f"sqlite:///{tmp_path / 'a.sqlite'}", _targets)
+    (folder / "a.toml").write_text(text)
+    assert st.stand_id() == socket.gethostname()[:64]
+    for name in ("a", "b"):
+        (folder / f"{name}.toml").write_text(text.replace("[stand]\n", '[stand]\nid = "line-3"\n'))
+    assert st.stand_id() == "line-3"
+    (folder / "b.toml").write_text(text.replace("[stand]\n", '[stand]\nid = "line-4"\n'))
+    with pytest.raises(UsageError, match="name different stands"):
+        st.stand_id()

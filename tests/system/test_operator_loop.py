@@ -75,7 +75,9 @@ def test_a_check_refuses_another_rotor_or_speed_and_says_when_it_got_worse(
     assert main(["simulate", "demo", "--out", before]) == 0
     capsys.readouterr()
     for previous, says in ((other_rotor, "another rotor"), (other_speed, "turned at 800 rpm")):
-        assert main(["balance", "--scene", "demo", "--check", previous, "--quiet"]) == 2
+        out = str(tmp_path / f"refused-{Path(previous).stem}.h5")  # recorded, then refused
+        argv = ["balance", "--scene", "demo", "--check", previous, "--quiet", "--out", out]
+        assert main(argv) == 2
         err = capsys.readouterr().err
         assert says in err and "--check-any" in err, err
     # a mass put where the unbalance already is: the "correction" made plane 1 worse

@@ -1,0 +1,169 @@
+"""The stand's machine object in an OPC UA address space, as OPC 40001-1 and 40001-101
+lay it out (the types: :mod:`stand.plant.ua_model`)::
+
+    Objects/Machines/<stand id>                    (Machinery i=1001 organizes it)
+        DI:Identification                          MachineIdentificationType
+            Manufacturer, Model, SerialNumber (= the stand id), SoftwareRevision,
+            ProductInstanceUri
+        Machinery:MachineryBuildingBlocks          FolderType, referencing (HasAddIn)
+            Identification, MachineryItemState, ResultManagement
+        Machinery:MachineryItemState               MachineryItemState_StateMachineType
+            CurrentState (LocalizedText) with Id (the state's NodeId)
+        Result:ResultManagement                    ResultManagementType
+            Result:GetLatestResult, Result:GetResultById, Result:GetResultIdListFiltered
+            Result:Results/ Result:LatestResult    ResultType (a ResultDataType)
+
+The notifier chain Server -> Machines -> machine -> ResultManagement (HasNotifier) lets a
+client subscribed on the Server object hear the machine's result events.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from stand import __version__
+from stand.plant.ua_model import (
+    MACHINE_IDENTIFICATION_TYPE,
+    MACHINERY_ITEM_STATE_TYPE,
+    MACHINES,
+    NAMESPACE,
+    RESULT_DATA,
+    RESULT_MANAGEMENT_TYPE,
+    RESULT_TYPE,
+    STATES,
+    Namespaces,
+    empty_result,
+    method_arguments,
+)
+from stand.plant.ua_nodes import add_node, add_property, add_reference, arguments
+
+MANUFACTURER = "rotor-stand (open source)"
+MODEL = "soft-bearing two-plane balancing stand"
+
+
+@dataclass(frozen=True)
+class Machine:
+    """The nodes the server writes to and calls on."""
+
+    node: Any
+    state: Any
+    state_id: Any
+    states: dict[str, Any]
+    """Each state's name and NodeId (the value of CurrentState's Id)."""
+    management: Any
+    latest: Any
+    methods: dict[str, Any]
+    notifiers: tuple[Any, ...]
+    """ResultManagement, the machine, Machines, Server: who emits a result event."""
+
+
+def _id(ns: Namespaces, stand: str, path: str) -> Any:
+    from asyncua import ua
+
+    return ua.NodeId(f"{stand}/{path}" if path else stand, ns.own)
+
+
+async def _identification(server: Any, ns: Namespaces, stand: str, machine: Any) -> Any:
+    from asyncua import ua
+
+    ident = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, "Identification"),
+        ua.QualifiedName("Identification", ns.di), machine, ua.ObjectIds.HasAddIn,
+        ua.NodeId(MACHINE_IDENTIFICATION_TYPE, ns.machinery),
+    )  # fmt: skip
+    text, string = ua.VariantType.LocalizedText, ua.VariantType.String
+    for name, value, vtype in (
+        ("Manufacturer", ua.LocalizedText(MANUFACTURER), text),
+        ("Model", ua.LocalizedText(MODEL), text),
+        ("SerialNumber", stand, string),
+        ("SoftwareRevision", __version__, string),
+        ("ProductInstanceUri", f"{NAMESPACE}:{stand}", string),
+    ):
+        await add_property(server, ident.nodeid, _id(ns, stand, f"Identification/{name}"),
+                           ua.QualifiedName(name, ns.di), ua.Variant(value, vtype))  # fmt: skip
+    return ident
+
+
+async def _state_machine(server: Any, ns: Namespaces, stand: str, parent: Any) -> tuple[Any, Any]:
+    from asyncua import ua
+
+    sm = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, "MachineryItemState"),
+        ua.QualifiedName("MachineryItemState", ns.machinery), parent, ua.ObjectIds.HasAddIn,
+        ua.NodeId(MACHINERY_ITEM_STATE_TYPE, ns.machinery),
+    )  # fmt: skip
+    current = await add_node(
+        server, ua.NodeClass.Variable, _id(ns, stand, "MachineryItemState/CurrentState"),
+        ua.QualifiedName("CurrentState", 0), sm.nodeid, ua.ObjectIds.HasComponent,
+        ua.ObjectIds.FiniteStateVariableType, DataType=ua.NodeId(ua.ObjectIds.LocalizedText),
+        ValueRank=-1, Value=ua.Variant(ua.LocalizedText("NotAvailable")),
+    )  # fmt: skip
+    first = ua.NodeId(STATES["NotAvailable"][0], ns.machinery)
+    state_id = await add_property(
+        server, current.nodeid, _id(ns, stand, "MachineryItemState/CurrentState/Id"),
+        ua.QualifiedName("Id", 0), ua.Variant(first, ua.VariantType.NodeId),
+    )  # fmt: skip
+    return current, state_id
+
+
+async def _management(server: Any, ns: Namespaces, stand: str, parent: Any,
+                      calls: dict[str, Any]) -> tuple[Any, Any, dict[str, Any]]:  # fmt: skip
+    from asyncua import ua
+
+    r = ns.result
+    rm = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, "ResultManagement"),
+        ua.QualifiedName("ResultManagement", r), parent, ua.ObjectIds.HasAddIn,
+        ua.NodeId(RESULT_MANAGEMENT_TYPE, r), EventNotifier=1,
+    )  # fmt: skip
+    methods = {}
+    for name, (inputs, outputs) in method_arguments(ns).items():
+        path = f"ResultManagement/{name}"
+        m = await add_node(
+            server, ua.NodeClass.Method, _id(ns, stand, path), ua.QualifiedName(name, r),
+            rm.nodeid, ua.ObjectIds.HasComponent,
+        )  # fmt: skip
+        ids = (_id(ns, stand, f"{path}/InputArguments"), _id(ns, stand, f"{path}/OutputArguments"))
+        await arguments(server, m.nodeid, ids, inputs, outputs)
+        server.link_method(m, calls[name])
+        methods[name] = m
+    folder = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, "ResultManagement/Results"),
+        ua.QualifiedName("Results", r), rm.nodeid, ua.ObjectIds.HasComponent,
+        ua.ObjectIds.FolderType,
+    )  # fmt: skip
+    latest = await add_node(
+        server, ua.NodeClass.Variable, _id(ns, stand, "ResultManagement/Results/LatestResult"),
+        ua.QualifiedName("LatestResult", ns.own), folder.nodeid, ua.ObjectIds.HasComponent,
+        ua.NodeId(RESULT_TYPE, r), DataType=ua.NodeId(RESULT_DATA[0], r), ValueRank=-1,
+        Value=ua.Variant(empty_result(), ua.VariantType.ExtensionObject),
+    )  # fmt: skip
+    return rm, latest, methods
+
+
+async def build_machine(server: Any, ns: Namespaces, stand: str, calls: dict[str, Any]) -> Machine:
+    """The machine ``stand`` under ``Machines``; ``calls``: the three methods' callbacks."""
+    from asyncua import ua
+
+    machines = ua.NodeId(MACHINES, ns.machinery)
+    node = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, ""), ua.QualifiedName(stand, ns.own),
+        machines, ua.ObjectIds.Organizes, ua.ObjectIds.BaseObjectType, EventNotifier=1,
+    )  # fmt: skip
+    ident = await _identification(server, ns, stand, node.nodeid)
+    blocks = await add_node(
+        server, ua.NodeClass.Object, _id(ns, stand, "MachineryBuildingBlocks"),
+        ua.QualifiedName("MachineryBuildingBlocks", ns.machinery), node.nodeid,
+        ua.ObjectIds.HasComponent, ua.ObjectIds.FolderType,
+    )  # fmt: skip
+    current, state_id = await _state_machine(server, ns, stand, blocks.nodeid)
+    rm, latest, methods = await _management(server, ns, stand, node.nodeid, calls)
+    obj = ua.NodeClass.Object
+    for target in (ident.nodeid, rm.nodeid):
+        await add_reference(server, blocks.nodeid, ua.ObjectIds.HasAddIn, target, obj)
+    for source, target in ((machines, node.nodeid), (node.nodeid, rm.nodeid)):
+        await add_reference(server, source, ua.ObjectIds.HasNotifier, target, obj)
+    chain = (rm.nodeid, node.nodeid, machines, ua.NodeId(ua.ObjectIds.Server))
+    states = {name: ua.NodeId(ids[0], ns.machinery) for name, ids in STATES.items()}
+    return Machine(node, current, state_id, states, rm, latest, methods, chain)
