@@ -11,11 +11,13 @@ from typing import Any
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config, validate
 from stand.config.autobalancer import AutobalancerTable
+from stand.config.rocker import load_rocker
 from stand.config.typed import parse_rpm, parse_unbalance, positive_float
 from stand.errors import UsageError
 from stand.sim import load_scene
 from stand.sim.scene import unbalance_kg_m
 from stand.solve.autobalance import predict
+from stand.solve.rocker import predict_rocker
 
 BALL_KEYS = ("plane", "balls", "ball_g", "radius_mm")
 
@@ -32,6 +34,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--config", metavar="CFG", help="the stand's config ([autobalancer])")
     where.add_argument("--scene", metavar="SCENE", help="a scene: its stand and unbalance")
+    where.add_argument(
+        "--rocker", metavar="FILE.toml",
+        help="a grinder on a rocker ([rocker] table, the seeds' symbols): its onset, "
+        "resonances, damping and cutting bounds",
+    )  # fmt: skip
     p.add_argument("--plane", type=int, choices=(1, 2), help="the plane of the balls' race")
     p.add_argument("--balls", type=int, help="how many balls (2 or more)")
     p.add_argument("--ball-g", type=positive_float, help="each ball's mass [g]")
@@ -58,6 +65,8 @@ def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.rocker:
+        return _rocker(args)
     U: list[complex] | None = None
     if args.scene:
         scene, params, source = load_scene(args.scene)
@@ -78,6 +87,20 @@ def run(args: argparse.Namespace) -> int:
         dump_json(doc)
         return 0
     _print(doc)
+    return 0
+
+
+def _rocker(args: argparse.Namespace) -> int:
+    stray = [f"--{k.replace('_', '-')}" for k in (*BALL_KEYS, "unbalance", "max_rpm")
+             if getattr(args, k) is not None]  # fmt: skip
+    if stray:
+        raise UsageError(f"stand autobalance --rocker: {', '.join(stray)} belong to a stand; "
+                         "the rocker file says it all")  # fmt: skip
+    doc = predict_rocker(load_rocker(args.rocker), rpm=args.rpm)
+    if args.json:
+        dump_json(doc)
+    else:
+        _print_rocker(doc)
     return 0
 
 
@@ -111,3 +134,43 @@ def _print(doc: dict[str, Any]) -> None:
     if "note" in b:
         print(f"  {b['note']}")
     print(f"({ANGLE_NOTE})")
+
+
+def _print_rocker(doc: dict[str, Any]) -> None:
+    """Print :func:`stand.solve.rocker.predict_rocker`'s document."""
+    print(f"J_O {doc['J_O_kg_m2']:.6g} kg m^2, omega0 {doc['omega0_rad_s']:.4g} rad/s")
+    print(f"the balls balance above {doc['onset_rpm']:.0f} rpm (omega > omega0), away from "
+          "the forced resonances at "
+          + ", ".join(f"{x:.0f}" for x in doc["forced_resonances_rpm"]) + " rpm")  # fmt: skip
+    state = "suppressed" if doc["parametric_suppressed"] else "NOT suppressed"
+    floquet = (f"{doc['floquet_h_min_n_s_m']:.4g} N s/m, sigma* "
+               f"{doc['floquet_sigma_threshold']:.4f}")  # fmt: skip
+    print(f"parametric resonance at {doc['parametric_rpm']:.0f} rpm: {state} (the hinge's "
+          f"damping must exceed {doc['h_min_n_s_m']:.4g} N s/m; Floquet at the rocker's eps: "
+          f"{floquet})")  # fmt: skip
+    share = f"{100 * doc['capacity_ratio']:.0f} % of the balls' capacity"
+    if doc["can_balance"]:
+        print(f"the disc's largest unbalance is {share}: the balls can cancel it")
+    else:
+        print(f"the disc's largest unbalance is {share}: beyond what the balls can cancel")
+    if doc.get("ball_angles_deg"):
+        print("  balls at " + ", ".join(f"{a:.1f}" for a in doc["ball_angles_deg"])
+              + " deg from the unbalance")  # fmt: skip
+    elif doc.get("ball_angles_note"):
+        print(f"  {doc['ball_angles_note']}")
+    cut = doc["cutting"]
+    if cut is not None:
+        print(
+            f"cutting: omega0 {cut['omega0_cutting_rad_s']:.4g} rad/s at theta "
+            f"{cut['theta_rad']:.4f} rad, at most {cut['omega0_star_rad_s']:.4g} rad/s "
+            f"(worst theta {cut['worst_theta_exact_rad']:.4f} rad); "
+            + ("the disc presses" if cut["pressing"] else "the moment does not press")
+        )
+        if cut["c_n_max_exact_n_m"] is not None:
+            print(f"  the work's contact stiffness must stay below {cut['c_n_max_exact_n_m']:.4g}"
+                  f" N/m (series: {cut['c_n_max_series_n_m']:.4g})")  # fmt: skip
+    at = doc["at"]
+    if at is not None:
+        verdict = "the balls balance" if at["balances"] else "the balls do not balance"
+        print(f"at {at['rpm']:g} rpm {verdict} (criterion {at['criterion_m']:.3g} m); 2x "
+              f"amplitude {at['amplitude_2x_rad']:.3g} rad")  # fmt: skip
