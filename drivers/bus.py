@@ -41,6 +41,9 @@ def describe_bus(kwargs: dict[str, Any]) -> str:
     return f"{merged.get('interface', '?')}:{merged.get('channel', '?')}"
 
 
+PRODUCT_KEYS = ("protocol", "scan")
+"""``[bus]`` keys the product reads itself (:mod:`stand.config.scan`); never python-can's."""
+
 URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
 """A channel like ``spy://``, ``loop://``, ``rfc2217://``, ``socket://``: serial interfaces
 hand it to pyserial, whose URL handlers open files and sockets."""
@@ -82,7 +85,7 @@ def open_bus(kwargs: dict[str, Any]) -> Any:
     """
     import can
 
-    kwargs = dict(kwargs)
+    kwargs = {k: v for k, v in kwargs.items() if k not in PRODUCT_KEYS}
     allow_url = bool(kwargs.pop(ALLOW_URL, False))
     where = describe_bus(kwargs)
     channel = kwargs.get("channel")

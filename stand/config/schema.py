@@ -32,7 +32,8 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
-from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError, field_validator
+from pydantic_core import PydanticCustomError
 
 from stand.config.autobalancer import AutobalancerTable
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
@@ -162,8 +163,21 @@ class Config(BaseModel):
 
     stand: StandTable
     rotor: RotorTable
-    bus: dict[str, str | int | float | bool | list[Any]] | None = None
-    """Passed to ``can.Bus`` as given; lists for options such as ``can_filters``."""
+    bus: dict[str, str | int | float | bool | list[Any] | dict[str, Any]] | None = None
+    """Passed to ``can.Bus`` as given (lists for options such as ``can_filters``), but for
+    ``protocol`` and the ``[bus.scan]`` table, the product's (:mod:`stand.config.scan`)."""
+
+    @field_validator("bus", mode="before")
+    @classmethod
+    def _plain_values(cls, bus: Any) -> Any:
+        """A table inside ``[bus]`` only as ``[bus.scan]``: can.Bus takes plain values."""
+        for key, value in bus.items() if isinstance(bus, dict) else ():
+            if isinstance(value, dict) and key != "scan":
+                raise PydanticCustomError(
+                    "bus_value", BUS_VALUE, {"key": key, "got": _shown(value)}
+                )
+        return bus
+
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
     sensors: SensorsTable = SensorsTable()
@@ -193,6 +207,7 @@ class Config(BaseModel):
 
 
 _UNION_MEMBERS = {"str", "int", "float", "bool"}
+BUS_VALUE = "expected text, a number or true/false (a can.Bus option), got {got}"
 
 
 SHOWN_CHARS = 80
@@ -206,16 +221,16 @@ def _shown(value: Any) -> str:
 
 def _describe(err: dict[str, Any]) -> tuple[str, str]:
     loc = [str(x) for x in err["loc"]]
-    if loc[0] == "bus" and loc[-1] in _UNION_MEMBERS:  # one error per member of the union
-        key = ".".join(loc[:-1])
-        return (
-            key,
-            f"expected text, a number or true/false (a can.Bus option), got {_shown(err['input'])}",
-        )
+    if err["type"] == "bus_value":
+        return f"bus.{err['ctx']['key']}", str(err["msg"])
+    if loc and loc[0] == "bus" and loc[-1] in _UNION_MEMBERS:  # one error per member of the union
+        return ".".join(loc[:-1]), BUS_VALUE.format(got=_shown(err["input"]))
     key = ".".join(loc)
     msg = str(err["msg"])
     if err["type"] == "extra_forbidden":
         msg = "unknown key (not part of the configuration)" if len(loc) > 1 else "unknown table"
+    elif err["type"] == "value_error" and not loc:  # a whole table's check: its own words
+        msg = msg.removeprefix("Value error, ")
     elif err["type"] != "missing":
         msg = f"{msg}, got {_shown(err['input'])}"
     return key, msg
@@ -239,7 +254,7 @@ def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = ""
         described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
         key, msg = described[0]
         more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
-        raise ConfigError(msg + more, source=source, key=prefix + key) from None
+        raise ConfigError(msg + more, source=source, key=(prefix + key).rstrip(".")) from None
 
 
 def parameters_of(cfg: Config, source: str) -> StandParameters:

@@ -37,6 +37,7 @@ from stand.errors import (
     StandError,
     UsageError,
 )
+from stand.live.protocol import builder_for, layout_of
 from stand.live.session import LiveSession
 from stand.measuring.measure import MIN_REVS
 from stand.sim import load_scene, simulate, with_masses
@@ -316,6 +317,8 @@ class LiveSource:
     bus_table: dict[str, Any] | None = None
     scene_frames: Any = None
     scene_bus: dict[str, Any] | None = None
+    layout: Any = None
+    """A scan module's layout (:mod:`stand.drivers.scan`) when ``[bus] protocol = "scan"``."""
 
 
 def live_source(
@@ -342,6 +345,7 @@ def live_source(
         else:
             cfg, params = sc.config(), physical
             text = config_toml(cfg)
+        layout = layout_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
         return LiveSource(
             cfg,
@@ -349,6 +353,7 @@ def live_source(
             text,
             scene_frames=simulate(sc, physical).frames,
             scene_bus={"interface": "virtual", "channel": channel},
+            layout=layout,
         )
     if masses or rpm is not None or index_deg is not None:
         raise UsageError(
@@ -357,7 +362,7 @@ def live_source(
     if not config:
         raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params, text = load_config_text(config)
-    return LiveSource(cfg, params, text, bus_table=cfg.bus)
+    return LiveSource(cfg, params, text, bus_table=cfg.bus, layout=layout_of(cfg, config))
 
 
 def measure_live(
@@ -393,6 +398,7 @@ def measure_live(
         scene_frames=source.scene_frames,
         silence_timeout_s=silence_timeout_s,
         run_attrs=attrs,
+        builder=builder_for(source.layout),
     ) as session:
         if on_start:
             on_start(session.where)

@@ -55,6 +55,7 @@ class LiveSession:
         scene_frames: Any = None,
         silence_timeout_s: float = 2.0,
         run_attrs: dict[str, str] | None = None,
+        builder: Any = None,
     ):
 
         self.bus_kwargs = bus_kwargs
@@ -62,7 +63,8 @@ class LiveSession:
         self.config_toml = config_toml
         self.run_attrs = run_attrs or {}
         self.where = describe_bus(bus_kwargs)
-        self.builder = StreamBuilder()
+        self.builder = builder if builder is not None else StreamBuilder()
+        """Protocol v1's decoder, or the one ``builder`` names (a scan module's)."""
         self.failure: BusError | None = None
         self.stop_signal: int | None = None
         self._scene_frames = scene_frames

@@ -2,11 +2,20 @@
 
 A scene (:mod:`stand.sim.scene`) describes one run; :func:`stand.sim.emit.simulate`
 computes it from the stand model (:mod:`stand.sim.physics`) and emits
-protocol-v1 frames through :mod:`drivers.nodes`.  This package sits between
+protocol-v1 frames through :mod:`drivers.nodes` (or a scan-stream module's,
+:mod:`stand.sim.scan_emit`).  This package sits between
 the core and the CLI: it may import the core, the config and the drivers.
 """
 
 from stand.sim.emit import Simulation, simulate
 from stand.sim.scene import Mass, Scene, load_scene, shipped_scenes, with_masses
 
-__all__ = ["Mass", "Scene", "Simulation", "load_scene", "shipped_scenes", "simulate", "with_masses"]
+__all__ = [
+    "Mass",
+    "Scene",
+    "Simulation",
+    "load_scene",
+    "shipped_scenes",
+    "simulate",
+    "with_masses",
+]

@@ -34,6 +34,7 @@ from stand.sim.physics import (
     steady_forward,
     support_force,
 )
+from stand.sim.scan_emit import module_frames
 from stand.sim.scene import Scene, node_unbalance, per_node, scene_beam, unbalance_kg_m
 
 FULL_SCALE = 32767
@@ -185,6 +186,20 @@ def _physics(
     return [closed_form(p, speed, U, s, beam, spread)[:, i] for i, s in enumerate(seen)], 0
 
 
+def noisy(scene: Scene, node: int, a: Any) -> Any:
+    """The sensor's white noise added to the acceleration ``a`` node ``node`` reads [m/s^2]
+    (the scene's ``[effects.noise]``; the same draw whatever carries the samples)."""
+    e = scene.effects
+    if not e.noise:
+        return a
+    rms = (
+        e.noise.rms_m_s2
+        if e.noise.rms_m_s2 is not None
+        else e.noise.density_m_s2_rthz * math.sqrt(scene.nodes.rate_hz / 2)  # type: ignore[operator]
+    )
+    return a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
+
+
 def _node_frames(
     scene: Scene,
     i: int,
@@ -197,13 +212,7 @@ def _node_frames(
     clipping, counts, invalid samples, its STATUS flags, its frames and the frames lost."""
     e, rate, node = scene.effects, scene.nodes.rate_hz, i + 1
     ppm, offset = clock
-    if e.noise:
-        rms = (
-            e.noise.rms_m_s2
-            if e.noise.rms_m_s2 is not None
-            else e.noise.density_m_s2_rthz * math.sqrt(rate / 2)  # type: ignore[operator]
-        )
-        a = a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
+    a = noisy(scene, node, a)
     clipped = np.zeros(len(a), bool)
     if e.clipping:
         r = e.clipping.range_m_s2
@@ -264,6 +273,9 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
             "run-up from standstill, nonlinear supports or integrated physics",
             key="rotor.shaft",
         )
+    if scene.nodes.protocol == "scan" and e.clock:
+        raise ConfigError("a scan module samples all channels on one clock: no "
+                          "[effects.clock] per node", key="effects.clock")  # fmt: skip
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
     offset = per_node(e.clock.offset_s) if e.clock else [0.0, 0.0]
     gain = per_node(e.sensor.gain) if e.sensor else [1.0, 1.0]
@@ -287,10 +299,17 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
     )
     blocks: list[Frames] = []
+    accel = []
     for i in range(2):
         a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed)
         truth[f"node{i + 1}"] = {"t_s": times[i], "accel_m_s2": a}
-        blocks.append(_node_frames(scene, i, a, times[i], edges, (ppm[i], offset[i])))
+        accel.append(a)
+        if scene.nodes.protocol == "v1":
+            blocks.append(_node_frames(scene, i, a, times[i], edges, (ppm[i], offset[i])))
+    if scene.nodes.protocol == "scan":  # one module, one clock: node 1's sample times
+        heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
+        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter)
+        blocks.append(_lost(scene, 1, module))
     return Simulation(
         frames=_on_the_bus(scene, blocks),
         physics="integrate" if scene.needs_integration else "closed_form",

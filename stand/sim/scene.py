@@ -44,6 +44,7 @@ from stand.config.schema import (
 from stand.core import StandParameters
 from stand.core.beam import beam_rotor, distributed_unbalance, node_at
 from stand.errors import ConfigError
+from stand.sim.scan_emit import bus_table
 from stand.sim.tables import (
     NODES as NODES,  # re-exported: the simulator's modules read it here
 )
@@ -66,7 +67,7 @@ class Scene(BaseModel):
     description: str = ""
     stand: StandTable
     rotor: RotorTable
-    bus: dict[str, str | int | float | bool | list[Any]] | None = None
+    bus: dict[str, str | int | float | bool | list[Any] | dict[str, Any]] | None = None
     tolerance: ToleranceTable | None = None
     correction: CorrectionTable = CorrectionTable()
     run: RunTable
@@ -76,10 +77,13 @@ class Scene(BaseModel):
 
     def config(self) -> Config:
         """The configuration part (what solves the recording)."""
+        bus = self.bus
+        if self.nodes.protocol == "scan":
+            bus = {**(bus or {}), **bus_table(self.nodes.rate_hz, self.nodes.counter)}
         return Config(
             stand=self.stand,
             rotor=self.rotor,
-            bus=self.bus,
+            bus=bus,
             tolerance=self.tolerance,
             correction=self.correction,
         )

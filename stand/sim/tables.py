@@ -102,6 +102,10 @@ class NodesTable(_Table):
     rate_hz: Annotated[int, Field(gt=0, lt=65536)] = 4000
     scale_um_s2: Annotated[int, Field(gt=0, lt=65536)] = 100
     first_seq: Annotated[int, Field(ge=0, lt=65536)] = 0
+    protocol: Literal["v1", "scan"] = "v1"
+    """``v1``: two sensor nodes; ``scan``: one scan-stream module (:mod:`stand.sim.scan_emit`)."""
+    counter: bool = True
+    """``scan`` only: whether the module sends its scan counter."""
 
 
 class Noise(_Table):

@@ -20,11 +20,22 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 from stand.config import parse_matrix
+from stand.config.scan import bus_protocol
 from stand.core import StandParameters
-from stand.drivers.recording import JOB_ATTR, MATRIX_ATTR, STAND_ATTR, config_digest, read_streams
+from stand.drivers.recording import (
+    JOB_ATTR,
+    MATRIX_ATTR,
+    STAND_ATTR,
+    config_digest,
+    read_recording,
+    read_streams,
+)
+from stand.drivers.scan import load_layout, scan_streams
+from stand.drivers.streams import RunStreams
 from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
 from stand.measuring import Measurement
 from stand.measuring.measure import measure
@@ -96,6 +107,7 @@ def solve_recording(
     else:
         cfg, params, text = stored_config(rec.meta, rec.path)
         source = f"{rec.path} (stored)"
+    streams = _protocol_streams(path, cfg, source, streams)
     stored = rec.meta.get(MATRIX_ATTR)
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
@@ -123,6 +135,20 @@ def solve_recording(
         m, cfg, params, stream_warnings=(*rec.warnings, *streams.warnings), provenance=prov,
         options=options, streams=streams,
     )  # fmt: skip
+
+
+def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> RunStreams:
+    """The run's streams as its config's ``[bus] protocol`` reads its frames: protocol v1's
+    (``streams``, already rebuilt), or a scan-stream module's (:mod:`stand.drivers.scan`,
+    its DBC relative to the config's folder)."""
+    _, scan = bus_protocol(cfg.bus, source)
+    if scan is None:
+        return streams
+    base = Path(source.removesuffix(" (stored)")).parent
+    layout = load_layout(scan, base, source)
+    with named_errors(path):
+        rec = read_recording(path)
+    return scan_streams(rec.frames, layout)
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:

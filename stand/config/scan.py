@@ -1,0 +1,102 @@
+"""``[bus] protocol`` and the ``[bus.scan]`` table: a scan-stream DAQ module described by a
+DBC and a mapping of its channels (the decoder: :mod:`stand.drivers.scan`).
+
+::
+
+    [bus]
+    interface = "socketcan"
+    channel = "can0"
+    protocol = "scan"              # "v1" (the sensor nodes, default) or "scan"
+
+    [bus.scan]
+    dbc = "scan-module.dbc"        # relative to this file's folder
+    rate_hz = 2000.0               # the module's scan rate
+    counter = "counter"            # the scan counter's signal (optional, strongly advised)
+    mark_threshold = 0.5           # the mark channel's threshold (default: mid-range)
+
+    [[bus.scan.channels]]
+    message = "SCAN"
+    signal = "ai1"
+    role = "accel"                 # "accel" or "mark"
+    support = 1
+    scale = 98.1                   # the DBC's physical value -> m/s^2 (10 mV/g: 981 ...)
+    delay_s = 0.0                  # the channel's known constant delay [s]
+
+The ``protocol`` and ``scan`` keys are the product's
+(:data:`stand.drivers.bus.PRODUCT_KEYS`); every other ``[bus]`` key goes to python-can as
+before.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
+
+from stand.config.schema import validate
+from stand.config.tables import STRICT
+from stand.errors import ConfigError
+
+PROTOCOLS = ("v1", "scan")
+"""``[bus] protocol``: the sensor nodes' protocol v1, or a scan-stream module."""
+Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")]
+
+
+class ScanChannel(BaseModel):
+    """``[[bus.scan.channels]]``: one signal of the module and what it measures."""
+
+    model_config = STRICT
+
+    message: Name
+    signal: Name
+    role: Literal["accel", "mark"]
+    support: Literal[1, 2] | None = None
+    scale: Annotated[FiniteFloat, Field(gt=-1e9, lt=1e9)] = 1.0
+    delay_s: Annotated[FiniteFloat, Field(ge=-0.05, le=0.05)] = 0.0
+
+    @model_validator(mode="after")
+    def _support_for_accel(self) -> ScanChannel:
+        if self.role == "accel" and self.support is None:
+            raise ValueError(f"{self.signal}: an accel channel names its support (1 or 2)")
+        if self.role == "mark" and self.support is not None:
+            raise ValueError(f"{self.signal}: the mark channel serves both supports")
+        if self.scale == 0:
+            raise ValueError(f"{self.signal}: scale 0 would make every value 0")
+        return self
+
+
+class ScanTable(BaseModel):
+    """``[bus.scan]``: the DBC, the rate, the counter and the channels."""
+
+    model_config = STRICT
+
+    dbc: Annotated[str, Field(min_length=1, max_length=4000)]
+    rate_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e6)]
+    counter: Name | None = None
+    mark_threshold: FiniteFloat | None = None
+    channels: Annotated[list[ScanChannel], Field(min_length=3, max_length=16)]
+
+    @model_validator(mode="after")
+    def _one_of_each(self) -> ScanTable:
+        roles: list[tuple[str, int | None]] = [(c.role, c.support) for c in self.channels]
+        for want, what in ((("mark", None), "the mark"), (("accel", 1), "support 1's accel"),
+                           (("accel", 2), "support 2's accel")):  # fmt: skip
+            if roles.count(want) != 1:
+                raise ValueError(f"channels: exactly one channel for {what}, "
+                                 f"found {roles.count(want)}")  # fmt: skip
+        return self
+
+
+def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, ScanTable | None]:
+    """The ``[bus]`` table's protocol and, for ``scan``, its checked ``[bus.scan]``."""
+    bus = bus or {}
+    protocol = bus.get("protocol", "v1")
+    if protocol not in PROTOCOLS:
+        raise ConfigError(f"[bus] protocol: {protocol!r}, expected one of "
+                          f"{', '.join(PROTOCOLS)}", source=source)  # fmt: skip
+    if protocol == "v1":
+        return protocol, None
+    scan = bus.get("scan")
+    if not isinstance(scan, dict):
+        raise ConfigError('[bus] protocol = "scan" needs a [bus.scan] table', source=source)
+    return protocol, validate(ScanTable, scan, source, prefix="bus.scan.")

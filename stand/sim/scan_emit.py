@@ -1,0 +1,79 @@
+"""The simulator's scan-stream module (``[nodes] protocol = "scan"``): one simultaneous-
+sampling module, a frame per scan (``drivers/scan_module.dbc``): a 16-bit counter, both
+accelerometers (IEPE, 100 mV/g) and the once-per-revolution sensor (0..5 V) on three
++-10 V, 16-bit inputs.  One clock for all three channels, so no per-node clock effect.
+``[nodes] counter = false`` leaves the counter's bits at 0 and the decoder is told there
+is none (a module that sends none)."""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+from typing import Any
+
+import numpy as np
+
+from stand.drivers.protocol import Frames
+from stand.drivers.scan import mark_wave, scan_frames
+
+VOLTS_PER_COUNT = 10.0 / 32768
+"""The module's inputs: +-10 V on 16 bits."""
+SENSITIVITY_M_S2_PER_V = 9.80665 / 0.1
+"""The accelerometers: 100 mV/g."""
+MARK_HIGH_V = 5.0
+"""The reference sensor's output when the mark is under it."""
+RISE_SAMPLES = 4.0
+"""The mark's edge: a ramp this many samples wide (the sensor behind its filter)."""
+SCAN_ID = 0x300
+"""The module's frame id (``SCAN`` in the DBC; clear of protocol v1's ids)."""
+
+
+def dbc_path() -> str:
+    """The simulated module's DBC, shipped with the drivers."""
+    return str(resources.files("stand.drivers") / "scan_module.dbc")
+
+
+def bus_table(rate_hz: float, counter: bool) -> dict[str, Any]:
+    """The ``[bus]`` table that decodes the simulated module (stored in its run files)."""
+    channels = [
+        {"message": "SCAN", "signal": "ai1", "role": "accel", "support": 1,
+         "scale": SENSITIVITY_M_S2_PER_V},
+        {"message": "SCAN", "signal": "ai2", "role": "accel", "support": 2,
+         "scale": SENSITIVITY_M_S2_PER_V},
+        {"message": "SCAN", "signal": "ai3", "role": "mark", "scale": 1.0},
+    ]  # fmt: skip
+    scan: dict[str, Any] = {"dbc": dbc_path(), "rate_hz": float(rate_hz),
+                            "mark_threshold": MARK_HIGH_V / 2, "channels": channels}  # fmt: skip
+    if counter:
+        scan["counter"] = "counter"
+    return {"protocol": "scan", "scan": scan}
+
+
+def _phase(t: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """The shaft's angle past the mark at times ``t``: interpolated between the edges (the
+    mark at 0, 2 pi, ...), extended by the first and last turns' speed."""
+    if len(edges) < 2:
+        return np.full(len(t), math.pi)  # no edge: the mark never passes
+    k = 2 * math.pi * np.arange(len(edges))
+    out = np.interp(t, edges, k)
+    before, after = t < edges[0], t > edges[-1]
+    w0 = 2 * math.pi / (edges[1] - edges[0])
+    w1 = 2 * math.pi / (edges[-1] - edges[-2])
+    out[before] = (t[before] - edges[0]) * w0
+    out[after] = k[-1] + (t[after] - edges[-1]) * w1
+    return np.asarray(out, dtype=np.float64)
+
+
+def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
+                  counter: bool) -> Frames:  # fmt: skip
+    """The module's frames: each scan at its sample time ``t`` (host time = sample time)."""
+    counts = [np.clip(np.rint(a / SENSITIVITY_M_S2_PER_V / VOLTS_PER_COUNT), -32767, 32767)
+              for a in accel]  # fmt: skip
+    speed = 2 * math.pi / np.median(np.diff(edges)) if len(edges) > 1 else 0.0
+    rise = max(RISE_SAMPLES * speed / rate_hz, 1e-9)
+    mark = np.rint(MARK_HIGH_V * mark_wave(_phase(t, edges), rise) / VOLTS_PER_COUNT)
+    frames = scan_frames(t - t[0] if len(t) else t, (counts[0], counts[1]), mark,
+                         frame_id=SCAN_ID)  # fmt: skip
+    if not counter:
+        frames.data[:, :2] = 0
+    return frames
