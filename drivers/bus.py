@@ -41,7 +41,7 @@ def describe_bus(kwargs: dict[str, Any]) -> str:
     return f"{merged.get('interface', '?')}:{merged.get('channel', '?')}"
 
 
-PRODUCT_KEYS = ("protocol", "scan")
+PRODUCT_KEYS = ("protocol", "scan", "canopen")
 """``[bus]`` keys the product reads itself (:mod:`stand.config.scan`); never python-can's."""
 
 URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")

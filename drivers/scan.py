@@ -17,6 +17,7 @@ per-node streams the measuring path takes, on one clock.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -158,10 +159,24 @@ def _index(layout: ScanLayout, raw_counter: NDArray[np.int64] | None, t: NDArray
     return index[keep], keep, lost, []
 
 
-def _edges(
+def revolutions(edges: NDArray[np.float64]) -> tuple[NDArray[np.int64], int]:
+    """Each edge's revolution number, counting the turns an edge was lost in (a gap in the
+    samples can hide one): the steps between edges in whole median periods; and how many
+    edges are missing."""
+    if len(edges) < 2:
+        return np.arange(len(edges), dtype=np.int64), 0
+    d = np.diff(edges)
+    steps = np.maximum(1, np.rint(d / np.median(d))).astype(np.int64)
+    return np.concatenate(([0], np.cumsum(steps))), int(np.sum(steps - 1))
+
+
+def edges_between(
     v: NDArray[np.float64], index: NDArray[np.int64], threshold: float
 ) -> NDArray[np.float64]:
-    """Rising crossings of ``threshold`` between consecutive samples, as sample positions."""
+    """Rising crossings of ``threshold`` between consecutive samples (``index`` one apart),
+    as sample positions, linearly interpolated."""
+    if len(v) < 2:
+        return np.zeros(0)
     a, b = v[:-1], v[1:]
     hit = (a < threshold) & (b >= threshold) & (np.diff(index) == 1)
     k = np.flatnonzero(hit)
@@ -185,7 +200,8 @@ def scan_streams(frames: Frames, layout: ScanLayout) -> RunStreams:
     threshold = layout.mark_threshold
     if threshold is None:
         threshold = (float(np.min(v)) + float(np.max(v))) / 2 if len(v) else 0.0
-    edges = _edges(v, index, threshold) if len(v) > 1 else np.zeros(0)
+    edges = edges_between(v, index, threshold)
+    rev, missed = revolutions(edges)
     nodes = {}
     for support in (1, 2):
         ch = layout.accel(support)
@@ -196,10 +212,9 @@ def scan_streams(frames: Frames, layout: ScanLayout) -> RunStreams:
             index=index, counts=ch.signal.raw(data).astype(np.int16),
             segment_start=np.zeros(1, np.int64), scale_start=np.zeros(1, np.int64),
             scale_m_s2=np.array([unit]), mark_position=edges - shift,
-            mark_segment=np.zeros(len(edges), np.int32),
-            mark_rev=np.arange(len(edges), dtype=np.int64), frames=len(index),
+            mark_segment=np.zeros(len(edges), np.int32), mark_rev=rev, frames=len(index),
             samples=len(index), invalid_samples=0, lost_frames=lost,
-            duplicate_frames=int(np.count_nonzero(~keep)), status_frames=0, lost_marks=0,
+            duplicate_frames=int(np.count_nonzero(~keep)), status_frames=0, lost_marks=missed,
             segments=1, flags=(), first_t_s=float(t[0]) if len(t) else 0.0,
             last_t_s=float(t[-1]) if len(t) else 0.0,
         )  # fmt: skip
@@ -236,14 +251,15 @@ def mark_wave(phase_rad: NDArray[np.float64], rise_rad: float) -> NDArray[np.flo
     return np.maximum(np.minimum(up, down), wrap)
 
 
-class ScanBuilder:
-    """A live session's frames, kept as they come, decoded as a scan module's on demand:
-    the same face as :class:`stand.drivers.streams.StreamBuilder` (``add``, ``streams``,
-    ``tail``, ``frames``, ``last_block``).  Decoding is all at once and vectorised, so a
-    full pass costs a few milliseconds for a minute at 2 kHz."""
+class WholeBuilder:
+    """A live session's frames, kept as they come and decoded all at once on demand by
+    ``decode`` (a scan module's :func:`scan_streams`, or CANopen's): the face of
+    :class:`stand.drivers.streams.StreamBuilder` (``add``, ``streams``, ``tail``,
+    ``frames``, ``last_block``).  Vectorised, a full pass costs a few milliseconds for a
+    minute at 2 kHz."""
 
-    def __init__(self, layout: ScanLayout) -> None:
-        self.layout = layout
+    def __init__(self, decode: Callable[[Frames], RunStreams]) -> None:
+        self.decode = decode
         self._blocks: list[Frames] = []
         self.frames = 0
         self.last_block = Frames.empty()
@@ -261,9 +277,9 @@ class ScanBuilder:
         return self._blocks[0] if self._blocks else Frames.empty()
 
     def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
-        """The two supports' streams of every frame so far (``strict_status`` is v1's: a
-        module has no STATUS)."""
-        out = scan_streams(self._all(), self.layout)
+        """The two supports' streams of every frame so far (``strict_status`` is v1's: these
+        modules send no STATUS)."""
+        out = self.decode(self._all())
         if release:
             self._blocks, self.frames, self.last_block = [], 0, Frames.empty()
         return out
@@ -271,4 +287,4 @@ class ScanBuilder:
     def tail(self, from_frame: int) -> RunStreams:
         """The streams of the frames from ``from_frame`` on, a run of their own."""
         every = self._all()
-        return scan_streams(every.take(np.arange(max(int(from_frame), 0), len(every))), self.layout)
+        return self.decode(every.take(np.arange(max(int(from_frame), 0), len(every))))

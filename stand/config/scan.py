@@ -37,8 +37,9 @@ from stand.config.schema import validate
 from stand.config.tables import STRICT
 from stand.errors import ConfigError
 
-PROTOCOLS = ("v1", "scan")
-"""``[bus] protocol``: the sensor nodes' protocol v1, or a scan-stream module."""
+PROTOCOLS = ("v1", "scan", "canopen")
+"""``[bus] protocol``: the sensor nodes' protocol v1, a scan-stream module, or CANopen
+modules sampling on SYNC (:mod:`stand.config.canopen`)."""
 Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")]
 
 
@@ -87,8 +88,12 @@ class ScanTable(BaseModel):
         return self
 
 
-def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, ScanTable | None]:
-    """The ``[bus]`` table's protocol and, for ``scan``, its checked ``[bus.scan]``."""
+def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, Any]:
+    """The ``[bus]`` table's protocol and its checked table: ``[bus.scan]``
+    (:class:`ScanTable`), ``[bus.canopen]``
+    (:class:`stand.config.canopen.CanopenTable`), or None for v1."""
+    from stand.config.canopen import CanopenTable
+
     bus = bus or {}
     protocol = bus.get("protocol", "v1")
     if protocol not in PROTOCOLS:
@@ -96,7 +101,9 @@ def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, ScanTabl
                           f"{', '.join(PROTOCOLS)}", source=source)  # fmt: skip
     if protocol == "v1":
         return protocol, None
-    scan = bus.get("scan")
-    if not isinstance(scan, dict):
-        raise ConfigError('[bus] protocol = "scan" needs a [bus.scan] table', source=source)
-    return protocol, validate(ScanTable, scan, source, prefix="bus.scan.")
+    table = bus.get(protocol)
+    if not isinstance(table, dict):
+        raise ConfigError(f"[bus] protocol = {protocol!r} needs a [bus.{protocol}] table",
+                          source=source)  # fmt: skip
+    model = ScanTable if protocol == "scan" else CanopenTable
+    return protocol, validate(model, table, source, prefix=f"bus.{protocol}.")

@@ -170,9 +170,10 @@ class Config(BaseModel):
     @field_validator("bus", mode="before")
     @classmethod
     def _plain_values(cls, bus: Any) -> Any:
-        """A table inside ``[bus]`` only as ``[bus.scan]``: can.Bus takes plain values."""
+        """A table inside ``[bus]`` only as ``[bus.scan]`` or ``[bus.canopen]``: can.Bus
+        takes plain values."""
         for key, value in bus.items() if isinstance(bus, dict) else ():
-            if isinstance(value, dict) and key != "scan":
+            if isinstance(value, dict) and key not in ("scan", "canopen"):
                 raise PydanticCustomError(
                     "bus_value", BUS_VALUE, {"key": key, "got": _shown(value)}
                 )

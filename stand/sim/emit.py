@@ -26,6 +26,7 @@ from stand.drivers import Frames
 from stand.drivers.budget import frames_budget
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.errors import ConfigError
+from stand.sim.canopen_emit import module_frames as canopen_frames
 from stand.sim.physics import (
     SceneSpeed,
     closed_form,
@@ -42,7 +43,10 @@ FULL_SCALE = 32767
 NO_REFERENCE_S = 2.0
 """STATUS flags "no reference edge" after this long without one [s]."""
 _STREAM = {
-    name: i for i, name in enumerate(("noise", "edge_jitter", "lost_frames", "invalid", "bursts"))
+    name: i
+    for i, name in enumerate(
+        ("noise", "edge_jitter", "lost_frames", "invalid", "bursts", "sync_jitter")
+    )
 }
 
 
@@ -262,7 +266,6 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     start = time.perf_counter()
     scene_budget(scene)
     e = scene.effects
-    rate = scene.nodes.rate_hz
     speed, t_start = scene_speed(scene)
     t_end = t_start + scene.run.seconds
     U = unbalance_from_polar(*unbalance_kg_m(scene))
@@ -273,8 +276,8 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
             "run-up from standstill, nonlinear supports or integrated physics",
             key="rotor.shaft",
         )
-    if scene.nodes.protocol == "scan" and e.clock:
-        raise ConfigError("a scan module samples all channels on one clock: no "
+    if scene.nodes.protocol != "v1" and e.clock:
+        raise ConfigError(f"{scene.nodes.protocol}: the modules sample on one clock: no "
                           "[effects.clock] per node", key="effects.clock")  # fmt: skip
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
     offset = per_node(e.clock.offset_s) if e.clock else [0.0, 0.0]
@@ -282,11 +285,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     delay = per_node(e.sensor.delay_s) if e.sensor else [0.0, 0.0]
 
     # --- when each node samples (physics time), and what the sensor sees then
-    times = []
-    for i in range(2):
-        true_rate = rate * (1 + ppm[i] * 1e-6)
-        n = math.floor((scene.run.seconds - offset[i]) * true_rate)
-        times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
+    times = _sample_times(scene, t_start, ppm, offset)
     seen = [t - d for t, d in zip(times, delay, strict=True)]  # a group delay: earlier motion
     a_phys, nfev = _physics(scene, p, speed, U, seen, beam)
 
@@ -298,25 +297,51 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     truth["A_m_s2"] = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]
     )
-    blocks: list[Frames] = []
     accel = []
     for i in range(2):
         a = gain[i] * _sensor_side(scene, i, seen[i], a_phys[i], speed)
         truth[f"node{i + 1}"] = {"t_s": times[i], "accel_m_s2": a}
         accel.append(a)
-        if scene.nodes.protocol == "v1":
-            blocks.append(_node_frames(scene, i, a, times[i], edges, (ppm[i], offset[i])))
-    if scene.nodes.protocol == "scan":  # one module, one clock: node 1's sample times
-        heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
-        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter)
-        blocks.append(_lost(scene, 1, module))
     return Simulation(
-        frames=_on_the_bus(scene, blocks),
+        frames=_on_the_bus(
+            scene, _frames(scene, accel, times, edges, [*zip(ppm, offset, strict=True)])
+        ),
         physics="integrate" if scene.needs_integration else "closed_form",
         nfev=nfev,
         wall_s=time.perf_counter() - start,
         truth=truth,
     )
+
+
+def _sample_times(scene: Scene, t_start: float, ppm: list[float],
+                  offset: list[float]) -> list[FloatArray]:  # fmt: skip
+    """When each node samples (physics time): its clock's rate and offset; CANopen's
+    modules when each SYNC comes (its jitter)."""
+    rate = scene.nodes.rate_hz
+    times = []
+    for i in range(2):
+        true_rate = rate * (1 + ppm[i] * 1e-6)
+        n = math.floor((scene.run.seconds - offset[i]) * true_rate)
+        times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
+    if scene.nodes.protocol == "canopen" and scene.nodes.sync_jitter_s > 0:  # on each SYNC
+        late = _rng(scene, "sync_jitter", 0).normal(0.0, scene.nodes.sync_jitter_s, len(times[0]))
+        times = [t + late[: len(t)] for t in times]
+    return times
+
+
+def _frames(scene: Scene, accel: list[Any], times: list[FloatArray], edges: FloatArray,
+            clocks: list[tuple[float, float]]) -> list[Frames]:  # fmt: skip
+    """What the bus carries of the accelerations the sensors read, by the scene's
+    protocol: two v1 nodes, one scan module, or a SYNC and two CANopen modules."""
+    protocol, rate = scene.nodes.protocol, scene.nodes.rate_hz
+    if protocol == "v1":
+        return [_node_frames(scene, i, accel[i], times[i], edges, clocks[i]) for i in range(2)]
+    heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
+    if protocol == "scan":  # one module, one clock: node 1's sample times
+        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter)
+        return [_lost(scene, 1, module)]
+    lost = lambda node, frames: _lost(scene, node, frames)  # noqa: E731
+    return [canopen_frames(times[0], heard, edges, rate, lost)]  # one SYNC for both
 
 
 def _status_flags(

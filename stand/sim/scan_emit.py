@@ -49,7 +49,7 @@ def bus_table(rate_hz: float, counter: bool) -> dict[str, Any]:
     return {"protocol": "scan", "scan": scan}
 
 
-def _phase(t: np.ndarray, edges: np.ndarray) -> np.ndarray:
+def shaft_phase(t: np.ndarray, edges: np.ndarray) -> np.ndarray:
     """The shaft's angle past the mark at times ``t``: interpolated between the edges (the
     mark at 0, 2 pi, ...), extended by the first and last turns' speed."""
     if len(edges) < 2:
@@ -71,7 +71,7 @@ def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rat
               for a in accel]  # fmt: skip
     speed = 2 * math.pi / np.median(np.diff(edges)) if len(edges) > 1 else 0.0
     rise = max(RISE_SAMPLES * speed / rate_hz, 1e-9)
-    mark = np.rint(MARK_HIGH_V * mark_wave(_phase(t, edges), rise) / VOLTS_PER_COUNT)
+    mark = np.rint(MARK_HIGH_V * mark_wave(shaft_phase(t, edges), rise) / VOLTS_PER_COUNT)
     frames = scan_frames(t - t[0] if len(t) else t, (counts[0], counts[1]), mark,
                          frame_id=SCAN_ID)  # fmt: skip
     if not counter:

@@ -44,6 +44,7 @@ from stand.config.schema import (
 from stand.core import StandParameters
 from stand.core.beam import beam_rotor, distributed_unbalance, node_at
 from stand.errors import ConfigError
+from stand.sim.canopen_emit import bus_table as canopen_bus_table
 from stand.sim.scan_emit import bus_table
 from stand.sim.tables import (
     NODES as NODES,  # re-exported: the simulator's modules read it here
@@ -80,6 +81,8 @@ class Scene(BaseModel):
         bus = self.bus
         if self.nodes.protocol == "scan":
             bus = {**(bus or {}), **bus_table(self.nodes.rate_hz, self.nodes.counter)}
+        elif self.nodes.protocol == "canopen":
+            bus = {**(bus or {}), **canopen_bus_table(self.nodes.rate_hz)}
         return Config(
             stand=self.stand,
             rotor=self.rotor,

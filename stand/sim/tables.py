@@ -102,10 +102,13 @@ class NodesTable(_Table):
     rate_hz: Annotated[int, Field(gt=0, lt=65536)] = 4000
     scale_um_s2: Annotated[int, Field(gt=0, lt=65536)] = 100
     first_seq: Annotated[int, Field(ge=0, lt=65536)] = 0
-    protocol: Literal["v1", "scan"] = "v1"
-    """``v1``: two sensor nodes; ``scan``: one scan-stream module (:mod:`stand.sim.scan_emit`)."""
+    protocol: Literal["v1", "scan", "canopen"] = "v1"
+    """``v1``: two sensor nodes; ``scan``: one scan-stream module (:mod:`stand.sim.scan_emit`);
+    ``canopen``: a SYNC producer and two analog input modules (:mod:`stand.sim.canopen_emit`)."""
     counter: bool = True
     """``scan`` only: whether the module sends its scan counter."""
+    sync_jitter_s: Annotated[float, Field(ge=0.0, le=1e-3)] = 0.0
+    """``canopen`` only: the SYNC's timing jitter (rms): the modules sample when it comes."""
 
 
 class Noise(_Table):

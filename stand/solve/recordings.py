@@ -26,6 +26,7 @@ from typing import Any
 from stand.config import parse_matrix
 from stand.config.scan import bus_protocol
 from stand.core import StandParameters
+from stand.drivers.canopen_stream import load_pdo_layout, pdo_streams
 from stand.drivers.recording import (
     JOB_ATTR,
     MATRIX_ATTR,
@@ -139,16 +140,18 @@ def solve_recording(
 
 def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> RunStreams:
     """The run's streams as its config's ``[bus] protocol`` reads its frames: protocol v1's
-    (``streams``, already rebuilt), or a scan-stream module's (:mod:`stand.drivers.scan`,
-    its DBC relative to the config's folder)."""
-    _, scan = bus_protocol(cfg.bus, source)
-    if scan is None:
+    (``streams``, already rebuilt), a scan-stream module's (:mod:`stand.drivers.scan`) or
+    CANopen modules' (:mod:`stand.drivers.canopen_stream`), the DBC or EDS relative to
+    the config's folder."""
+    protocol, table = bus_protocol(cfg.bus, source)
+    if table is None:
         return streams
     base = Path(source.removesuffix(" (stored)")).parent
-    layout = load_layout(scan, base, source)
     with named_errors(path):
-        rec = read_recording(path)
-    return scan_streams(rec.frames, layout)
+        frames = read_recording(path).frames
+    if protocol == "scan":
+        return scan_streams(frames, load_layout(table, base, source))
+    return pdo_streams(frames, load_pdo_layout(table, base, source))
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:

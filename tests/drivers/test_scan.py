@@ -10,37 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from protocols import holds_the_demo, short_scene, solve_json
 
 from stand.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "examples" / "scan-stand.toml"
-
-
-def _scene(tmp_path: Path, **nodes: object) -> Path:
-    """The shipped demo-scan scene with ``[nodes]`` keys changed (and 2 s long)."""
-    from stand.sim import shipped_scenes
-
-    text = Path(str(shipped_scenes()["demo-scan"])).read_text()
-    text = text.replace("seconds = 8.0", "seconds = 2.0")
-    for key, value in nodes.items():
-        text = text.replace("[nodes]\n", f"[nodes]\n{key} = {json.dumps(value)}\n")
-    path = tmp_path / "scene.toml"
-    path.write_text(text)
-    return path
-
-
-def _solve(run: Path, capsys: pytest.CaptureFixture[str], *extra: str) -> dict:
-    assert main(["solve", str(run), "--json", *extra]) == 0
-    return json.loads(capsys.readouterr().out)
-
-
-def _holds_the_scene(out: dict) -> None:
-    """The demo's 5000 g mm at 30 deg and 3000 g mm at 200 deg inside each 95 % circle."""
-    for p, (g, deg) in zip(out["planes"], ((5000.0, 30.0), (3000.0, 200.0)), strict=True):
-        U = g * np.exp(-1j * math.radians(deg))
-        got = p["unbalance_g_mm"] * np.exp(-1j * math.radians(p["angle_deg"]))
-        assert abs(got - U) <= p["uncertainty_g_mm"], (p, g, deg)
 
 
 def test_the_demo_through_a_scan_module_solves_to_its_unbalance(
@@ -51,9 +26,9 @@ def test_the_demo_through_a_scan_module_solves_to_its_unbalance(
     run = tmp_path / "s.h5"
     assert main(["simulate", "demo-scan", "--out", str(run)]) == 0
     capsys.readouterr()
-    stored = _solve(run, capsys)
-    _holds_the_scene(stored)
-    given = _solve(run, capsys, "--config", str(CONFIG))
+    stored = solve_json(run, capsys)
+    holds_the_demo(stored)
+    given = solve_json(run, capsys, "--config", str(CONFIG))
     assert given["planes"] == stored["planes"]
 
 
@@ -69,21 +44,22 @@ def _drop(run: Path, out: Path, keep: np.ndarray) -> None:
 def test_a_lost_frame_with_a_counter_is_a_lost_sample_in_place(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """1 % of the frames dropped at random and a burst of 50: the counter keeps every later
-    sample in its place, so the answer stays inside its circle and the angles move less
-    than 0.05 deg from the complete recording's."""
+    """1 % of the frames dropped at random and a burst of 300 (0.15 s: two marks lost with
+    them): the counter keeps every later sample in its place and the turns are counted
+    across the gap, so the answer stays inside its circle and the angles move less than
+    0.05 deg from the complete recording's."""
     run, cut = tmp_path / "s.h5", tmp_path / "cut.h5"
-    assert main(["simulate", str(_scene(tmp_path)), "--out", str(run)]) == 0
+    assert main(["simulate", str(short_scene(tmp_path, "demo-scan")), "--out", str(run)]) == 0
     capsys.readouterr()
-    whole = _solve(run, capsys)
+    whole = solve_json(run, capsys)
     from stand.drivers import read_recording
 
     n = len(read_recording(str(run)).frames)
     keep = np.random.default_rng(3).random(n) >= 0.01
-    keep[1000:1050] = False
+    keep[1000:1300] = False
     _drop(run, cut, keep)
-    lost = _solve(cut, capsys)
-    _holds_the_scene(lost)
+    lost = solve_json(cut, capsys)
+    holds_the_demo(lost)
     for a, b in zip(whole["planes"], lost["planes"], strict=True):
         assert abs((a["angle_deg"] - b["angle_deg"] + 180) % 360 - 180) < 0.05
     from stand.config import load_config
@@ -100,19 +76,24 @@ def test_without_a_counter_a_gap_flags_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """A module that sends no counter: complete, no flag; with frames lost, the receive
-    times show the gap and the run says its phase cannot be trusted."""
+    times show the gap and the run is flagged."""
     run, cut = tmp_path / "s.h5", tmp_path / "cut.h5"
-    assert main(["simulate", str(_scene(tmp_path, counter=False)), "--out", str(run)]) == 0
+    assert (
+        main(
+            ["simulate", str(short_scene(tmp_path, "demo-scan", counter=False)), "--out", str(run)]
+        )
+        == 0
+    )
     capsys.readouterr()
-    whole = _solve(run, capsys)
+    whole = solve_json(run, capsys)
     assert not [w for w in whole["warnings"] if "without a counter" in w]
-    _holds_the_scene(whole)
+    holds_the_demo(whole)
     from stand.drivers import read_recording
 
     keep = np.ones(len(read_recording(str(run)).frames), bool)
     keep[1500:1503] = False
     _drop(run, cut, keep)
-    flagged = _solve(cut, capsys)
+    flagged = solve_json(cut, capsys)
     said = [w for w in flagged["warnings"] if "without a counter" in w]
     assert len(said) == 1 and "1 gap(s)" in said[0], flagged["warnings"]
 
@@ -158,7 +139,7 @@ def test_bad_mappings_are_one_line(
     edit: tuple[str, str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     run = tmp_path / "s.h5"
-    assert main(["simulate", str(_scene(tmp_path)), "--out", str(run)]) == 0
+    assert main(["simulate", str(short_scene(tmp_path, "demo-scan")), "--out", str(run)]) == 0
     capsys.readouterr()
     text = CONFIG.read_text()
     assert edit[0] in text
@@ -182,10 +163,10 @@ def test_a_live_balance_reads_the_module(
     argv = ["balance", "--scene", "demo-scan", "--out", str(run), "--json", "--quiet"]
     assert main(argv) == 0
     live = json.loads(capsys.readouterr().out)
-    _holds_the_scene(live)
+    holds_the_demo(live)
     assert live["stopped_by"] == "precision"
-    again = _solve(run, capsys)
-    _holds_the_scene(again)
+    again = solve_json(run, capsys)
+    holds_the_demo(again)
     v1 = str(ROOT / "examples" / "demo-stand.toml")
     assert main([*argv[:3], "--config", v1, "--out", str(tmp_path / "c.h5")]) == 2
     err = capsys.readouterr().err
@@ -201,7 +182,7 @@ def test_a_run_the_mapping_does_not_fit_is_one_line(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sent nothing" in err, err
     run = tmp_path / "s.h5"
-    assert main(["simulate", str(_scene(tmp_path)), "--out", str(run)]) == 0
+    assert main(["simulate", str(short_scene(tmp_path, "demo-scan")), "--out", str(run)]) == 0
     capsys.readouterr()
     high = tmp_path / "high.toml"
     high.write_text(CONFIG.read_text().replace("mark_threshold = 2.5", "mark_threshold = 9.5")

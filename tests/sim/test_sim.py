@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import copy
 import math
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -283,12 +282,12 @@ def test_scene_errors_name_the_file_and_key(tmp_path: Any) -> None:
 def test_shipped_scenes_run_and_give_their_phasors_back(name: str) -> None:
     sc, p, _ = load_scene(name)
     sim = simulate(sc, p)
-    if sc.nodes.protocol == "scan":  # one module's frames: its own decoder
-        from stand.config.scan import bus_protocol
-        from stand.drivers.scan import load_layout, scan_streams
+    if sc.nodes.protocol != "v1":  # a scan module's or CANopen's frames: their decoder
+        from stand.live.protocol import decoder, layout_of
 
-        scan = bus_protocol(sc.config().bus, name)[1]
-        r = scan_streams(sim.frames, load_layout(scan, Path("."), name))
+        layout = layout_of(sc.config(), None)
+        assert layout is not None
+        r = decoder(layout)(sim.frames)
         assert sorted(r.nodes) == [1, 2] and r.unknown_frames == 0
         for i in (1, 2):
             got = fit(r.nodes[i], sc.stand.reference_angle_deg)[1]

@@ -1,0 +1,74 @@
+"""``[bus] protocol = "canopen"`` and the ``[bus.canopen]`` table: one CANopen analog input
+module per support sampling on SYNC (the decoder: :mod:`stand.drivers.canopen_stream`).
+
+::
+
+    [bus]
+    interface = "socketcan"
+    channel = "can0"
+    protocol = "canopen"
+
+    [bus.canopen]
+    rate_hz = 2000.0               # the SYNC rate: the sample rate
+    sync_id = 0x80                 # the SYNC's COB-ID (CiA 301's default)
+    mark_threshold = 2.5           # the mark input's threshold [V] (default: mid-range)
+
+    [[bus.canopen.nodes]]
+    support = 1
+    node_id = 5
+    eds = "module.eds"             # relative to this file's folder
+    accel = "0x6401:1"             # the accelerometer's input, mapped in TPDO1
+    mark = "0x6401:2"              # the reference sensor's input, mapped in TPDO1
+    scale = 0.0299                 # a count -> m/s^2
+    mark_scale = 0.000305          # a count -> the threshold's unit (V)
+    delay_s = 0.0                  # the input's known constant delay [s]
+    mark_delay_s = 0.0
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
+
+from stand.config.tables import STRICT
+
+Object = Annotated[str, Field(pattern=r"^0x[0-9A-Fa-f]{4}:(0x[0-9A-Fa-f]{1,2}|[0-9]{1,3})$")]
+"""``0xIIII:S``: an object's index and sub-index."""
+Delay = Annotated[FiniteFloat, Field(ge=-0.05, le=0.05)]
+Scale = Annotated[FiniteFloat, Field(gt=0.0, lt=1e9)]
+
+
+class CanopenNode(BaseModel):
+    """``[[bus.canopen.nodes]]``: one support's module."""
+
+    model_config = STRICT
+
+    support: Literal[1, 2]
+    node_id: Annotated[int, Field(ge=1, le=127)]
+    eds: Annotated[str, Field(min_length=1, max_length=4000)]
+    accel: Object
+    mark: Object
+    scale: Scale
+    mark_scale: Scale = 1.0
+    delay_s: Delay = 0.0
+    mark_delay_s: Delay = 0.0
+
+
+class CanopenTable(BaseModel):
+    """``[bus.canopen]``: the SYNC, the two modules."""
+
+    model_config = STRICT
+
+    rate_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e5)]
+    sync_id: Annotated[int, Field(ge=1, le=0x7FF)] = 0x80
+    mark_threshold: FiniteFloat | None = None
+    nodes: Annotated[list[CanopenNode], Field(min_length=2, max_length=2)]
+
+    @model_validator(mode="after")
+    def _one_per_support(self) -> CanopenTable:
+        if sorted(n.support for n in self.nodes) != [1, 2]:
+            raise ValueError("nodes: one module for support 1 and one for support 2")
+        if self.nodes[0].node_id == self.nodes[1].node_id:
+            raise ValueError("nodes: two modules cannot share a node id")
+        return self
