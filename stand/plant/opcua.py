@@ -106,14 +106,14 @@ class ResultServer:
         await declare_result_types(server, ns)
         await server.load_data_type_definitions()
         await declare_result_objects(server, ns)
+        maybe = (ua.VariantType.ExtensionObject, ua.VariantType.Null)  # null: none given
         calls = {
             "GetLatestResult": guarded("GetLatestResult", [ua.VariantType.Int32], self._latest),
             "GetResultById": guarded("GetResultById", [ua.VariantType.String,
                                      ua.VariantType.Int32], self._by_id),
             "GetResultIdListFiltered": guarded(
                 "GetResultIdListFiltered",
-                [ua.VariantType.ExtensionObject, (ua.VariantType.ExtensionObject,
-                 ua.VariantType.Null), ua.VariantType.UInt32, ua.VariantType.Int32],
+                [maybe, maybe, ua.VariantType.UInt32, ua.VariantType.Int32],
                 self._id_list),
         }  # fmt: skip
         machine = await build_machine(server, ns, self.stand_id, calls)

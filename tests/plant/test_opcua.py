@@ -183,6 +183,11 @@ async def _calls(ns: dict[str, int], rm: Any, run_id: str, event: Any, url: str)
         timeout,
     )  # fmt: skip
     assert listed == [0, [run_id], 0]
+    unfiltered = await rm.call_method(  # a null Filter and OrderedBy: none given, every one
+        await method("GetResultIdListFiltered"), ua.Variant(None, ua.VariantType.Null),
+        ua.Variant(None, ua.VariantType.Null), ua.Variant(1, ua.VariantType.UInt32), timeout,
+    )  # fmt: skip
+    assert unfiltered == [0, [run_id], 0]
 
 
 def _client_certificate(folder: Path) -> tuple[Path, Path]:
