@@ -33,6 +33,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
+from stand.config.canopen import CanopenTable
 from stand.config.schema import validate
 from stand.config.tables import STRICT
 from stand.errors import ConfigError
@@ -92,8 +93,6 @@ def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, Any]:
     """The ``[bus]`` table's protocol and its checked table: ``[bus.scan]``
     (:class:`ScanTable`), ``[bus.canopen]``
     (:class:`stand.config.canopen.CanopenTable`), or None for v1."""
-    from stand.config.canopen import CanopenTable
-
     bus = bus or {}
     protocol = bus.get("protocol", "v1")
     if protocol not in PROTOCOLS:
