@@ -201,15 +201,16 @@ def _run_dict(r: Any, planes_: list[dict[str, Any]]) -> dict[str, Any]:
 def latest(
     archive: Archive, stand: str | None = None, run_id: int | None = None
 ) -> dict[str, Any] | None:
-    """The latest run in an open archive (of one stand, or of any), or the run ``run_id``
-    (of that stand), as :func:`history` gives it, with ``initial``, the planes of the run
-    it checks (its own when it checks none), and ``result``, its whole JSON form; None
-    when there is none."""
+    """The latest production run in an open archive (of one stand, or of any), or the
+    production run ``run_id`` (of that stand), as :func:`history` gives it, with
+    ``initial``, the planes of the run it checks (its own when it checks none), and
+    ``result``, its whole JSON form; None when there is none.  A tooling's index runs are
+    no results (kind ``tooling``)."""
 
     import sqlalchemy as sa
 
     with archive.transaction() as conn:
-        q = sa.select(runs)
+        q = sa.select(runs).where(runs.c.kind == "production")
         if stand is not None:
             q = q.where(runs.c.stand_id == stand)
         if run_id is not None:
@@ -229,12 +230,12 @@ def latest(
 
 
 def newest_ids(archive: Archive, stand: str | None = None, limit: int | None = None) -> list[int]:
-    """The ids of an open archive's runs (of one stand, or of any), newest first; at most
-    ``limit`` of them."""
+    """The ids of an open archive's production runs (of one stand, or of any), newest
+    first; at most ``limit`` of them."""
     import sqlalchemy as sa
 
     with archive.transaction() as conn:
-        q = sa.select(runs.c.id)
+        q = sa.select(runs.c.id).where(runs.c.kind == "production")
         if stand is not None:
             q = q.where(runs.c.stand_id == stand)
         q = q.order_by(runs.c.id.desc())
@@ -244,11 +245,12 @@ def newest_ids(archive: Archive, stand: str | None = None, limit: int | None = N
 
 
 def latest_id(archive: Archive, stand: str | None = None) -> int | None:
-    """The id of the latest run in an open archive (a cheap poll: anything new?)."""
+    """The id of the latest production run in an open archive (a cheap poll: anything
+    new?)."""
     import sqlalchemy as sa
 
     with archive.transaction() as conn:
-        q = sa.select(sa.func.max(runs.c.id))
+        q = sa.select(sa.func.max(runs.c.id)).where(runs.c.kind == "production")
         if stand is not None:
             q = q.where(runs.c.stand_id == stand)
         found = conn.execute(q).scalar()

@@ -100,9 +100,9 @@ def test_the_balls_mass_keeps_mass_and_first_moment() -> None:
 @given(
     st.integers(1, 2),
     st.floats(60.0, 300.0),
-    st.floats(0.0, 2e-3),
+    st.floats(0.0, 2e-3, allow_subnormal=False),
     st.floats(0.0, 360.0),
-    st.floats(0.0, 2e-3),
+    st.floats(0.0, 2e-3, allow_subnormal=False),
     st.floats(0.0, 360.0),
 )
 def test_the_balanced_state_holds_the_race_plane_still(
@@ -110,14 +110,15 @@ def test_the_balanced_state_holds_the_race_plane_still(
 ) -> None:
     """Above the second mode, the balls' unbalance put on the model (with their mass)
     leaves the race plane's motion below 1e-9 of what the rotor alone makes there, while
-    within capacity; the two balls' unbalances sum to U_b."""
+    within capacity; the two balls' unbalances sum to U_b.  (Below 1e-30 m the motion is
+    no motion: hypothesis found 2e-313 kg m, whose motion is a denormal.)"""
     q = with_balls(DAMPED, plane, 2 * 0.05)
     U = np.array([cmath.rect(u1, -math.radians(a1)), cmath.rect(u2, -math.radians(a2))])
     b = balanced(q, plane, U, w, balls=2, ball_kg=0.05, radius_m=0.05)
     alone = abs(_x_at_planes(q, w, U)[plane - 1])
     if b.capacity_ratio <= 1 and alone > 0:
         left = abs(_x_at_planes(q, w, np.array(b.residual_kg_m))[plane - 1])
-        assert left <= 1e-9 * alone
+        assert left <= 1e-9 * alone + 1e-30
         balls = sum(0.05 * 0.05 * cmath.exp(-1j * math.radians(t)) for t in b.ball_angles_deg)
         assert abs(balls - b.balls_kg_m) <= 1e-12
 

@@ -360,3 +360,28 @@ def test_a_guarded_method_answers_each_bad_call_with_its_status_code(
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == len(cases) + 1 and all(ln.startswith("stand opcua: ") for ln in lines)
     assert "Traceback" not in "\n".join(lines)
+
+
+def test_a_toolings_index_runs_are_no_results(tmp_path: Path, demo_run: Path) -> None:
+    """What the server serves (latest, by id, the id list) leaves out runs marked as a
+    tooling's index runs: they are no production results."""
+    import dataclasses
+    import hashlib
+
+    from stand.archive import Archive, rows
+    from stand.archive.query import latest, latest_id, newest_ids
+    from stand.solve import solve_recording
+
+    r = solve_recording(str(demo_run))
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    with Archive(url) as archive:
+        ids = []
+        for k in range(2):
+            prov = dataclasses.replace(r.provenance, run_file=f"t/{k}.h5")
+            digest = hashlib.sha256(prov.run_file.encode()).hexdigest()
+            ids.append(archive.add(*rows(dataclasses.replace(r, provenance=prov), digest, None)))
+        assert archive.mark_tooling([hashlib.sha256(b"t/1.h5").hexdigest()]) == [ids[1]]
+        assert latest_id(archive) == ids[0] and newest_ids(archive) == [ids[0]]
+        got = latest(archive)
+        assert got is not None and got["id"] == ids[0]
+        assert latest(archive, run_id=ids[1]) is None
