@@ -24,9 +24,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.drivers.node_stream import NodeStream
 from stand.drivers.protocol import FLAG_EXTENDED, Frames
-from stand.drivers.scan import Signal, edges_between, revolutions
+from stand.drivers.scan import Signal, mark_edges, one_clock_stream
 from stand.drivers.streams import RunStreams
 from stand.errors import ConfigError
 
@@ -152,26 +151,15 @@ def pdo_streams(frames: Frames, layout: PdoLayout) -> RunStreams:
             warn.append(Diagnostic("tpdo_late", f"node {n.node_id}: {moved} TPDO(s) came after "
                                    f"the next SYNC (put back on their own), {dropped} a second "
                                    "on one SYNC (dropped)", float(moved + dropped)))  # fmt: skip
-        span = int(index[-1] - index[0] + 1) if len(index) else 0
-        v = (n.mark.raw(data) * n.mark_scale).astype(np.float64)
-        threshold = layout.mark_threshold
-        if threshold is None:
-            threshold = (float(np.min(v)) + float(np.max(v))) / 2 if len(v) else 0.0
-        edges = edges_between(v, index, threshold)
-        rev, missed = revolutions(edges)
-        shift = (n.mark_delay_s - n.accel_delay_s) * layout.rate_hz
-        nodes[n.support] = NodeStream(
-            node=n.support, rate_hz=layout.rate_hz, scale_um_s2=n.accel_scale * 1e6,
-            index=index, counts=n.accel.raw(data).astype(np.int16),
-            segment_start=np.zeros(1, np.int64), scale_start=np.zeros(1, np.int64),
-            scale_m_s2=np.array([n.accel_scale]), mark_position=edges - shift,
-            mark_segment=np.zeros(len(edges), np.int32), mark_rev=rev, frames=len(index),
-            samples=len(index), invalid_samples=0, lost_frames=span - len(index),
-            duplicate_frames=dropped, status_frames=0, lost_marks=missed, segments=1, flags=(),
-            first_t_s=float(t[0]) if len(t) else 0.0, last_t_s=float(t[-1]) if len(t) else 0.0,
-        )  # fmt: skip
         if not len(index):
-            del nodes[n.support]
+            continue  # nothing from this module: the measuring path says so
+        v = (n.mark.raw(data) * n.mark_scale).astype(np.float64)
+        shift = (n.mark_delay_s - n.accel_delay_s) * layout.rate_hz
+        lost = int(index[-1] - index[0] + 1) - len(index)
+        nodes[n.support] = one_clock_stream(
+            n.support, layout.rate_hz, index, n.accel.raw(data), n.accel_scale,
+            mark_edges(v, index, layout.mark_threshold), shift, t, lost, dropped,
+        )  # fmt: skip
     span_s = float(frames.t_s[-1] - frames.t_s[0]) if len(frames) else 0.0
     return RunStreams(nodes, len(frames), int(np.count_nonzero(~known)), 0, (), span_s,
                       tuple(warn))  # fmt: skip

@@ -183,6 +183,47 @@ def edges_between(
     return index[k] + (threshold - a[k]) / (b[k] - a[k])
 
 
+@dataclass(frozen=True)
+class Marks:
+    """A mark channel's edges as sample positions, their revolution numbers, and how many
+    edges the gaps hid."""
+
+    position: NDArray[np.float64]
+    rev: NDArray[np.int64]
+    missed: int
+
+
+def mark_edges(v: NDArray[np.float64], index: NDArray[np.int64], threshold: float | None) -> Marks:
+    """The rising crossings of an analog mark channel ``v`` (``threshold`` None: its
+    mid-range), counted in turns across gaps."""
+    if threshold is None:
+        threshold = (float(np.min(v)) + float(np.max(v))) / 2 if len(v) else 0.0
+    edges = edges_between(v, index, threshold)
+    rev, missed = revolutions(edges)
+    return Marks(edges, rev, missed)
+
+
+def one_clock_stream(
+    support: int, rate_hz: float, index: NDArray[np.int64], counts: NDArray[np.int64],
+    unit_m_s2: float, marks: Marks, shift: float, t: NDArray[np.float64], lost: int,
+    duplicates: int,
+) -> NodeStream:  # fmt: skip
+    """One support's stream when its samples and the mark's share one clock and one index:
+    a count is ``unit_m_s2``; the edges moved back by ``shift`` samples (the channels'
+    delay difference)."""
+    return NodeStream(
+        node=support, rate_hz=rate_hz, scale_um_s2=unit_m_s2 * 1e6, index=index,
+        counts=counts.astype(np.int16), segment_start=np.zeros(1, np.int64),
+        scale_start=np.zeros(1, np.int64), scale_m_s2=np.array([unit_m_s2]),
+        mark_position=marks.position - shift,
+        mark_segment=np.zeros(len(marks.position), np.int32), mark_rev=marks.rev,
+        frames=len(index), samples=len(index), invalid_samples=0, lost_frames=lost,
+        duplicate_frames=duplicates, status_frames=0, lost_marks=marks.missed, segments=1,
+        flags=(), first_t_s=float(t[0]) if len(t) else 0.0,
+        last_t_s=float(t[-1]) if len(t) else 0.0,
+    )  # fmt: skip
+
+
 def scan_streams(frames: Frames, layout: ScanLayout) -> RunStreams:
     """The two supports' streams of a scan-stream recording (frames in arrival order)."""
     sig0 = layout.channels[0].signal
@@ -197,26 +238,14 @@ def scan_streams(frames: Frames, layout: ScanLayout) -> RunStreams:
     data, t = data[keep], t[keep]
     mark = layout.mark
     v = (mark.signal.raw(data) * mark.signal.factor + mark.signal.offset).astype(np.float64)
-    threshold = layout.mark_threshold
-    if threshold is None:
-        threshold = (float(np.min(v)) + float(np.max(v))) / 2 if len(v) else 0.0
-    edges = edges_between(v, index, threshold)
-    rev, missed = revolutions(edges)
+    marks = mark_edges(v, index, layout.mark_threshold)
     nodes = {}
     for support in (1, 2):
         ch = layout.accel(support)
         shift = (mark.delay_s - ch.delay_s) * layout.rate_hz
-        unit = ch.signal.factor * ch.scale
-        nodes[support] = NodeStream(
-            node=support, rate_hz=layout.rate_hz, scale_um_s2=unit * 1e6,
-            index=index, counts=ch.signal.raw(data).astype(np.int16),
-            segment_start=np.zeros(1, np.int64), scale_start=np.zeros(1, np.int64),
-            scale_m_s2=np.array([unit]), mark_position=edges - shift,
-            mark_segment=np.zeros(len(edges), np.int32), mark_rev=rev, frames=len(index),
-            samples=len(index), invalid_samples=0, lost_frames=lost,
-            duplicate_frames=int(np.count_nonzero(~keep)), status_frames=0, lost_marks=missed,
-            segments=1, flags=(), first_t_s=float(t[0]) if len(t) else 0.0,
-            last_t_s=float(t[-1]) if len(t) else 0.0,
+        nodes[support] = one_clock_stream(
+            support, layout.rate_hz, index, ch.signal.raw(data), ch.signal.factor * ch.scale,
+            marks, shift, t, lost, int(np.count_nonzero(~keep)),
         )  # fmt: skip
     return RunStreams(nodes, len(frames), int(np.count_nonzero(~mine)), 0, (), span,
                       tuple(warn))  # fmt: skip

@@ -80,12 +80,17 @@ IN_CHUNK = 500
 """Runs asked for at a time in an ``IN (...)`` list (databases bound its length)."""
 
 
+def _row_columns() -> list[Any]:
+    """A run's columns but the result's JSON (the listings never need it)."""
+    return [c for c in runs.c if c.name != "result_json"]
+
+
 def select_runs(conn: Any, f: Filters) -> list[Any]:
     """The runs that match (every column but the result's JSON), oldest first; with a
     limit, the newest that many."""
     import sqlalchemy as sa
 
-    cols: list[Any] = [c for c in runs.c if c.name != "result_json"]
+    cols: list[Any] = _row_columns()
     q = sa.select(*cols)
     if f.revision is not None:
         rid = revision_id_in(conn, f.revision)
@@ -106,7 +111,7 @@ def runs_by_id(conn: Any, ids: list[int]) -> list[Any]:
     order; an id not in the archive is left out."""
     import sqlalchemy as sa
 
-    cols = [c for c in runs.c if c.name != "result_json"]
+    cols = _row_columns()
     url, out = shown_url(conn), []
     for part in chunks(sorted(set(ids))):
         q = sa.select(*cols).where(runs.c.id.in_(part)).order_by(runs.c.id)

@@ -37,7 +37,6 @@ from stand.errors import (
     StandError,
     UsageError,
 )
-from stand.live.protocol import builder_for, layout_of
 from stand.live.session import LiveSession
 from stand.measuring.measure import MIN_REVS
 from stand.sim import load_scene, simulate, with_masses
@@ -50,6 +49,7 @@ from stand.solve.pipeline import (
     measure_streams,
     remeasure_streams,
 )
+from stand.solve.protocols import builder_for, layout_of
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
 

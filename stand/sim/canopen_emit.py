@@ -8,20 +8,17 @@ are the scan module's (+-10 V on 16 bits, 100 mV/g, the mark 0..5 V:
 
 from __future__ import annotations
 
-import math
 from importlib import resources
 from typing import Any
 
 import numpy as np
 
 from stand.drivers.protocol import Frames
-from stand.drivers.scan import mark_wave
 from stand.sim.scan_emit import (
     MARK_HIGH_V,
-    RISE_SAMPLES,
     SENSITIVITY_M_S2_PER_V,
     VOLTS_PER_COUNT,
-    shaft_phase,
+    input_counts,
 )
 
 SYNC_ID = 0x80
@@ -55,12 +52,9 @@ def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rat
     """The SYNCs at the sample times ``t`` and each module's TPDO after each; ``lost(node,
     frames)`` takes out the frames the bus loses."""
     t0 = t[0] if len(t) else 0.0
-    speed = 2 * math.pi / np.median(np.diff(edges)) if len(edges) > 1 else 0.0
-    rise = max(RISE_SAMPLES * speed / rate_hz, 1e-9)
-    mark = np.rint(MARK_HIGH_V * mark_wave(shaft_phase(t, edges), rise) / VOLTS_PER_COUNT)
+    inputs, mark = input_counts(t, accel, edges, rate_hz)
     blocks = [Frames.build(t - t0, SYNC_ID, np.zeros((len(t), 8), np.uint8), dlc=0)]
-    for k, (node, a) in enumerate(zip(NODE_IDS, accel, strict=True)):
-        counts = np.clip(np.rint(a / SENSITIVITY_M_S2_PER_V / VOLTS_PER_COUNT), -32767, 32767)
+    for k, (node, counts) in enumerate(zip(NODE_IDS, inputs, strict=True)):
         data = np.zeros((len(t), 8), np.uint8)
         word = (counts.astype(np.int64) & 0xFFFF) | ((mark.astype(np.int64) & 0xFFFF) << 16)
         data[:, :4] = word.astype("<u4").view(np.uint8).reshape(-1, 4)

@@ -64,14 +64,23 @@ def shaft_phase(t: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return np.asarray(out, dtype=np.float64)
 
 
-def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
-                  counter: bool) -> Frames:  # fmt: skip
-    """The module's frames: each scan at its sample time ``t`` (host time = sample time)."""
+def input_counts(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float
+                 ) -> tuple[list[np.ndarray], np.ndarray]:  # fmt: skip
+    """What the module's inputs read at the sample times ``t``, in counts: each
+    accelerometer's (IEPE, 100 mV/g) and the reference sensor's (0..5 V, its edge a ramp
+    :data:`RISE_SAMPLES` wide)."""
     counts = [np.clip(np.rint(a / SENSITIVITY_M_S2_PER_V / VOLTS_PER_COUNT), -32767, 32767)
               for a in accel]  # fmt: skip
     speed = 2 * math.pi / np.median(np.diff(edges)) if len(edges) > 1 else 0.0
     rise = max(RISE_SAMPLES * speed / rate_hz, 1e-9)
     mark = np.rint(MARK_HIGH_V * mark_wave(shaft_phase(t, edges), rise) / VOLTS_PER_COUNT)
+    return counts, mark
+
+
+def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
+                  counter: bool) -> Frames:  # fmt: skip
+    """The module's frames: each scan at its sample time ``t`` (host time = sample time)."""
+    counts, mark = input_counts(t, accel, edges, rate_hz)
     frames = scan_frames(t - t[0] if len(t) else t, (counts[0], counts[1]), mark,
                          frame_id=SCAN_ID)  # fmt: skip
     if not counter:

@@ -20,13 +20,10 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 from stand.config import parse_matrix
-from stand.config.scan import bus_protocol
 from stand.core import StandParameters
-from stand.drivers.canopen_stream import load_pdo_layout, pdo_streams
 from stand.drivers.recording import (
     JOB_ATTR,
     MATRIX_ATTR,
@@ -35,7 +32,6 @@ from stand.drivers.recording import (
     read_recording,
     read_streams,
 )
-from stand.drivers.scan import load_layout, scan_streams
 from stand.drivers.streams import RunStreams
 from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
 from stand.measuring import Measurement
@@ -51,6 +47,7 @@ from stand.solve.pipeline import (
     measure_streams,
     stored_config,
 )
+from stand.solve.protocols import decoder, layout_of
 from stand.solve.result import Job, Provenance, Result
 
 
@@ -140,18 +137,14 @@ def solve_recording(
 
 def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> RunStreams:
     """The run's streams as its config's ``[bus] protocol`` reads its frames: protocol v1's
-    (``streams``, already rebuilt), a scan-stream module's (:mod:`stand.drivers.scan`) or
-    CANopen modules' (:mod:`stand.drivers.canopen_stream`), the DBC or EDS relative to
-    the config's folder."""
-    protocol, table = bus_protocol(cfg.bus, source)
-    if table is None:
+    (``streams``, already rebuilt), else the frames read again and decoded by the
+    protocol's decoder (:mod:`stand.solve.protocols`)."""
+    layout = layout_of(cfg, source)
+    if layout is None:
         return streams
-    base = Path(source.removesuffix(" (stored)")).parent
     with named_errors(path):
         frames = read_recording(path).frames
-    if protocol == "scan":
-        return scan_streams(frames, load_layout(table, base, source))
-    return pdo_streams(frames, load_pdo_layout(table, base, source))
+    return decoder(layout)(frames)
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:

@@ -22,10 +22,10 @@ import math
 import numpy as np
 
 from stand.drivers import rebuild
-from stand.live.protocol import decoder, layout_of
 from stand.sim import load_scene, simulate
 from stand.sim.scan_emit import SENSITIVITY_M_S2_PER_V, VOLTS_PER_COUNT
 from stand.solve import SolveOptions, measure_streams
+from stand.solve.protocols import decoder, layout_of
 
 STUFFING = 1.17
 """Bit stuffing, typical: an 8-byte classic frame's 111 bits become about 130."""

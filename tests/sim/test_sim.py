@@ -283,7 +283,7 @@ def test_shipped_scenes_run_and_give_their_phasors_back(name: str) -> None:
     sc, p, _ = load_scene(name)
     sim = simulate(sc, p)
     if sc.nodes.protocol != "v1":  # a scan module's or CANopen's frames: their decoder
-        from stand.live.protocol import decoder, layout_of
+        from stand.solve.protocols import decoder, layout_of
 
         layout = layout_of(sc.config(), None)
         assert layout is not None
