@@ -21,6 +21,8 @@ import threading
 import time
 from typing import Any
 
+import numpy as np
+
 from stand.drivers.logs import messages_from_frames
 from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
 from stand.errors import BusError, BusTimeoutError
@@ -167,8 +169,12 @@ class BusReader(FrameSource):
         channel_info: str | None = None,
         silence_timeout_s: float = SILENCE_TIMEOUT_S,
         max_pending: int = MAX_PENDING,
+        quiet_ids: tuple[int, ...] = (),
     ):
         self.bus = bus
+        self.quiet_ids = np.array(quiet_ids, dtype=np.uint32)
+        """Ids of the host's own frames (its SYNC): they are recorded but are no sign that
+        the nodes live, so frames of these ids alone do not hold off the silence timeout."""
         self.channel_info = channel_info or str(getattr(bus, "channel_info", "bus"))
         self.silence_timeout_s = silence_timeout_s
         self.max_pending = max_pending
@@ -178,6 +184,7 @@ class BusReader(FrameSource):
         self._ready = threading.Event()
         self._stop = threading.Event()
         self._error: BaseException | None = None
+        self._silent: BusTimeoutError | None = None
         self._last_frame = time.monotonic()
         self._t: list[float] = []
         self._id: list[int] = []
@@ -218,6 +225,8 @@ class BusReader(FrameSource):
             self._ready.set()
 
     def read_block(self, timeout_s: float = 0.1) -> Frames:
+        if self._silent is not None:
+            raise self._silent
         self._ready.wait(timeout_s)
         with self._lock:
             self._ready.clear()
@@ -226,9 +235,12 @@ class BusReader(FrameSource):
         now = time.monotonic()
         n = len(t)
         if n:
-            self._last_frame = now
             self.frames_received += n
             frames = Frames.from_lists(t, ids, dlc, flags, data)
+            if not len(self.quiet_ids) or not np.isin(frames.can_id, self.quiet_ids).all():
+                self._last_frame = now
+            elif now - self._last_frame > self.silence_timeout_s:
+                self._silent = self._silence(own=True)  # raised once these frames are taken
             if ((frames.flags & FLAG_ERROR) != 0).any():
                 err = frames.can_id[(frames.flags & FLAG_ERROR) != 0]
                 if (err & SOCKETCAN_ERR_BUSOFF).any():
@@ -249,30 +261,34 @@ class BusReader(FrameSource):
                 frames_received=self.frames_received,
             )
         if now - self._last_frame > self.silence_timeout_s:
-            if self.frames_received == 0:
-                what = (
-                    f"no frames at all for {self.silence_timeout_s:g} s: is the bus "
-                    "connected, the bitrate right, are the nodes powered?"
-                )
-                if self.channel_info.startswith("virtual"):
-                    what = (
-                        f"no frames at all for {self.silence_timeout_s:g} s: python-can's "
-                        "virtual interface joins buses inside one process only; from another "
-                        "process (stand simulate --bus) use udp_multicast, e.g. "
-                        "-i udp_multicast -c 239.74.163.2"
-                    )
-            else:
-                what = (
-                    f"no more frames for {self.silence_timeout_s:g} s "
-                    f"(after {self.frames_received})"
-                )
-            raise BusTimeoutError(
-                what,
-                channel=self.channel_info,
-                timeout_s=self.silence_timeout_s,
-                frames_received=self.frames_received,
-            )
+            raise self._silence()
         return Frames.empty()
+
+    def _silence(self, *, own: bool = False) -> BusTimeoutError:
+        """The error of a bus silent (``own``: but for the host's own frames) too long."""
+        if own:
+            what = (f"no frame but the host's own SYNC for {self.silence_timeout_s:g} s "
+                    f"(after {self.frames_received}): the modules stopped answering")  # fmt: skip
+        elif self.frames_received == 0:
+            what = (
+                f"no frames at all for {self.silence_timeout_s:g} s: is the bus "
+                "connected, the bitrate right, are the nodes powered?"
+            )
+            if self.channel_info.startswith("virtual"):
+                what = (
+                    f"no frames at all for {self.silence_timeout_s:g} s: python-can's "
+                    "virtual interface joins buses inside one process only; from another "
+                    "process (stand simulate --bus) use udp_multicast, e.g. "
+                    "-i udp_multicast -c 239.74.163.2"
+                )
+        else:
+            what = f"no more frames for {self.silence_timeout_s:g} s (after {self.frames_received})"
+        return BusTimeoutError(
+            what,
+            channel=self.channel_info,
+            timeout_s=self.silence_timeout_s,
+            frames_received=self.frames_received,
+        )
 
     def _close(self) -> None:
         self._stop.set()

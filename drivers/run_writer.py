@@ -113,6 +113,7 @@ class RunWriter:
         self.flush_interval_s = flush_interval_s
         self._pending: list[Frames] = []
         self._warnings: list[Diagnostic] = []
+        self._attrs: dict[str, str] = {}
         self._n = 0
         self._width = FRAME_DLC
         self._closed = False
@@ -171,10 +172,14 @@ class RunWriter:
         self._warnings.extend(warnings)
         self.warnings = (*self.warnings, *warnings)
 
+    def add_attrs(self, attrs: Mapping[str, str]) -> None:
+        """More text attributes of the run (written with the next flush)."""
+        self._attrs.update(attrs)
+
     def flush(self) -> None:
         """Open the file, append what is pending, commit, close."""
         self._last_flush = time.monotonic()
-        if not self._pending and not self._warnings:
+        if not self._pending and not self._warnings and not self._attrs:
             return
         if self._broken:
             raise WriteError(
@@ -205,6 +210,7 @@ class RunWriter:
                     for name in ("code", "message"):
                         w[name].resize((m + len(warns),))
                         w[name][m:] = [getattr(x, name) for x in warns]
+                f.attrs.update(self._attrs)
                 f.flush()
                 f.attrs["frames_committed"] = n + k
         except OSError as exc:
@@ -217,6 +223,7 @@ class RunWriter:
             self._broken = True  # never touch a file HDF5 failed to write again
             raise write_error(exc, self.path, "cannot append to the run file") from exc
         self._pending = []
+        self._attrs = {}
         self._n = n + k
         self._last_success = time.monotonic()
 

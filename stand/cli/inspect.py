@@ -7,8 +7,9 @@ import argparse
 
 from stand.cli.common import write_text_output
 from stand.cli.format import print_recording
-from stand.drivers import read_recording, rebuild
+from stand.drivers import read_recording
 from stand.errors import RecordingError
+from stand.solve import stored_streams
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,11 +38,12 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if len(rec.frames) == 0:
         raise RecordingError("no frames in the file", path=args.path)
-    streams = rebuild(rec.frames, strict_status=False)
+    streams = stored_streams(rec)  # as the configuration it carries reads its frames
     if not streams.nodes:
         raise RecordingError(
             f"no sensor-node frames: {len(rec.frames)} frames, none with a protocol id "
-            "(0x101-0x10F, 0x141-0x14F, 0x181-0x18F, DLC 8)",
+            "(0x101-0x10F, 0x141-0x14F, 0x181-0x18F, DLC 8), nor of the stored "
+            "configuration's [bus] protocol",
             path=args.path,
         )
     print_recording(rec, streams, as_json=args.json)

@@ -1,4 +1,6 @@
-"""Record the sensor nodes from a CAN bus into an HDF5 run file, as frames arrive."""
+"""Record the sensor nodes from a CAN bus into an HDF5 run file, as frames arrive (CANopen
+modules set up over SDO first, and clocked by the SYNC this command sends, when the
+config's ``[bus] protocol = "canopen"``)."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ from stand.drivers import Frames, Recording, rebuild
 from stand.errors import BusError, BusTimeoutError, UsageError
 from stand.live import LiveSession
 from stand.solve import load_config_text
+from stand.solve.protocols import builder_for, canopen_of, decoder, layout_of
 
 STATUS_EVERY_S = 1.0
 SPEED_WINDOW_S = 2.0
@@ -32,10 +35,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_bus_arguments(p)
 
 
-def speed_line(window: collections.deque[Any], elapsed: float, frames: int) -> str:
-    """The speed each node saw over the last seconds (from the blocks in ``window``)."""
+def speed_line(window: collections.deque[Any], elapsed: float, frames: int,
+               decode: Any = None) -> str:  # fmt: skip
+    """The speed each node saw over the last seconds (from the blocks in ``window``, read by
+    ``decode``: frames -> streams; default protocol v1's)."""
 
-    recent = rebuild(Frames.concat([b for _, b in window]), strict_status=False)
+    blocks = Frames.concat([b for _, b in window])
+    recent = decode(blocks) if decode else rebuild(blocks, strict_status=False)
     nodes = []
     for n, s in sorted(recent.nodes.items()):
         rpm = s.rpm()
@@ -75,21 +81,24 @@ def _record(args: argparse.Namespace, session: Any) -> None:
             window.popleft()
         if not args.quiet and session.elapsed_s >= next_status:
             next_status += STATUS_EVERY_S
-            print(speed_line(window, session.elapsed_s, session.frames_received), file=sys.stderr)
+            line = speed_line(window, session.elapsed_s, session.frames_received, args.decode)
+            print(line, file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> int:
 
     if args.seconds is not None and not args.seconds > 0:
         raise UsageError(f"stand record: --seconds must be > 0, got {args.seconds}")
-    config_text, table = "", None
+    config_text, table, layout = "", None, None
     if args.config:
         cfg, _, config_text = load_config_text(args.config)
-        table = cfg.bus
+        table, layout = cfg.bus, layout_of(cfg, args.config)
     kwargs = bus_kwargs(args, table)
+    args.decode = None if layout is None else decoder(layout)
     with LiveSession(
-        kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout
-    ) as session:
+        kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout,
+        builder=builder_for(layout), canopen=canopen_of(layout),
+    ) as session:  # fmt: skip
         _record(args, session)
     streams = session.close()
     frames = session.builder.frames

@@ -39,7 +39,7 @@ from stand.errors import (
 )
 from stand.live.session import LiveSession
 from stand.measuring.measure import MIN_REVS
-from stand.sim import load_scene, simulate, with_masses
+from stand.sim import load_scene, scene_modules, simulate, with_masses
 from stand.solve.pipeline import (
     SOFTWARE,
     SolveOptions,
@@ -49,7 +49,7 @@ from stand.solve.pipeline import (
     measure_streams,
     remeasure_streams,
 )
-from stand.solve.protocols import builder_for, layout_of
+from stand.solve.protocols import builder_for, canopen_of, layout_of
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
 
@@ -306,9 +306,8 @@ def _final_result(
 class LiveSource:
     """What a live measurement reads: the config, the parameters and the frames of a scene.
 
-    ``bus_table`` is the config's ``[bus]`` table (None for a scene, which
-    plays on a private virtual bus: ``scene_bus``); ``config_toml`` is stored
-    in the run.
+    ``bus_table`` is the config's ``[bus]`` table (None for a scene, which plays on a
+    private virtual bus: ``scene_bus``); ``config_toml`` is stored in the run.
     """
 
     cfg: Any
@@ -318,7 +317,8 @@ class LiveSource:
     scene_frames: Any = None
     scene_bus: dict[str, Any] | None = None
     layout: Any = None
-    """A scan module's layout (:mod:`stand.drivers.scan`) when ``[bus] protocol = "scan"``."""
+    """The ``[bus] protocol``'s layout: a scan module's or the CANopen modules' (or None)."""
+    modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
 
 
 def live_source(
@@ -354,6 +354,7 @@ def live_source(
             scene_frames=simulate(sc, physical).frames,
             scene_bus={"interface": "virtual", "channel": channel},
             layout=layout,
+            modules=scene_modules(sc),
         )
     if masses or rpm is not None or index_deg is not None:
         raise UsageError(
@@ -399,6 +400,8 @@ def measure_live(
         silence_timeout_s=silence_timeout_s,
         run_attrs=attrs,
         builder=builder_for(source.layout),
+        canopen=canopen_of(source.layout),
+        modules=source.modules,
     ) as session:
         if on_start:
             on_start(session.where)

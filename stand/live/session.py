@@ -6,8 +6,12 @@ the run file, the decoded streams and the signals, owned by one context manager.
 (:class:`~stand.drivers.streams.StreamBuilder`); the run file is written as
 they come; nothing is read back from it.  SIGINT and SIGTERM end the session
 cleanly (also when SIGINT was ignored when the process started, as under
-``nohup``): the run is kept and marked complete.  The measuring loop on it is
-:func:`stand.live.loop.measure_until_precise`.
+``nohup``): the run is kept and marked complete.  With CANopen modules
+(``canopen``: their :class:`~stand.drivers.canopen_stream.PdoLayout`) the session sets
+them up over SDO before it reads (the dialogue stored in the run,
+:mod:`stand.drivers.canopen_setup`), starts them, and on a real bus produces the SYNC
+until it closes; a scene's modules (``modules``) answer that set-up on the private bus.
+The measuring loop on it is :func:`stand.live.loop.measure_until_precise`.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ from typing import Any
 
 from stand.core import Diagnostic
 from stand.drivers.bus import BusReader, describe_bus, open_bus, play
+from stand.drivers.canopen_setup import SETUP_ATTR, SyncProducer, configure_modules
 from stand.drivers.run_writer import RunWriter
 from stand.drivers.streams import StreamBuilder
 from stand.errors import BusError
@@ -56,9 +61,16 @@ class LiveSession:
         silence_timeout_s: float = 2.0,
         run_attrs: dict[str, str] | None = None,
         builder: Any = None,
+        canopen: Any = None,
+        modules: Any = None,
     ):
 
+        if canopen is not None and scene_frames is None:  # the SYNCs it sends are recorded
+            bus_kwargs = {"receive_own_messages": True, **bus_kwargs}
         self.bus_kwargs = bus_kwargs
+        self._canopen, self._modules = canopen, modules
+        self._modules_bus: Any = None
+        self._sync: SyncProducer | None = None
         self.run_path = run_path
         self.config_toml = config_toml
         self.run_attrs = run_attrs or {}
@@ -91,14 +103,25 @@ class LiveSession:
         except BusError:
             self.writer.discard()  # nothing was received: leave no empty run behind
             raise
+        try:
+            self._set_up_modules()
+        except BusError:
+            self._shut_modules()
+            self.bus.shutdown()
+            self.writer.discard()
+            raise
         if self._scene_frames is not None:
             tx = open_bus(self.bus_kwargs)
             frames, stop = self._scene_frames, self._stop_player
             self._player = threading.Thread(
                 target=lambda: (play(tx, frames, stop=stop), tx.shutdown()), daemon=True
             )
-        self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout)
+        quiet = () if self._canopen is None else (self._canopen.sync_id,)
+        self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,
+                                quiet_ids=quiet)  # fmt: skip
         self._install_signals()
+        if self._sync is not None:
+            self._sync.start(produce=self._scene_frames is None)  # a scene plays its SYNCs
         if self._player is not None:
             self._player.start()
         self.start = time.monotonic()
@@ -106,6 +129,25 @@ class LiveSession:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+    def _set_up_modules(self) -> None:
+        """A scene's modules on their side of the bus; CANopen modules set up over SDO."""
+        if self._modules is not None:
+            self._modules_bus = open_bus(self.bus_kwargs)
+            self._modules.attach(self._modules_bus)
+        if self._canopen is not None:
+            steps = configure_modules(self.bus, self._canopen, self.where)
+            self.writer.add_attrs({SETUP_ATTR: json.dumps(steps)})
+            self._sync = SyncProducer(self.bus, self._canopen)
+
+    def _shut_modules(self) -> None:
+        if self._sync is not None:
+            self._sync.stop()
+        if self._modules is not None:
+            self._modules.detach()
+        if self._modules_bus is not None:
+            self._modules_bus.shutdown()
+            self._modules_bus = None
 
     def _install_signals(self) -> None:
         if threading.current_thread() is not threading.main_thread():
@@ -166,6 +208,7 @@ class LiveSession:
         self._closed = True
         try:
             self._stop_player.set()
+            self._shut_modules()
             self.reader.close()
             self.bus.shutdown()
             try:

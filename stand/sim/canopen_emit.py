@@ -2,9 +2,12 @@
 the sample rate (CiA 301, COB-ID 0x80, its jitter ``[nodes] sync_jitter_s``), and per
 support an analog input module (``drivers/canopen_ai.eds``, node ids 1 and 2) that samples
 its accelerometer and the reference sensor when the SYNC arrives and answers with TPDO1
-(0x180 + node id: two INTEGER16, 0x6401 sub 1 and 2) 100 us per node later.  The inputs
-are the scan module's (+-10 V on 16 bits, 100 mV/g, the mark 0..5 V:
-:mod:`stand.sim.scan_emit`)."""
+(0x180 + node id: the two inputs' CiA 404 AI input PV, INTEGER16 0x7130 sub 1 and 2, and
+their AI status, UNSIGNED8 0x6150 sub 1 and 2) 100 us per node later.  The inputs are the
+scan module's (+-10 V on 16 bits, 100 mV/g, the mark 0..5 V: :mod:`stand.sim.scan_emit`).
+``[effects.canopen]`` (:class:`stand.sim.tables.CanopenFaults`) makes one module answer
+late, send an EMCY (and mark its input not valid for a moment) or restart; its identity
+and mapping faults are the SDO side's (:mod:`stand.sim.canopen_node`)."""
 
 from __future__ import annotations
 
@@ -27,6 +30,8 @@ NODE_IDS = (1, 2)
 """The modules' node ids (support 1, support 2)."""
 ANSWER_S = 100e-6
 """A module's TPDO follows the SYNC by this much per node id."""
+EMCY_HARDWARE = 0x5000
+"""CiA 301's EMCY error code "device hardware"."""
 
 
 def eds_path() -> str:
@@ -37,9 +42,9 @@ def eds_path() -> str:
 def bus_table(rate_hz: float) -> dict[str, Any]:
     """The ``[bus]`` table that decodes the simulated modules (stored in their run files)."""
     nodes = [
-        {"support": s, "node_id": n, "eds": eds_path(), "accel": "0x6401:1",
-         "mark": "0x6401:2", "scale": VOLTS_PER_COUNT * SENSITIVITY_M_S2_PER_V,
-         "mark_scale": VOLTS_PER_COUNT}
+        {"support": s, "node_id": n, "eds": eds_path(), "accel": "0x7130:1",
+         "mark": "0x7130:2", "accel_status": "0x6150:1", "mark_status": "0x6150:2",
+         "scale": VOLTS_PER_COUNT * SENSITIVITY_M_S2_PER_V, "mark_scale": VOLTS_PER_COUNT}
         for s, n in zip((1, 2), NODE_IDS, strict=True)
     ]  # fmt: skip
     table = {"rate_hz": float(rate_hz), "sync_id": SYNC_ID, "mark_threshold": MARK_HIGH_V / 2,
@@ -47,10 +52,34 @@ def bus_table(rate_hz: float) -> dict[str, Any]:
     return {"protocol": "canopen", "canopen": table}
 
 
+def _faulty(node: int, tpdo: Frames, status: np.ndarray, t_rel: np.ndarray, period_s: float,
+            faults: Any, rng: np.random.Generator) -> tuple[Frames, list[Frames]]:  # fmt: skip
+    """One module's TPDOs with the scene's faults, and the EMCY and boot-up frames it sends."""
+    if faults is None or faults.node != node:
+        return tpdo, []
+    said = []
+    if faults.emcy_at_s is not None:
+        bad = (t_rel >= faults.emcy_at_s) & (t_rel < faults.emcy_at_s + faults.invalid_s)
+        status[bad] |= 1  # the accelerometer input: not valid
+        tpdo.data[:, 4] = status
+        data = np.zeros((1, 8), np.uint8)
+        data[0, :3] = (EMCY_HARDWARE & 0xFF, EMCY_HARDWARE >> 8, 0x01)
+        said.append(Frames.build(np.array([faults.emcy_at_s]), 0x80 + node, data, dlc=8))
+    if faults.late_probability > 0:
+        late = rng.random(len(tpdo)) < faults.late_probability
+        tpdo.t_s[late] += period_s - ANSWER_S * node / 2  # after the next SYNC, before its TPDO
+    if faults.restart_at_s is not None:
+        tpdo = tpdo.take(t_rel < faults.restart_at_s)
+        said.append(Frames.build(np.array([faults.restart_at_s]), 0x700 + node,
+                                 np.zeros((1, 8), np.uint8), dlc=1))  # fmt: skip
+    return tpdo, said
+
+
 def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
-                  lost: Any) -> Frames:  # fmt: skip
+                  lost: Any, faults: Any = None, rng: Any = None) -> Frames:  # fmt: skip
     """The SYNCs at the sample times ``t`` and each module's TPDO after each; ``lost(node,
-    frames)`` takes out the frames the bus loses."""
+    frames)`` takes out the frames the bus loses; ``faults`` (``[effects.canopen]``, with
+    its random generator ``rng``) what one module does wrong."""
     t0 = t[0] if len(t) else 0.0
     inputs, mark = input_counts(t, accel, edges, rate_hz)
     blocks = [Frames.build(t - t0, SYNC_ID, np.zeros((len(t), 8), np.uint8), dlc=0)]
@@ -58,7 +87,8 @@ def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rat
         data = np.zeros((len(t), 8), np.uint8)
         word = (counts.astype(np.int64) & 0xFFFF) | ((mark.astype(np.int64) & 0xFFFF) << 16)
         data[:, :4] = word.astype("<u4").view(np.uint8).reshape(-1, 4)
-        tpdo = Frames.build(t - t0 + ANSWER_S * (k + 1), 0x180 + node, data, dlc=4)
-        blocks.append(lost(k + 1, tpdo))
+        tpdo = Frames.build(t - t0 + ANSWER_S * (k + 1), 0x180 + node, data, dlc=6)
+        tpdo, said = _faulty(node, tpdo, data[:, 4].copy(), t - t0, 1.0 / rate_hz, faults, rng)
+        blocks += [lost(k + 1, tpdo), *said]
     every = Frames.concat(blocks)
     return every.take(np.argsort(every.t_s, kind="stable"))

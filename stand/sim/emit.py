@@ -45,7 +45,7 @@ NO_REFERENCE_S = 2.0
 _STREAM = {
     name: i
     for i, name in enumerate(
-        ("noise", "edge_jitter", "lost_frames", "invalid", "bursts", "sync_jitter")
+        ("noise", "edge_jitter", "lost_frames", "invalid", "bursts", "sync_jitter", "canopen")
     )
 }
 
@@ -279,6 +279,9 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     if scene.nodes.protocol != "v1" and e.clock:
         raise ConfigError(f"{scene.nodes.protocol}: the modules sample on one clock: no "
                           "[effects.clock] per node", key="effects.clock")  # fmt: skip
+    if scene.nodes.protocol != "canopen" and e.canopen:
+        raise ConfigError("[effects.canopen] needs [nodes] protocol = \"canopen\"",
+                          key="effects.canopen")  # fmt: skip
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
     offset = per_node(e.clock.offset_s) if e.clock else [0.0, 0.0]
     gain = per_node(e.sensor.gain) if e.sensor else [1.0, 1.0]
@@ -341,7 +344,9 @@ def _frames(scene: Scene, accel: list[Any], times: list[FloatArray], edges: Floa
         module = module_frames(times[0], heard, edges, rate, scene.nodes.counter)
         return [_lost(scene, 1, module)]
     lost = lambda node, frames: _lost(scene, node, frames)  # noqa: E731
-    return [canopen_frames(times[0], heard, edges, rate, lost)]  # one SYNC for both
+    faults = scene.effects.canopen
+    return [canopen_frames(times[0], heard, edges, rate, lost, faults,
+                           _rng(scene, "canopen", 0))]  # one SYNC for both  # fmt: skip
 
 
 def _status_flags(

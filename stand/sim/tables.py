@@ -269,6 +269,25 @@ class Dropout(_Table):
     seconds: Positive
 
 
+class CanopenFaults(_Table):
+    """``[effects.canopen]`` (``[nodes] protocol = "canopen"``): what the simulated modules
+    do wrong.  ``node`` (1 or 2) is the module the timed faults hit."""
+
+    node: Literal[1, 2] = 1
+    late_probability: Probability = 0.0
+    """A TPDO sent after the next SYNC (past the synchronous window)."""
+    emcy_at_s: NonNegative | None = None
+    """An EMCY (error code 0x5000, device hardware) at this time; the accelerometer input's
+    AI status says not valid for ``invalid_s`` after it."""
+    invalid_s: NonNegative = 0.02
+    restart_at_s: NonNegative | None = None
+    """The module restarts (boot-up, pre-operational): no TPDO from it after this time."""
+    vendor_id: Annotated[int, Field(ge=0, le=0xFFFFFFFF)] | None = None
+    """The identity's vendor id the modules show (0x1018 sub 1) instead of their EDS's."""
+    refuse_mapping: bool = False
+    """The modules refuse to have TPDO1 mapped (SDO abort 0x06040041)."""
+
+
 class Effects(_Table):
     """``[effects.*]``: each absent unless named."""
 
@@ -290,6 +309,7 @@ class Effects(_Table):
     drift: DriftEffect | None = None
     runout: Runout | None = None
     placement: PlacementEffect | None = None
+    canopen: CanopenFaults | None = None
 
     def named(self) -> list[str]:
         """The effects the scene names, in table order."""

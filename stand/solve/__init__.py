@@ -16,7 +16,7 @@ from stand.solve.pipeline import (
     load_config_text,
     measure_streams,
 )
-from stand.solve.recordings import measure_recording, solve_recording
+from stand.solve.recordings import measure_recording, solve_recording, stored_streams
 from stand.solve.result import Job, Provenance, Result, json_text
 from stand.solve.result_json import to_json
 
@@ -33,6 +33,7 @@ __all__ = [
     "measure_streams",
     "solve_check",
     "solve_recording",
+    "stored_streams",
     "to_json",
     "with_check",
 ]

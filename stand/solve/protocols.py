@@ -47,6 +47,12 @@ def decoder(layout: ScanLayout | PdoLayout) -> Callable[[Frames], RunStreams]:
     return lambda frames: pdo_streams(frames, layout)
 
 
+def canopen_of(layout: ScanLayout | PdoLayout | None) -> PdoLayout | None:
+    """The CANopen modules a live session sets up over SDO and clocks with its SYNC (their
+    ``configure`` is true), or None."""
+    return layout if isinstance(layout, PdoLayout) and layout.configure else None
+
+
 def builder_for(layout: ScanLayout | PdoLayout | None) -> StreamBuilder | WholeBuilder:
     """A fresh decoder for one session."""
     return StreamBuilder() if layout is None else WholeBuilder(decoder(layout))

@@ -32,7 +32,7 @@ from stand.drivers.recording import (
     read_recording,
     read_streams,
 )
-from stand.drivers.streams import RunStreams
+from stand.drivers.streams import RunStreams, rebuild
 from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
 from stand.measuring import Measurement
 from stand.measuring.measure import measure
@@ -145,6 +145,17 @@ def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> 
     with named_errors(path):
         frames = read_recording(path).frames
     return decoder(layout)(frames)
+
+
+def stored_streams(rec: Any) -> RunStreams:
+    """A recording's streams as the configuration it carries reads its frames (protocol
+    v1's when it carries none)."""
+    streams = rebuild(rec.frames, strict_status=False)
+    if not rec.meta.get("config_toml"):
+        return streams
+    cfg, _, _ = stored_config(rec.meta, rec.path)
+    layout = layout_of(cfg, f"{rec.path} (stored)")
+    return streams if layout is None else decoder(layout)(rec.frames)
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:

@@ -111,12 +111,12 @@ def test_the_spread_sits_at_the_cramer_rao_bound() -> None:
 @pytest.mark.parametrize(
     ("edit", "says"),
     [
-        (('accel = "0x6401:1"', 'accel = "0x6402:1"'), "has no object 0x6402:1"),
-        (('accel = "0x6401:1"', 'accel = "0x6401:3"'), "0x6401:3 is not mapped in TPDO1"),
-        (('accel = "0x6401:1"', 'accel = "0x1018:1"'), "0x1018:1 is not mapped in TPDO1"),
+        (('accel = "0x7130:1"', 'accel = "0x7131:1"'), "has no object 0x7131:1"),
+        (('accel = "0x7130:1"', 'accel = "0x6114:1"'), "0x6114:1 is not mapped in TPDO1"),
+        (('accel = "0x7130:1"', 'accel = "0x1018:1"'), "0x1018:1 is not mapped in TPDO1"),
         (("node_id = 2", "node_id = 1"), "two modules cannot share a node id"),
         (('eds = "../drivers/canopen_ai.eds"', 'eds = "nope.eds"'), "cannot read"),
-        (('accel = "0x6401:1"', 'accel = "6401:1"'), "bus.canopen.nodes.0.accel"),
+        (('accel = "0x7130:1"', 'accel = "7130:1"'), "bus.canopen.nodes.0.accel"),
     ],
 )
 def test_bad_eds_and_mappings_are_one_line(
