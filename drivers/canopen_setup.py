@@ -38,8 +38,6 @@ SDO_TIMEOUT_S = 0.3
 then taken as silent [s]."""
 NMT_PRE_OPERATIONAL = 0x80
 NMT_START = 0x01
-SETUP_ATTR = "canopen_setup"
-"""The run file attribute holding the SDO dialogue (JSON: a list of steps)."""
 SCALING = ((0x6120, 0.0), (0x6121, 0.0), (0x6122, 1.0), (0x6123, 1.0))
 """CiA 404's two-point scaling of an input (FV1, PV1, FV2, PV2): the identity."""
 

@@ -24,7 +24,13 @@ MATRIX_ATTR = "influence_matrix_json"
 STAND_ATTR = "stand_id"
 """Run file attribute: the id of the stand that recorded the run (``[stand] id``, else its
 host name), so a plant's shared archive knows where each run was made."""
-CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR)
+CANOPEN_SETUP_ATTR = "canopen_setup"
+"""Run file attribute: how the CANopen modules were set up over SDO before the run (JSON: a
+list of steps, :mod:`stand.drivers.canopen_setup`)."""
+TEST_UNBALANCE_ATTR = "test_unbalance_json"
+"""Run file attribute: the test unbalance a simulated start of a ball balancer's test
+carried (JSON: ``[[re, im], [re, im]]`` per plane, kg m, ``U = q R e^{-i phi}``)."""
+CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR, CANOPEN_SETUP_ATTR, TEST_UNBALANCE_ATTR)
 """Text attributes a converted or rewritten run keeps."""
 FRAME_FIELDS = {
     "t_s": np.float64,

@@ -6,14 +6,18 @@ from __future__ import annotations
 import argparse
 import cmath
 import math
+from dataclasses import replace
 from typing import Any
 
+from stand.archive import archive_result, url_for
+from stand.cli.common import add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config, validate
 from stand.config.autobalancer import AutobalancerTable
 from stand.config.rocker import load_rocker
 from stand.config.typed import parse_rpm, parse_unbalance, positive_float
 from stand.errors import UsageError
+from stand.field.balancer import balancer_test
 from stand.sim import load_scene
 from stand.sim.scene import unbalance_kg_m
 from stand.solve.autobalance import predict
@@ -31,6 +35,11 @@ def _plane_unbalance(text: str) -> tuple[int, float, float]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "what", nargs="*", metavar="test RUN",
+        help="test RUN...: the acceptance test of a rotor with a ball balancer from its "
+        "starts (runs in order, with --config): residuals, onset, verdict; archived",
+    )  # fmt: skip
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--config", metavar="CFG", help="the stand's config ([autobalancer])")
     where.add_argument("--scene", metavar="SCENE", help="a scene: its stand and unbalance")
@@ -50,7 +59,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the direction of rotation (repeatable; default with --scene: the scene's)",
     )  # fmt: skip
     p.add_argument("--max-rpm", type=parse_rpm, help="seek windows up to this speed")
+    p.add_argument(
+        "--moved-deg", type=float, default=180.0,
+        help="test: how far the test unbalance moves from one start to the next [deg]",
+    )  # fmt: skip
+    add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-archive", action="store_true", help="test: do not archive the starts")
 
 
 def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable:
@@ -65,6 +80,8 @@ def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.what:
+        return _test(args)
     if args.rocker:
         return _rocker(args)
     U: list[complex] | None = None
@@ -174,3 +191,70 @@ def _print_rocker(doc: dict[str, Any]) -> None:
         verdict = "the balls balance" if at["balances"] else "the balls do not balance"
         print(f"at {at['rpm']:g} rpm {verdict} (criterion {at['criterion_m']:.3g} m); 2x "
               f"amplitude {at['amplitude_2x_rad']:.3g} rad")  # fmt: skip
+
+
+def _test(args: argparse.Namespace) -> int:
+    """``stand autobalance test RUN... --config CFG``: the balancer's acceptance test."""
+    if args.what[0] != "test" or len(args.what) < 2:
+        raise UsageError("stand autobalance: the only action is test RUN... (one or more runs)")
+    if not args.config:
+        raise UsageError("stand autobalance test: give --config CFG (with its [autobalancer])")
+    stray = [f"--{k.replace('_', '-')}" for k in (*BALL_KEYS, "rpm", "max_rpm")
+             if getattr(args, k) is not None]  # fmt: skip
+    if stray:
+        raise UsageError(f"stand autobalance test: {', '.join(stray)}: the test takes the "
+                         "balancer from --config and the speed from the runs")  # fmt: skip
+    if not math.isfinite(args.moved_deg):
+        raise UsageError(f"--moved-deg: a number of degrees, got {args.moved_deg}")
+    cfg, params = load_config(args.config)
+    first = None
+    if args.unbalance:
+        first = [0j, 0j]
+        for plane, g_mm, deg in args.unbalance:
+            first[plane - 1] += cmath.rect(g_mm * 1e-6, -math.radians(deg))
+    doc, starts = balancer_test(args.what[1:], args.config, cfg, params, first, args.moved_deg)
+    doc["certificate"] = certificate_line(doc)
+    if not args.no_archive:
+        url = url_for(args.archive, cfg)
+        doc["archived"] = []
+        for k, s in enumerate(starts):
+            job = replace(s.result.provenance.job, note=f"balancer test: {doc['verdict']} "
+                          f"(start {k + 1} of {len(starts)})")  # fmt: skip
+            result = replace(s.result, provenance=replace(s.result.provenance, job=job))
+            doc["archived"].append(archive_result(result, url, config=args.config))
+    if args.json:
+        dump_json(doc)
+        return 0
+    _print_test(doc)
+    return 0
+
+
+def certificate_line(doc: dict[str, Any]) -> str:
+    """The test's one line for a certificate."""
+    who = f"serial {doc['serial']}" if doc["serial"] else "the rotor"
+    parts = [f"balancer test of {who}: {doc['verdict']}, {doc['starts_n']} start(s) at "
+             f"{doc['rpm']:.0f} rpm"]  # fmt: skip
+    for r in doc["residual"]:
+        pred = r["predicted_mean_g_mm"]
+        parts.append(f"plane {r['plane']} residual mean {r['mean_g_mm']:.1f} g mm, 95th "
+                     f"percentile {r['p95_g_mm']:.1f}"
+                     + ("" if pred is None else f" (predicted {pred:.1f})"))  # fmt: skip
+    on, edge = doc["onset_rpm"], doc["window_edge_rpm"]
+    if on is not None and edge is not None:
+        parts.append(f"onset {on['mean']:.0f} rpm against the window's edge at {edge:.0f}")
+    return "; ".join(parts)
+
+
+def _print_test(doc: dict[str, Any]) -> None:
+    for s in doc["starts"]:
+        res = ", ".join(f"plane {r['plane']} {r['unbalance_g_mm']:.1f} +- "
+                        f"{r['uncertainty_g_mm']:.1f} g mm at {r['angle_deg']:.1f} deg"
+                        for r in s["residual"])  # fmt: skip
+        onset = "" if s["onset_rpm"] is None else f", onset {s['onset_rpm']:.0f} rpm"
+        print(f"{s['run']}: {s['rpm']:.0f} rpm{onset}: {res}")
+    for note in doc["notes"]:
+        print(f"  {note}")
+    print(doc["certificate"])
+    if "archived" in doc:
+        print("archived as run(s) " + ", ".join(str(i) for i in doc["archived"]))
+    print(f"({ANGLE_NOTE})")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -20,12 +21,15 @@ from stand.cli.common import (
 )
 from stand.cli.panel import scene_masses
 from stand.config import config_toml
+from stand.core import unbalance_from_polar
 from stand.drivers import rebuild
 from stand.drivers.bus import describe_bus, open_bus, play
 from stand.drivers.files import check_output
 from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
+from stand.drivers.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
-from stand.sim import load_scene, shipped_scenes, simulate, with_masses
+from stand.sim import load_scene, shipped_scenes, simulate, turned, with_masses
+from stand.sim.scene import unbalance_kg_m
 from stand.solve import load_config_text
 
 
@@ -58,7 +62,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "([effects.drift]); the runs go to --out-dir, results and calibration data to the "
         "archive",
     )
-    p.add_argument("--out-dir", metavar="DIR", help="with --series: where the runs go")
+    p.add_argument(
+        "--starts", type=int, metavar="N",
+        help="N starts of a ball balancer's acceptance test: the scene run N times, its "
+        "unbalance turned 180 deg from one start to the next, into --out-dir as "
+        "start-01.h5 ... (for stand autobalance test)",
+    )  # fmt: skip
+    p.add_argument("--out-dir", metavar="DIR", help="with --series or --starts: where the runs go")
     add_archive_argument(p)
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     add_scene_arguments(p)
@@ -70,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.series is not None:
         return _series(args)
+    if args.starts is not None:
+        return _starts(args)
     if args.archive or args.out_dir:  # never ignored: they belong to --series
         raise UsageError(
             "stand simulate: --archive and --out-dir go with --series N (archive one run "
@@ -109,6 +121,7 @@ def _write(
     stored: str | None,
     believed: Any,
     source: str,
+    more: dict[str, str] | None = None,
 ) -> None:
     """The run written to --out (a run file, or a python-can log by its extension)."""
 
@@ -122,6 +135,7 @@ def _write(
             "software": f"stand {__version__}",
             JOB_ATTR: job.to_text() if job else "",
             STAND_ATTR: (believed or scene).stand.stand_id(),
+            **(more or {}),
         },
     )
     write_recording(
@@ -151,18 +165,9 @@ def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
 def _series(args: argparse.Namespace) -> int:
     """``--series N``: a simulated production series into the archive."""
 
-    if args.series < 1 or not args.out_dir:
-        raise UsageError("stand simulate: --series N (N >= 1) needs --out-dir DIR")
-    if args.out or args.bus:
-        raise UsageError("stand simulate: --series writes --out-dir and the archive only")
-    folder = Path(args.out_dir)
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"stand simulate: --out-dir {folder}: not a folder")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UsageError(f"stand simulate: --out-dir {folder}: cannot make it "
-                         f"({exc.strerror})") from exc  # fmt: skip
+    if args.series < 1:
+        raise UsageError("stand simulate: --series N needs N >= 1")
+    folder = _out_dir(args, "--series N")
     url = url_for(args.archive)
     done = simulate_series(
         args.scene,
@@ -178,4 +183,48 @@ def _series(args: argparse.Namespace) -> int:
         ),
     )
     print(f"{done} rotors balanced, corrected and checked; their data in {url}")
+    return 0
+
+
+def _out_dir(args: argparse.Namespace, what: str) -> Path:
+    """``--out-dir``, made if missing (one line if it cannot be)."""
+    if not args.out_dir:
+        raise UsageError(f"stand simulate: {what} needs --out-dir DIR")
+    if args.out or args.bus:
+        raise UsageError(f"stand simulate: {what} writes --out-dir only")
+    folder = Path(args.out_dir)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"stand simulate: --out-dir {folder}: not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"stand simulate: --out-dir {folder}: cannot make it "
+                         f"({exc.strerror})") from exc  # fmt: skip
+    return folder
+
+
+def _starts(args: argparse.Namespace) -> int:
+    """``--starts N``: a ball balancer's test starts, the unbalance turned 180 deg each."""
+    if args.starts < 1 or args.starts > 99:
+        raise UsageError(f"stand simulate: --starts takes 1 to 99, got {args.starts}")
+    folder = _out_dir(args, "--starts N")
+    names = [folder / f"start-{k + 1:02d}.h5" for k in range(args.starts)]
+    for name in names:
+        check_output(str(name), force=args.force)  # before the work
+    base, params, source = load_scene(args.scene)
+    if base.effects.autobalancer is None:
+        raise UsageError(f"stand simulate: {args.scene} has no [effects.autobalancer]: "
+                         "--starts simulates a ball balancer's test")  # fmt: skip
+    label = args.scene if args.scene in shipped_scenes() else source
+    for k, name in enumerate(names):
+        scene = turned(base, 180.0 * k, (args.seed if args.seed is not None else base.run.seed) + k)
+        sim = simulate(scene, params)
+        test = [[u.real, u.imag] for u in unbalance_from_polar(*unbalance_kg_m(scene))]
+        args.out = str(name)
+        _write(args, scene, sim, label, None, None, source,
+               {TEST_UNBALANCE_ATTR: json.dumps(test)})  # fmt: skip
+        args.out = None
+    print(f"{args.starts} starts of {Path(source).stem} in {folder}, the unbalance turned 180 "
+          "deg each: stand autobalance test " + " ".join(str(n) for n in names) + " --config "
+          "CFG")  # fmt: skip
     return 0

@@ -91,4 +91,9 @@ class CanopenTable(BaseModel):
             raise ValueError("nodes: one module for support 1 and one for support 2")
         if self.nodes[0].node_id == self.nodes[1].node_id:
             raise ValueError("nodes: two modules cannot share a node id")
+        if self.window_s is not None and self.window_s >= 1.0 / self.rate_hz:
+            raise ValueError(
+                f"window_s: {self.window_s:g} s is not within a SYNC period "
+                f"({1.0 / self.rate_hz:g} s): a TPDO must come before the next SYNC"
+            )
         return self

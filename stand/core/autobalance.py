@@ -126,6 +126,22 @@ def antiresonance(p: StandParameters, plane: int) -> float | None:
     return math.sqrt(-a0 / a1)
 
 
+def _gathered(H_PP: complex, A: complex, cap: float) -> complex:
+    """Where balls beyond their capacity gather in a window [kg m]: all together, ``U_b =
+    cap e^{i phi}``, where their mean tangential force vanishes: the race plane's motion
+    ``H_PP U_b + A`` (``A = sum_j H_Pj U_j``) along them, ``Im((H_PP U_b + A) e^{-i phi})
+    = 0`` with a positive real part.  On an undamped stand, in a window (``H_PP < 0``),
+    that is along ``A``, opposite the unbalance that moves the plane; damping turns it by
+    the receptance's phase (0.75 deg on the damped demo at 900 rpm)."""
+    s = -cap * H_PP.imag / abs(A)
+    base = cmath.phase(A)
+    for phi in (base - math.asin(s), base - math.pi + math.asin(s)):
+        Ub = cmath.rect(cap, phi)
+        if ((H_PP * Ub + A) * cmath.exp(-1j * phi)).real > 0:
+            return Ub
+    raise ModelError("no place where the balls gather (|A| <= capacity x |H_PP|)")
+
+
 @dataclasses.dataclass(frozen=True)
 class Balanced:
     """The balanced state at one speed: the balls' unbalance [kg m], the capacity ratio
@@ -161,8 +177,8 @@ def balanced(
     Ub = -U[P] - H[P, other] / H[P, P] * U[other]
     cap = balls * ball_kg * radius_m
     ratio = abs(Ub) / cap
-    if ratio > 1:  # gathered opposite the motion: the capacity in U_b's direction
-        Ub = cmath.rect(cap, cmath.phase(Ub))
+    if ratio > 1:  # gathered together where the race plane's motion points
+        Ub = _gathered(H[P, P], H[P] @ np.array(U), cap)
     angles: tuple[float, ...] = ()
     phi_b = math.degrees(-cmath.phase(Ub)) % 360.0
     if ratio >= 1:

@@ -25,7 +25,8 @@ from typing import Any
 
 from stand.core import Diagnostic
 from stand.drivers.bus import BusReader, describe_bus, open_bus, play
-from stand.drivers.canopen_setup import SETUP_ATTR, SyncProducer, configure_modules
+from stand.drivers.canopen_setup import SyncProducer, configure_modules
+from stand.drivers.run_format import CANOPEN_SETUP_ATTR
 from stand.drivers.run_writer import RunWriter
 from stand.drivers.streams import StreamBuilder
 from stand.errors import BusError
@@ -137,7 +138,7 @@ class LiveSession:
             self._modules.attach(self._modules_bus)
         if self._canopen is not None:
             steps = configure_modules(self.bus, self._canopen, self.where)
-            self.writer.add_attrs({SETUP_ATTR: json.dumps(steps)})
+            self.writer.add_attrs({CANOPEN_SETUP_ATTR: json.dumps(steps)})
             self._sync = SyncProducer(self.bus, self._canopen)
 
     def _shut_modules(self) -> None:

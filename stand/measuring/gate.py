@@ -10,6 +10,7 @@ revolutions (:data:`MIN_REVS`).  Used by the passes of the 1x fit
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,6 +45,9 @@ class Window:
     edge_jitter_rad: float = 0.0
     """Rms shaft-angle error of one edge from its timing jitter [rad]
     (:func:`~stand.core.dsp.edge_jitter` times the speed)."""
+    drift: tuple[float, float] = (0.0, 0.0)
+    """How much the blocks' 1x changes across the window along a straight line through them,
+    and that change's standard error, both relative to the 1x (:func:`block_drift`)."""
 
 
 def node_segment(s: NodeStream) -> tuple[int, int, np.ndarray, np.ndarray]:
@@ -172,6 +176,27 @@ def settled_block(sums: np.ndarray) -> int:
             break
         first_good = k
     return first_good
+
+
+def block_drift(sums: np.ndarray) -> tuple[float, float]:
+    """The change of the blocks' 1x across them along a least-squares line (weighted by
+    their samples), and its standard error from the blocks' scatter about the line, both
+    relative to the mean 1x; ``(0, 0)`` with fewer than 4 blocks."""
+    n_blocks = len(sums)
+    if n_blocks < 4:
+        return 0.0, 0.0
+    A, n, _ = block_fits(sums)
+    k = np.arange(n_blocks, dtype=float)
+    wts = n / np.sum(n)
+    k0 = float(np.sum(wts * k))
+    mean = complex(np.sum(wts * A))
+    sxx = float(np.sum(wts * (k - k0) ** 2))
+    slope = complex(np.sum(wts * (k - k0) * (A - mean))) / sxx
+    resid = A - mean - slope * (k - k0)
+    var = float(np.sum(wts * np.abs(resid) ** 2)) * n_blocks / (n_blocks - 2)
+    span, scale = n_blocks - 1, max(abs(mean), 1e-300)
+    se = math.sqrt(var / (sxx * n_blocks))
+    return abs(slope) * span / scale, se * span / scale
 
 
 def block_scatter(sums: np.ndarray, noise: float) -> float:

@@ -30,7 +30,14 @@ from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.nonlinear import Nonlinearity, detect
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
-from stand.measuring.gate import BLOCK_REVS, MIN_REVS, Window, block_scatter, check_saturation
+from stand.measuring.gate import (
+    BLOCK_REVS,
+    MIN_REVS,
+    Window,
+    block_drift,
+    block_scatter,
+    check_saturation,
+)
 from stand.measuring.passes import NodeFit, node_phasor
 from stand.process import Beside, can_fork
 
@@ -199,6 +206,7 @@ def _support(
         more = bad if "no samples" in str(exc) or "no reference edges" in str(exc) else ""
         raise type(exc)(f"node {node}: {exc}{more}") from None
     ratio = block_scatter(blocks, ph.noise_m_s2)
+    window = replace(window, drift=block_drift(blocks))
     ph, warnings = judge_support(node, ph, window, ratio, sensor)
     if fit is not None:
         fit = replace(fit, scatter=ratio)

@@ -10,7 +10,7 @@ sits between the core and the CLI: it may import the core, the config and the dr
 
 from stand.sim.canopen_node import SimulatedModules, scene_modules
 from stand.sim.emit import Simulation, simulate
-from stand.sim.scene import Mass, Scene, load_scene, shipped_scenes, with_masses
+from stand.sim.scene import Mass, Scene, load_scene, shipped_scenes, turned, with_masses
 
 __all__ = [
     "Mass",
@@ -21,5 +21,6 @@ __all__ = [
     "scene_modules",
     "shipped_scenes",
     "simulate",
+    "turned",
     "with_masses",
 ]

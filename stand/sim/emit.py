@@ -26,6 +26,7 @@ from stand.drivers import Frames
 from stand.drivers.budget import frames_budget
 from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.errors import ConfigError
+from stand.sim.balls import free_balls
 from stand.sim.canopen_emit import module_frames as canopen_frames
 from stand.sim.physics import (
     SceneSpeed,
@@ -86,7 +87,10 @@ def scene_speed(scene: Scene) -> tuple[SceneSpeed, float]:
     """The speed law and the recording's start in physics time [s]."""
     e = scene.effects
     ramp = e.run_up.ramp_s if e.run_up else 0.0
-    hold = scene.run.settle_s if scene.needs_integration and not e.run_up else 0.0
+    # nonlinear supports settle before the record; free balls start with it
+    hold = (
+        scene.run.settle_s if scene.needs_integration and not (e.run_up or e.autobalancer) else 0.0
+    )
     t_start = hold  # a run-up is recorded from standstill
     sp = e.speed
     speed = SceneSpeed(
@@ -170,10 +174,19 @@ def _support_force(scene: Scene, p: StandParameters, speed: Any, U: Any) -> Any:
 
 
 def _physics(
-    scene: Scene, p: StandParameters, speed: Any, U: Any, seen: list[Any], beam: Any
+    scene: Scene,
+    p: StandParameters,
+    speed: Any,
+    U: Any,
+    seen: list[Any],
+    beam: Any,
+    truth: dict[str, object],
 ) -> tuple[list[Any], int]:
     """Each support's acceleration at the times its sensor sees [m/s^2]: integrated in time
     (a run-up, nonlinear supports) or in closed form; and the integrator's evaluations."""
+    if scene.effects.autobalancer is not None:
+        return free_balls(scene.effects.autobalancer, p, speed, U, seen, scene.run.rtol,
+                          scene.effects.run_up is None, truth)  # fmt: skip
     if scene.needs_integration:
         both = np.concatenate(seen)
         a_both, nfev = integrated(
@@ -290,12 +303,13 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     # --- when each node samples (physics time), and what the sensor sees then
     times = _sample_times(scene, t_start, ppm, offset)
     seen = [t - d for t, d in zip(times, delay, strict=True)]  # a group delay: earlier motion
-    a_phys, nfev = _physics(scene, p, speed, U, seen, beam)
+    truth: dict[str, object] = {}
+    a_phys, nfev = _physics(scene, p, speed, U, seen, beam, truth)
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:
         edges = edges + _rng(scene, "edge_jitter").normal(0.0, e.edge_jitter.rms_s, len(edges))
-    truth: dict[str, object] = {"edges_s": edges, "t_start_s": t_start}
+    truth.update({"edges_s": edges, "t_start_s": t_start})
     w0 = speed.omega0_rad_s
     truth["A_m_s2"] = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
         [sensor_response(g, d, w0) for g, d in zip(gain, delay, strict=True)]

@@ -89,6 +89,7 @@ class Scene(BaseModel):
             bus=bus,
             tolerance=self.tolerance,
             correction=self.correction,
+            autobalancer=self.effects.autobalancer,
         )
 
     @property
@@ -96,7 +97,8 @@ class Scene(BaseModel):
         """Whether the physics path is time integration."""
         if self.run.physics != "auto":
             return self.run.physics == "integrate"
-        return self.effects.run_up is not None or self.effects.nonlinear
+        e = self.effects
+        return e.run_up is not None or e.nonlinear or e.autobalancer is not None
 
 
 def scenes_dir() -> Path:
@@ -283,3 +285,17 @@ def scene_beam(scene: Scene) -> Any:
         a.position_m for a in scene.unbalance.axial
     ]
     return beam_rotor(*scene.rotor.shaft.core_args(), extra_positions_m=at)
+
+
+def turned(scene: Scene, deg: float, seed: int) -> Scene:
+    """The scene with both planes' unbalance turned ``deg`` (the angles' sense: a test mass
+    moved round the rotor) and another random seed: one start of a balancer's test."""
+    u = scene.unbalance
+    planes = {
+        f"plane{i}": p.model_copy(update={"angle_deg": (p.angle_deg + deg) % 360.0})
+        for i, p in ((1, u.plane1), (2, u.plane2))
+    }
+    return scene.model_copy(update={
+        "unbalance": u.model_copy(update=planes),
+        "run": scene.run.model_copy(update={"seed": seed}),
+    })  # fmt: skip

@@ -13,6 +13,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config import STRICT
+from stand.config.autobalancer import AutobalancerTable
 
 NODES = 2
 
@@ -310,6 +311,9 @@ class Effects(_Table):
     runout: Runout | None = None
     placement: PlacementEffect | None = None
     canopen: CanopenFaults | None = None
+    autobalancer: AutobalancerTable | None = None
+    """A ball balancer on the rotor, its balls free on their race (the ``[autobalancer]``
+    table's keys): integrated with the stand (:mod:`stand.core.balls`)."""
 
     def named(self) -> list[str]:
         """The effects the scene names, in table order."""

@@ -14,8 +14,8 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from stand.core import rad_s_to_rpm, rpm_to_rad_s
-from stand.core.autobalance import antiresonance, balanced, windows, with_balls
+from stand.core import Diagnostic, rad_s_to_rpm, rpm_to_rad_s
+from stand.core.autobalance import antiresonance, balanced, driving_point, windows, with_balls
 from stand.core.model import StandParameters, natural_frequencies
 from stand.errors import UsageError
 
@@ -102,3 +102,33 @@ def _balanced(
             "opposite and leave the rest"
         )
     return out
+
+
+BALLS_DRIFT = 0.01
+"""A balancer rotor's 1x that changes by more than 1 % across the measured window (and 4
+of that change's standard errors) is taken as balls still on their way."""
+
+
+def balls_note(cfg: Any, p: StandParameters, m: Any) -> Any:
+    """A warning on the measurement ``m`` of a rotor with a ball balancer (the config's
+    ``[autobalancer]``): outside every window the balls gather on the heavy side; a 1x
+    that wanders, or drifts across the window, means they have not settled.  None when
+    neither."""
+    table = cfg.autobalancer
+    if table is None:
+        return None
+    omega_rad_s, codes = m.omega_rad_s, {w.code for w in m.warnings}
+    drift = max((w.drift for w in m.windows), key=lambda d: d[0], default=(0.0, 0.0))
+    q = with_balls(p, table.plane, table.balls * table.ball_g * 1e-3)
+    rpm = float(rad_s_to_rpm(omega_rad_s))
+    if driving_point(q, table.plane, omega_rad_s).real >= 0:
+        return Diagnostic("balls_outside_window", f"the ball balancer cannot balance at "
+                          f"{rpm:.0f} rpm (Re H_PP >= 0: below its first window or in the gap, "
+                          "stand autobalance says where): its balls gather on the heavy side, "
+                          "and this run measures the rotor with them there")  # fmt: skip
+    if "unsteady_1x" in codes or (drift[0] > BALLS_DRIFT and drift[0] > 4 * drift[1]):
+        moved = 100 * drift[0]
+        return Diagnostic("balls_unsettled", f"the 1x still moves through the run ({moved:.1f} "
+                          "% across it): the balancer's balls have not settled, so this answer "
+                          "averages a changing state; measure again once they have")  # fmt: skip
+    return None

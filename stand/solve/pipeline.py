@@ -35,6 +35,7 @@ from stand.errors import ConfigError
 from stand.measuring import Measurement
 from stand.measuring.live_fit import remeasure
 from stand.measuring.measure import measure
+from stand.solve.autobalance import balls_note
 from stand.solve.correct import corrections as plane_corrections
 from stand.solve.result import (
     Check,
@@ -332,6 +333,7 @@ def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) ->
     """The config's notes on a measurement, and its tooling taken out."""
     flexible = cfg.rotor.shaft is not None and options.matrix is None
     notes = [None if flexible else rigid_note(cfg, params, m.omega_rad_s)]
+    notes.append(balls_note(cfg, params, m))
     if options.matrix is not None:
         notes.append(options.matrix.speed_note(m.omega_rad_s))
     if any(notes):

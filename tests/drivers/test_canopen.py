@@ -117,6 +117,7 @@ def test_the_spread_sits_at_the_cramer_rao_bound() -> None:
         (("node_id = 2", "node_id = 1"), "two modules cannot share a node id"),
         (('eds = "../drivers/canopen_ai.eds"', 'eds = "nope.eds"'), "cannot read"),
         (('accel = "0x7130:1"', 'accel = "7130:1"'), "bus.canopen.nodes.0.accel"),
+        (("rate_hz = 2000.0", "rate_hz = 2000.0\nwindow_s = 0.0005"), "is not within a SYNC"),
     ],
 )
 def test_bad_eds_and_mappings_are_one_line(
