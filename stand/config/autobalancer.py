@@ -8,7 +8,7 @@
     ball_g = 50.0        # each ball's mass [g]
     radius_mm = 60.0     # the radius the balls' centres run on [mm]
     drag_n_s_m = 0.5     # viscous drag on a ball's motion relative to the race [N s/m]
-    rolling = 0.0        # rolling resistance, as a friction coefficient (0: none)
+    rolling = 0.0        # rolling resistance on the force pressing a ball on its race (0: none)
     gravity = false      # gravity on the balls (a horizontal rotor)
     start_deg = [0.0, 180.0]   # where the balls start, one angle per ball [deg]
 

@@ -29,9 +29,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from stand.core.autobalance import plane_positions, with_balls
 from stand.core.model import FloatArray, StandParameters, mass_matrix, natural_frequencies
@@ -54,6 +55,10 @@ class Balls:
     radius_m: float
     drag_n_s_m: float
     gravity_m_s2: float = 0.0
+    rolling: float = 0.0
+    """Rolling resistance as a coefficient on the force pressing a ball onto its race
+    (``m R psi'^2``): a ball sticks on the race while the force that holds it there stays
+    within ``rolling m R psi'^2``, and rolls against that force otherwise."""
 
     @property
     def capacity_kg_m(self) -> float:
@@ -103,10 +108,22 @@ class _System:
         self.lever = np.array([[p.b + p.c + p.d, p.d], [p.a, p.a + p.b + p.c]]) / p.L
         self.zs = plane_positions(p)
 
-    def accel(self, t: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``x''`` (2, k) and ``phi''`` (n, k) at times ``t`` (k,) and states ``y`` (., k)."""
+    def modes(self, held: NDArray[np.bool_] | None, slip: FloatArray | None
+              ) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
+        """Which balls are held on the race, and the direction each other one rolls in
+        (the sign of ``phi'``: its rolling resistance opposes it)."""
+        n = self.b.n
+        h = np.full(n, self.locked) if held is None else held
+        return h, np.zeros(n) if slip is None else slip
+
+    def accel(self, t: FloatArray, y: FloatArray, held: NDArray[np.bool_] | None = None,
+              slip: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+        """``x''`` (2, k) and ``phi''`` (n, k) at times ``t`` (k,) and states ``y`` (., k),
+        the balls ``held`` on the race (all when locked) and the others rolling in the
+        directions ``slip``."""
         n, m, R, beta, g = self.b.n, self.b.mass_kg, self.b.radius_m, self.b.drag_n_s_m, \
             self.b.gravity_m_s2  # fmt: skip
+        h, sl = self.modes(held, slip)
         x, v = y[:2], y[2:4]
         phi, dphi = y[4 : 4 + n], y[4 + n :]
         theta, w, al = self.speed.theta(t), self.speed.omega(t), self.speed.alpha(t)
@@ -115,11 +132,10 @@ class _System:
         dpsi = w + dphi
         e = self.U[:, None] * np.exp(1j * theta)
         rhs = self.lever @ (w**2 * e.real + al * e.imag) - self.H[:, None] * v - self.K[:, None] * x
-        if self.locked:  # held on the rotor: psi'' = alpha, no share of x_P''
-            r, S2 = np.broadcast_to(al, psi.shape), np.zeros_like(t)
-        else:
-            r = -(beta / m) * dphi - (g / R) * c  # psi'' less its share of x_P''
-            S2 = m * np.sum(s * s, axis=0)
+        # psi'' less its share of x_P'': held, alpha; else drag, gravity, rolling resistance
+        free = -(beta / m) * dphi - (g / R) * c - self.b.rolling * dpsi**2 * sl[:, None]
+        r = np.where(h[:, None], al, free)
+        S2 = m * np.sum(np.where(h[:, None], 0.0, s * s), axis=0)
         G = m * R * np.sum(r * s + dpsi**2 * c, axis=0)
         rhs = rhs + self.N[:, None] * G
         # (M - S2 N N^T) x'' = rhs, 2 x 2 for every instant
@@ -129,24 +145,39 @@ class _System:
         a22 = self.M[1, 1] - S2 * NN[1, 1]
         det = a11 * a22 - a12 * a12
         xdd = np.array([(a22 * rhs[0] - a12 * rhs[1]) / det, (a11 * rhs[1] - a12 * rhs[0]) / det])
-        if self.locked:
-            return xdd, np.zeros_like(phi)
         aP = self.N @ xdd
-        phidd = aP * s / R + r - al
+        phidd = np.where(h[:, None], 0.0, aP * s / R + r - al)
         return xdd, phidd
 
-    def power(self, t: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def holding(self, t: FloatArray, y: FloatArray, held: NDArray[np.bool_]
+                ) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+        """The tangential force the race must give each ball to hold it [N] (what it would
+        need, for a rolling ball), and the most its rolling resistance gives [N]: ``m R
+        alpha - m x_P'' sin psi + m g cos psi`` against ``rolling m R psi'^2``."""
+        n, m, R = self.b.n, self.b.mass_kg, self.b.radius_m
+        xdd, _ = self.accel(t, y, held, np.zeros(n))
+        theta, w, al = self.speed.theta(t), self.speed.omega(t), self.speed.alpha(t)
+        psi = theta + y[4 : 4 + n]
+        need = m * R * al - m * (self.N @ xdd) * np.sin(psi) + m * self.b.gravity_m_s2 * np.cos(psi)
+        return need, self.b.rolling * m * R * (w + y[4 + n :]) ** 2
+
+    def power(
+        self, t: FloatArray, y: FloatArray, held: NDArray[np.bool_] | None = None,
+        slip: FloatArray | None = None,
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:  # fmt: skip
         """The drive's power, the power dissipated [W] and the energy [J] at ``(t, y)``.
 
         The drive holds ``theta(t)``: its torque is what the rotor's unbalance and the
-        balls' drag ask, ``-sum_i x_i'' Im(U_i e^{i theta}) + |U_i| R_i theta'' + beta R^2
-        sum_j (theta' - psi_j')`` (``x_i`` the motion at plane ``i``).  The energy counts
-        the supports, the rotor's translation and tilt, the unbalance's spin (its masses at
-        the correction radii) and its coupling to the translation, the balls' motion and
-        their height."""
+        balls' drag and race forces ask, ``-sum_i x_i'' Im(U_i e^{i theta}) + |U_i| R_i
+        theta'' + beta R^2 sum_j (theta' - psi_j') + R sum_j f_j`` (``x_i`` the motion at
+        plane ``i``, ``f_j`` the race's tangential force on ball ``j``: what holds it, or its
+        rolling resistance).  The energy counts the supports, the rotor's translation and
+        tilt, the unbalance's spin (its masses at the correction radii) and its coupling to
+        the translation, the balls' motion and their height."""
         n, m, R, beta, g = self.b.n, self.b.mass_kg, self.b.radius_m, self.b.drag_n_s_m, \
             self.b.gravity_m_s2  # fmt: skip
-        xdd, _ = self.accel(t, y)
+        h, sl = self.modes(held, slip)
+        xdd, _ = self.accel(t, y, h, sl)
         v, x = y[2:4], y[:2]
         phi, dphi = y[4 : 4 + n], y[4 + n :]
         theta, w, al = self.speed.theta(t), self.speed.omega(t), self.speed.alpha(t)
@@ -156,8 +187,13 @@ class _System:
         xdd_pl, v_pl = Npl @ xdd, Npl @ v
         torque = -np.sum(xdd_pl * e.imag, axis=0) + np.sum(np.abs(self.U) * radii) * al
         torque = torque + beta * R**2 * np.sum(-dphi, axis=0)
-        drive = torque * w
         lost = np.sum(self.H[:, None] * v * v, axis=0) + beta * R**2 * np.sum(dphi**2, axis=0)
+        if self.b.rolling > 0 or h.any():
+            need, most = self.holding(t, y, h)
+            f = np.where(h[:, None], need, -most * sl[:, None])
+            torque = torque + R * np.sum(f, axis=0)
+            lost = lost - R * np.sum(f * dphi, axis=0)
+        drive = torque * w
         psi = theta + phi
         dpsi = w + dphi
         vP = self.N @ v
@@ -184,6 +220,11 @@ def integrate_balls(
 ) -> BallsRun:
     """Integrate the stand and the balls with :func:`scipy.integrate.solve_ivp`.
 
+    With rolling resistance the balls stick and roll: the integration stops where a
+    rolling ball comes to rest on the race or a held one needs more than its rolling
+    resistance gives (solve_ivp's events, located to the integrator's tolerance), and
+    goes on in the new mode; a held ball does not move on its race at all (no creep).
+
     Parameters
     ----------
     p
@@ -208,8 +249,6 @@ def integrate_balls(
         Hold the balls where they start (the balancer locked): the stand model with their
         unbalance and mass added, the reference the tests hold the free balls to.
     """
-    from scipy.integrate import solve_ivp
-
     U = np.asarray(U_kg_m, dtype=np.complex128)
     t_eval = np.asarray(t_eval_s, dtype=float)
     phi0 = np.asarray(phi0_rad, dtype=float).reshape(-1)
@@ -224,23 +263,114 @@ def integrate_balls(
         rtol * np.array([scale, scale, w_top * scale, w_top * scale]),
         np.full(balls.n, rtol), np.full(balls.n, rtol * w_top),
     ))  # fmt: skip
-
-    def rhs(t: float, y: FloatArray) -> FloatArray:
-        xdd, phidd = sys.accel(np.array([t]), y[:, None])
-        return np.concatenate((y[2:4], xdd[:, 0], y[4 + balls.n :], phidd[:, 0]))
-
     start = np.concatenate((np.zeros(4) if y0 is None else np.asarray(y0, float), phi0,
                             np.zeros(balls.n)))  # fmt: skip
-    sol = solve_ivp(rhs, (0.0, float(t_eval[-1])), start, method=method, t_eval=t_eval,
-                    rtol=rtol, atol=atol, max_step=0.25 * 2 * math.pi / w_top)  # fmt: skip
-    if not sol.success:
-        raise ModelError(f"time integration failed: {sol.message}")
-    y = sol.y
-    xdd, _ = sys.accel(t_eval, y)
-    drive, lost, energy = sys.power(t_eval, y)
+    options = {"method": method, "rtol": rtol, "atol": atol, "max_step": 0.5 * math.pi / w_top}
+    y, xdd, power, nfev = _segments(sys, start, t_eval, options)
+    n = balls.n
     return BallsRun(
-        t_s=t_eval, x_m=y[:2].T.copy(), a_m_s2=xdd.T.copy(), phi_rad=y[4 : 4 + balls.n].T.copy(),
-        phi_rate_rad_s=y[4 + balls.n :].T.copy(), theta_rad=speed.theta(t_eval),
-        omega_rad_s=speed.omega(t_eval), drive_w=drive, dissipated_w=lost, energy_j=energy,
-        nfev=int(sol.nfev),
+        t_s=t_eval, x_m=y[:2].T.copy(), a_m_s2=xdd.T.copy(), phi_rad=y[4 : 4 + n].T.copy(),
+        phi_rate_rad_s=y[4 + n :].T.copy(), theta_rad=speed.theta(t_eval),
+        omega_rad_s=speed.omega(t_eval), drive_w=power[0], dissipated_w=power[1],
+        energy_j=power[2], nfev=nfev,
     )  # fmt: skip
+
+
+MAX_SWITCHES = 20_000
+"""More stick-slip switches than this in one run are refused: balls chattering on their
+race (a rolling resistance at the edge of what holds them) cost a step each."""
+
+
+def _segments(sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str, Any]
+              ) -> tuple[FloatArray, FloatArray, FloatArray, int]:  # fmt: skip
+    """The run in segments of one mode each (one segment without rolling resistance): the
+    states, the support accelerations and the powers at ``t_eval``, and the evaluations."""
+    from scipy.integrate import solve_ivp
+
+    n, t0, t_end, done, nfev = sys.b.n, 0.0, float(t_eval[-1]), 0, 0
+    held, slip = _modes_at(sys, 0.0, y, np.full(n, sys.locked), np.zeros(n))
+    ys, xdds, powers = [], [], []
+    for _ in range(MAX_SWITCHES):
+        h, sl = held.copy(), slip.copy()
+
+        def rhs(t: float, z: FloatArray, h: Any = h, sl: Any = sl) -> FloatArray:
+            xdd, phidd = sys.accel(np.array([t]), z[:, None], h, sl)
+            return np.concatenate((z[2:4], xdd[:, 0], z[4 + n :], phidd[:, 0]))
+
+        events = _events(sys, h, sl)
+        sol = solve_ivp(rhs, (t0, t_end), y, t_eval=t_eval[done:], events=events or None,
+                        **options)  # fmt: skip
+        if not sol.success:
+            raise ModelError(f"time integration failed: {sol.message}")
+        nfev += int(sol.nfev)
+        if len(sol.t):
+            ys.append(sol.y)
+            xdds.append(sys.accel(sol.t, sol.y, h, sl)[0])
+            powers.append(np.array(sys.power(sol.t, sol.y, h, sl)))
+            done += len(sol.t)
+        if sol.status != 1:
+            return np.hstack(ys), np.hstack(xdds), np.hstack(powers), nfev
+        k = min((j for j in range(len(events)) if len(sol.t_events[j])),
+                key=lambda j: sol.t_events[j][0])  # fmt: skip
+        t0, y = float(sol.t_events[k][0]), sol.y_events[k][0].copy()
+        held, slip = _switch(sys, t0, y, h, sl, k)
+    raise ModelError(f"the balls switch between sticking and rolling more than {MAX_SWITCHES} "
+                     "times: a rolling resistance at the edge of what holds them")  # fmt: skip
+
+
+def _modes_at(sys: _System, t: float, y: FloatArray, held: NDArray[np.bool_],
+              slip: FloatArray) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
+    """At rest on the race, each ball is held if its rolling resistance holds it, else
+    rolls the way the rest of its forces push it (only with rolling resistance)."""
+    if sys.b.rolling <= 0 or sys.locked:
+        return held, slip
+    need, most = sys.holding(np.array([t]), y[:, None], np.ones(sys.b.n, bool))
+    at_rest = np.abs(y[4 + sys.b.n :]) == 0
+    keep = at_rest & (np.abs(need[:, 0]) <= most[:, 0])
+    rolls = np.where(at_rest, -np.sign(need[:, 0]), np.sign(y[4 + sys.b.n :]))
+    return keep, np.where(keep, 0.0, rolls)
+
+
+def _events(sys: _System, held: NDArray[np.bool_], slip: FloatArray) -> list[Any]:
+    """Per ball: a held one lets go when the force that holds it reaches its rolling
+    resistance; a rolling one stops when its speed on the race comes to 0."""
+    if sys.b.rolling <= 0 or sys.locked:
+        return []
+    n, out = sys.b.n, []
+    for j in range(n):
+        if held[j]:
+
+            def let_go(t: float, z: FloatArray, j: int = j) -> float:
+                need, most = sys.holding(np.array([t]), z[:, None], held)
+                return float(most[j, 0] - abs(need[j, 0]))
+
+            let_go.terminal, let_go.direction = True, -1  # type: ignore[attr-defined]
+            out.append(let_go)
+        else:
+
+            def stop(t: float, z: FloatArray, j: int = j) -> float:
+                return float(z[4 + n + j])
+
+            stop.terminal, stop.direction = True, -slip[j]  # type: ignore[attr-defined]
+            out.append(stop)
+    return out
+
+
+def _switch(sys: _System, t: float, y: FloatArray, held: NDArray[np.bool_], slip: FloatArray,
+            k: int) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
+    """The modes after ball ``k``'s event: a held ball rolls off, a stopped one is held if
+    its resistance holds it, else rolls on the way its forces push it."""
+    n = sys.b.n
+    held, slip = held.copy(), slip.copy()
+    if held[k]:
+        need, _ = sys.holding(np.array([t]), y[:, None], held)
+        held[k], slip[k] = False, -np.sign(need[k, 0]) or 1.0
+        return held, slip
+    y[4 + n + k] = 0.0
+    trial = held.copy()
+    trial[k] = True
+    need, most = sys.holding(np.array([t]), y[:, None], trial)
+    if abs(need[k, 0]) <= most[k, 0]:
+        return trial, np.where(trial, 0.0, slip)
+    slip[k] = -np.sign(need[k, 0]) or 1.0
+    return held, slip

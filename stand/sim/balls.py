@@ -20,7 +20,6 @@ from stand.core.autobalance import with_balls
 from stand.core.balls import G_M_S2, Balls, integrate_balls
 from stand.core.model import StandParameters
 from stand.core.transient import steady_state_initial
-from stand.errors import ConfigError
 
 TRUTH_HZ = 50.0
 """How often the truth keeps the balls' places [Hz]."""
@@ -28,12 +27,9 @@ TRUTH_HZ = 50.0
 
 def balls_of(table: Any) -> Balls:
     """The core's balls from an ``[autobalancer]`` table (SI)."""
-    if table.rolling > 0:
-        raise ConfigError("rolling resistance is not simulated yet: set rolling = 0",
-                          key="effects.autobalancer.rolling")  # fmt: skip
     return Balls(plane=table.plane, n=table.balls, mass_kg=table.ball_g * 1e-3,
                  radius_m=table.radius_mm * 1e-3, drag_n_s_m=table.drag_n_s_m,
-                 gravity_m_s2=G_M_S2 if table.gravity else 0.0)  # fmt: skip
+                 gravity_m_s2=G_M_S2 if table.gravity else 0.0, rolling=table.rolling)  # fmt: skip
 
 
 def start_places(table: Any) -> np.ndarray:

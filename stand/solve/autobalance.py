@@ -132,3 +132,10 @@ def balls_note(cfg: Any, p: StandParameters, m: Any) -> Any:
                           "% across it): the balancer's balls have not settled, so this answer "
                           "averages a changing state; measure again once they have")  # fmt: skip
     return None
+
+
+def with_the_balls(cfg: Any, p: StandParameters) -> StandParameters:
+    """The stand the config measures with: its rotor and, with an ``[autobalancer]``, the
+    balls' mass at their race (the ``[rotor]`` table is the rotor without them)."""
+    t = cfg.autobalancer
+    return p if t is None else with_balls(p, t.plane, t.balls * t.ball_g * 1e-3)

@@ -78,6 +78,8 @@ def test_a_working_balancer_passes_and_each_start_is_archived(
         ({"ball_g = 50.0": "ball_g = 20.0"}, "over_capacity"),
         ({"seconds = 30.0": "seconds = 5.0", "scale_um_s2 = 100": "scale_um_s2 = 400"},
          "unsettled"),
+        ({"drag_n_s_m = 0.5": "drag_n_s_m = 0.5\nrolling = 0.01",
+          "start_deg = [90.0, 120.0]": "start_deg = [0.0, 180.0]"}, "stuck"),
     ],
 )  # fmt: skip
 def test_each_verdict_from_the_physics_that_gives_it(
@@ -85,8 +87,11 @@ def test_each_verdict_from_the_physics_that_gives_it(
 ) -> None:
     """300 rpm is below the first window (339 rpm), 430 rpm in the gap (399..466: near
     the second natural speed, measured with a range of +-13 m/s^2), 2 x 20 g on 60 mm make
-    2400 g mm where 5500 are needed, and after 5 s the balls are still on their way."""
-    runs, cfg = _starts(tmp_path, _scene(tmp_path, **changes), 1, capsys)
+    2400 g mm where 5500 are needed, after 5 s the balls are still on their way, and with a
+    rolling resistance of 0.01 they never leave their start (two starts: the residual
+    follows the test unbalance, 5000 g mm turned 180 deg)."""
+    n = 2 if verdict == "stuck" else 1
+    runs, cfg = _starts(tmp_path, _scene(tmp_path, **changes), n, capsys)
     doc = _test(runs, cfg, tmp_path, capsys)
     assert doc["verdict"] == verdict, doc["notes"]
 

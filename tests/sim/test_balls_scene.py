@@ -82,7 +82,7 @@ def test_balls_that_do_not_settle_are_flagged(
         (("balls = 2", "balls = 0"), "effects.autobalancer.balls"),
         (("radius_mm = 60.0", "radius_mm = 0.0"), "effects.autobalancer.radius_mm"),
         (("start_deg = [90.0, 120.0]", "start_deg = [90.0]"), "start_deg: 1 angles for 2"),
-        (("drag_n_s_m = 0.5", "drag_n_s_m = 0.5\nrolling = 0.01"), "rolling resistance is not"),
+        (("drag_n_s_m = 0.5", "drag_n_s_m = 0.5\nrolling = 2.0"), "effects.autobalancer.rolling"),
     ],
 )
 def test_a_bad_balancer_is_one_line(
