@@ -3,7 +3,8 @@ recorded as they come (:class:`LiveSession`) and measured again every second unt
 estimate is precise enough (:func:`measure_live`); the loop the operator watches.
 """
 
-from stand.live.loop import Progress, live_source, measure_live
+from stand.live.loop import Progress, measure_live
 from stand.live.session import LiveSession
+from stand.live.source import LiveSource, live_source
 
-__all__ = ["LiveSession", "Progress", "live_source", "measure_live"]
+__all__ = ["LiveSession", "LiveSource", "Progress", "live_source", "measure_live"]

@@ -16,16 +16,14 @@ from __future__ import annotations
 
 import contextlib
 import math
-import os
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from stand.config import config_toml
 from stand.core import Diagnostic
 from stand.drivers.recording import JOB_ATTR, STAND_ATTR, config_digest
 from stand.drivers.streams import StreamBuilder
@@ -35,21 +33,19 @@ from stand.errors import (
     NoStatusError,
     SensorFaultError,
     StandError,
-    UsageError,
 )
 from stand.live.session import LiveSession
+from stand.live.source import LiveSource
 from stand.measuring.measure import MIN_REVS
-from stand.sim import load_scene, scene_modules, simulate, with_masses
 from stand.solve.pipeline import (
     SOFTWARE,
     SolveOptions,
     build_result,
     check_matrix,
-    load_config_text,
     measure_streams,
     remeasure_streams,
 )
-from stand.solve.protocols import builder_for, canopen_of, layout_of
+from stand.solve.protocols import builder_for, canopen_of
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
 
@@ -300,70 +296,6 @@ def _final_result(
         streams=streams,
         live=LiveInfo(stopped_by, elapsed, goal),
     )
-
-
-@dataclass(frozen=True)
-class LiveSource:
-    """What a live measurement reads: the config, the parameters and the frames of a scene.
-
-    ``bus_table`` is the config's ``[bus]`` table (None for a scene, which plays on a
-    private virtual bus: ``scene_bus``); ``config_toml`` is stored in the run.
-    """
-
-    cfg: Any
-    params: Any
-    config_toml: str
-    bus_table: dict[str, Any] | None = None
-    scene_frames: Any = None
-    scene_bus: dict[str, Any] | None = None
-    layout: Any = None
-    """The ``[bus] protocol``'s layout: a scan module's or the CANopen modules' (or None)."""
-    modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
-
-
-def live_source(
-    scene: str | None,
-    config: str | None,
-    command: str,
-    masses: Sequence[Any] = (),
-    rpm: float | None = None,
-    index_deg: float | None = None,
-) -> LiveSource:
-    """A simulated scene (played in real time on a private virtual bus), or a config's bus.
-
-    With a scene, ``--config`` is what the software believes (calibration,
-    correction, tolerance) and the scene is the physical stand and rotor: both
-    are honoured.  ``masses`` (:class:`stand.sim.Mass`) and ``rpm`` change the
-    simulated rotor and its speed.
-    """
-
-    if scene:
-        sc, physical, _ = load_scene(scene)
-        sc = with_masses(sc, masses, rpm, index_deg)
-        if config:
-            cfg, params, text = load_config_text(config)
-        else:
-            cfg, params = sc.config(), physical
-            text = config_toml(cfg)
-        layout = layout_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
-        channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
-        return LiveSource(
-            cfg,
-            params,
-            text,
-            scene_frames=simulate(sc, physical).frames,
-            scene_bus={"interface": "virtual", "channel": channel},
-            layout=layout,
-            modules=scene_modules(sc),
-        )
-    if masses or rpm is not None or index_deg is not None:
-        raise UsageError(
-            f"stand {command}: --add, --apply, --rpm and --index change a --scene's rotor"
-        )
-    if not config:
-        raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
-    cfg, params, text = load_config_text(config)
-    return LiveSource(cfg, params, text, bus_table=cfg.bus, layout=layout_of(cfg, config))
 
 
 def measure_live(

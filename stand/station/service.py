@@ -255,7 +255,7 @@ class Station(ArchiveSide):
 
         s = self._state
         scene = None if s.source == BUS else s.source
-        src = live_source(scene, str(config), "station", list(s.applied))
+        src = live_source(scene, str(config), "station", list(s.applied), scene_hardware=True)
         tol = tolerance_of(src.cfg, src.params)
         self._set(tolerance_kg_m=None if tol is None else tuple(tol.per_plane_kg_m))
         kwargs = src.scene_bus if src.scene_bus is not None else _bus(src.bus_table)

@@ -1,0 +1,91 @@
+"""What a live measurement reads (:class:`LiveSource`): a config's CAN bus, or a simulated
+scene played in real time on a private virtual bus, with the config the software
+believes about it."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from stand.config import config_toml
+from stand.config.scan import bus_protocol
+from stand.errors import UsageError
+from stand.sim import load_scene, scene_modules, simulate, with_masses
+from stand.solve.pipeline import load_config_text
+from stand.solve.protocols import layout_of
+
+
+@dataclass(frozen=True)
+class LiveSource:
+    """What a live measurement reads: the config, the parameters and the frames of a scene.
+
+    ``bus_table`` is the config's ``[bus]`` table (None for a scene, which plays on a
+    private virtual bus: ``scene_bus``); ``config_toml`` is stored in the run.
+    """
+
+    cfg: Any
+    params: Any
+    config_toml: str
+    bus_table: dict[str, Any] | None = None
+    scene_frames: Any = None
+    scene_bus: dict[str, Any] | None = None
+    layout: Any = None
+    """The ``[bus] protocol``'s layout: a scan module's or the CANopen modules' (or None)."""
+    modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
+
+
+def live_source(
+    scene: str | None,
+    config: str | None,
+    command: str,
+    masses: Sequence[Any] = (),
+    rpm: float | None = None,
+    index_deg: float | None = None,
+    *,
+    scene_hardware: bool = False,
+) -> LiveSource:
+    """A simulated scene (played in real time on a private virtual bus), or a config's bus.
+
+    With a scene, ``--config`` is what the software believes (calibration,
+    correction, tolerance) and the scene is the physical stand and rotor: both
+    are honoured.  ``masses`` (:class:`stand.sim.Mass`) and ``rpm`` change the
+    simulated rotor and its speed.  A config that reads another protocol than the scene
+    sends is refused, unless ``scene_hardware`` (the station's simulated sources): then
+    the scene's sensors are the stand's and its ``[bus]`` table replaces the config's, in
+    the run's stored config too.
+    """
+
+    if scene:
+        sc, physical, _ = load_scene(scene)
+        sc = with_masses(sc, masses, rpm, index_deg)
+        if config:
+            cfg, params, text = load_config_text(config)
+            sent = sc.config().bus
+            if scene_hardware and bus_protocol(cfg.bus, config)[0] != bus_protocol(sent, scene)[0]:
+                cfg = cfg.model_copy(update={"bus": sent})
+                text = config_toml(cfg)
+        else:
+            cfg, params = sc.config(), physical
+            text = config_toml(cfg)
+        layout = layout_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
+        channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
+        return LiveSource(
+            cfg,
+            params,
+            text,
+            scene_frames=simulate(sc, physical).frames,
+            scene_bus={"interface": "virtual", "channel": channel},
+            layout=layout,
+            modules=scene_modules(sc),
+        )
+    if masses or rpm is not None or index_deg is not None:
+        raise UsageError(
+            f"stand {command}: --add, --apply, --rpm and --index change a --scene's rotor"
+        )
+    if not config:
+        raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
+    cfg, params, text = load_config_text(config)
+    return LiveSource(cfg, params, text, bus_table=cfg.bus, layout=layout_of(cfg, config))
