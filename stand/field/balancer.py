@@ -127,9 +127,9 @@ def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
               first: Sequence[complex] | None, moved_deg: float) -> Start:  # fmt: skip
     """Start ``k`` (0 first) of the test, from its run file."""
     table = cfg.autobalancer
-    result = solve_recording(path, config)
     rec = read_recording(path)
-    test = _test_unbalance(rec.meta, path, first, k, moved_deg)
+    test = _test_unbalance(rec.meta, path, first, k, moved_deg)  # bad input before the work
+    result = solve_recording(path, config)
     q = with_balls(params, table.plane, table.balls * table.ball_g * 1e-3)
     w = result.measurement.omega_rad_s
     predicted = None

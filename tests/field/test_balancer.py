@@ -148,3 +148,23 @@ def test_bad_input_is_one_line(
     assert main([*argv, "--no-archive"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err, err
+
+
+@pytest.mark.parametrize(
+    "stored", ["[[1, 2]]", "not json", "[[1e9, 0], [0, 0]]", '[["a", 0], [0, 0]]']
+)
+def test_a_malformed_test_unbalance_in_a_run_is_one_line(
+    stored: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The run carries it (as a simulated start does), rewritten and sealed again."""
+    from stand.drivers import read_recording, write_recording
+
+    runs, cfg = _starts(tmp_path, _scene(tmp_path, **{"seconds = 30.0": "seconds = 3.0"}), 1,
+                        capsys)  # fmt: skip
+    rec = read_recording(runs[0])
+    bad = tmp_path / "bad.h5"
+    write_recording(type(rec)(rec.path, rec.frames, {**rec.meta, "test_unbalance_json": stored},
+                              rec.warnings), str(bad))  # fmt: skip
+    assert main(["autobalance", "test", str(bad), "--config", str(cfg), "--no-archive"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'test_unbalance_json' is not a test unbalance" in err, err

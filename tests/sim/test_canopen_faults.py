@@ -111,3 +111,17 @@ def test_faults_of_another_protocol_are_refused(
     assert main(["simulate", str(path), "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "[effects.canopen]" in err, err
+
+
+@pytest.mark.parametrize(
+    ("faults", "key"),
+    [("node = 3", "effects.canopen.node"), ("vendor_id = -1", "effects.canopen.vendor_id"),
+     ("late_probability = 1.5", "effects.canopen.late_probability"),
+     ("restart_at_s = nan", "effects.canopen.restart_at_s"), ("smoke = 1", "effects.canopen")],
+)  # fmt: skip
+def test_a_bad_fault_is_one_line(
+    faults: str, key: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["simulate", str(_scene(tmp_path, faults)), "--out", str(tmp_path / "x.h5")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and key in err, err
