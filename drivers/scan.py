@@ -79,6 +79,9 @@ class ScanLayout:
     counter: Signal | None
     channels: tuple[Channel, ...]
     mark_threshold: float | None = None
+    per_frame: int = 1
+    """Scans a frame carries (a CAN FD frame of k scans), ``scan_bytes`` each."""
+    scan_bytes: int = 8
 
     def accel(self, support: int) -> Channel:
         return next(c for c in self.channels if c.role == "accel" and c.support == support)
@@ -130,7 +133,14 @@ def load_layout(table: Any, base: Path, source: str) -> ScanLayout:
     if len(ids) != 1:
         raise ConfigError("[bus.scan] channels: every channel (and the counter) must be in one "
                           "message: one frame is one scan", source=source)  # fmt: skip
-    return ScanLayout(float(table.rate_hz), counter, tuple(channels), table.mark_threshold)
+    bits = 8 * table.scan_bytes
+    for s in (*(c.signal for c in channels), *([counter] if counter else [])):
+        if s.start + s.length > bits:
+            last = s.start + s.length - 1
+            raise ConfigError(f"signal {s.name}: bits {s.start}..{last} lie beyond a scan's "
+                              f"{table.scan_bytes} bytes", source=source)  # fmt: skip
+    return ScanLayout(float(table.rate_hz), counter, tuple(channels), table.mark_threshold,
+                      table.scans_per_frame, table.scan_bytes)  # fmt: skip
 
 
 def _index(layout: ScanLayout, raw_counter: NDArray[np.int64] | None, t: NDArray[np.float64]
@@ -224,12 +234,32 @@ def one_clock_stream(
     )  # fmt: skip
 
 
+def _scans(data: NDArray[np.uint8], t: NDArray[np.float64], layout: ScanLayout
+           ) -> tuple[NDArray[np.uint8], NDArray[np.float64]]:  # fmt: skip
+    """One row (8 bytes) a scan, from frames of ``per_frame`` scans, each scan timed a
+    sample period after the one before it in its frame."""
+    k, b = layout.per_frame, layout.scan_bytes
+    if k == 1 and b == 8:
+        return data, t
+    rows = np.zeros((len(data) * k, 8), np.uint8)
+    rows[:, :b] = data[:, : k * b].reshape(len(data) * k, b)
+    times = (t[:, None] + np.arange(k) / layout.rate_hz).reshape(-1)
+    return rows, times
+
+
 def scan_streams(frames: Frames, layout: ScanLayout) -> RunStreams:
     """The two supports' streams of a scan-stream recording (frames in arrival order)."""
     sig0 = layout.channels[0].signal
     ext = (frames.flags & FLAG_EXTENDED) != 0
-    mine = (frames.can_id == sig0.frame_id) & (ext == sig0.extended) & (frames.dlc >= 8)
-    data, t = frames.data[mine], frames.t_s[mine]
+    need = layout.per_frame * layout.scan_bytes  # a frame's bytes
+    mine = (frames.can_id == sig0.frame_id) & (ext == sig0.extended) & (frames.dlc >= need)
+    mine &= need <= frames.data.shape[1]
+    if mine.any() and int(frames.dlc[mine].min()) >= 2 * need:
+        raise ConfigError(f"the module's frames carry {int(frames.dlc[mine].min())} bytes or "
+                          f"more, [bus.scan] reads {layout.per_frame} scan(s) of "
+                          f"{layout.scan_bytes} bytes a frame: set scans_per_frame (CAN FD)",
+                          key="bus.scan.scans_per_frame")  # fmt: skip
+    data, t = _scans(frames.data[mine], frames.t_s[mine], layout)
     span = float(frames.t_s[-1] - frames.t_s[0]) if len(frames) else 0.0
     if not len(t):  # none of the module's frames: no node (the measuring path says so)
         return RunStreams({}, len(frames), len(frames), 0, (), span)

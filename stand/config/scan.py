@@ -13,6 +13,8 @@ DBC and a mapping of its channels (the decoder: :mod:`stand.drivers.scan`).
     rate_hz = 2000.0               # the module's scan rate
     counter = "counter"            # the scan counter's signal (optional, strongly advised)
     mark_threshold = 0.5           # the mark channel's threshold (default: mid-range)
+    scans_per_frame = 1            # a CAN FD frame of k scans: 8 (default 1)
+    scan_bytes = 8                 # the bytes of one scan in it
 
     [[bus.scan.channels]]
     message = "SCAN"
@@ -76,6 +78,11 @@ class ScanTable(BaseModel):
     rate_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e6)]
     counter: Name | None = None
     mark_threshold: FiniteFloat | None = None
+    scans_per_frame: Annotated[int, Field(ge=1, le=64)] = 1
+    """Scans a frame carries (a CAN FD frame of k scans: scan ``i`` at byte ``i x
+    scan_bytes``, each laid out as the DBC's message describes the first)."""
+    scan_bytes: Annotated[int, Field(ge=1, le=8)] = 8
+    """The bytes one scan takes in such a frame."""
     channels: Annotated[list[ScanChannel], Field(min_length=3, max_length=16)]
 
     @model_validator(mode="after")
@@ -86,6 +93,9 @@ class ScanTable(BaseModel):
             if roles.count(want) != 1:
                 raise ValueError(f"channels: exactly one channel for {what}, "
                                  f"found {roles.count(want)}")  # fmt: skip
+        if self.scans_per_frame * self.scan_bytes > 64:
+            raise ValueError(f"scans_per_frame x scan_bytes: {self.scans_per_frame} x "
+                             f"{self.scan_bytes} bytes, more than a CAN FD frame's 64")  # fmt: skip
         return self
 
 

@@ -355,7 +355,8 @@ def _frames(scene: Scene, accel: list[Any], times: list[FloatArray], edges: Floa
         return [_node_frames(scene, i, accel[i], times[i], edges, clocks[i]) for i in range(2)]
     heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
     if protocol == "scan":  # one module, one clock: node 1's sample times
-        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter)
+        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter,
+                               scene.nodes.scans_per_frame)  # fmt: skip
         return [_lost(scene, 1, module)]
     lost = lambda node, frames: _lost(scene, node, frames)  # noqa: E731
     faults = scene.effects.canopen

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.drivers.protocol import Frames
+from stand.drivers.protocol import FLAG_FD, Frames
 from stand.drivers.scan import mark_wave, scan_frames
 
 VOLTS_PER_COUNT = 10.0 / 32768
@@ -33,7 +33,7 @@ def dbc_path() -> str:
     return str(resources.files("stand.drivers") / "scan_module.dbc")
 
 
-def bus_table(rate_hz: float, counter: bool) -> dict[str, Any]:
+def bus_table(rate_hz: float, counter: bool, per_frame: int = 1) -> dict[str, Any]:
     """The ``[bus]`` table that decodes the simulated module (stored in its run files)."""
     channels = [
         {"message": "SCAN", "signal": "ai1", "role": "accel", "support": 1,
@@ -46,6 +46,8 @@ def bus_table(rate_hz: float, counter: bool) -> dict[str, Any]:
                             "mark_threshold": MARK_HIGH_V / 2, "channels": channels}  # fmt: skip
     if counter:
         scan["counter"] = "counter"
+    if per_frame > 1:
+        scan["scans_per_frame"] = per_frame
     return {"protocol": "scan", "scan": scan}
 
 
@@ -78,11 +80,18 @@ def input_counts(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate
 
 
 def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
-                  counter: bool) -> Frames:  # fmt: skip
-    """The module's frames: each scan at its sample time ``t`` (host time = sample time)."""
+                  counter: bool, per_frame: int = 1) -> Frames:  # fmt: skip
+    """The module's frames: each scan at its sample time ``t`` (host time = sample time);
+    with ``per_frame`` > 1, CAN FD frames of that many scans, each sent at its last scan's
+    time (a partial frame at the end is not sent)."""
     counts, mark = input_counts(t, accel, edges, rate_hz)
     frames = scan_frames(t - t[0] if len(t) else t, (counts[0], counts[1]), mark,
                          frame_id=SCAN_ID)  # fmt: skip
     if not counter:
         frames.data[:, :2] = 0
-    return frames
+    if per_frame == 1:
+        return frames
+    n = len(frames) // per_frame * per_frame
+    data = frames.data[:n].reshape(-1, 8 * per_frame)
+    return Frames.build(frames.t_s[per_frame - 1 : n : per_frame], SCAN_ID, data,
+                        dlc=8 * per_frame, flags=FLAG_FD)  # fmt: skip

@@ -80,7 +80,8 @@ class Scene(BaseModel):
         """The configuration part (what solves the recording)."""
         bus = self.bus
         if self.nodes.protocol == "scan":
-            bus = {**(bus or {}), **bus_table(self.nodes.rate_hz, self.nodes.counter)}
+            bus = {**(bus or {}), **bus_table(self.nodes.rate_hz, self.nodes.counter,
+                                              self.nodes.scans_per_frame)}  # fmt: skip
         elif self.nodes.protocol == "canopen":
             bus = {**(bus or {}), **canopen_bus_table(self.nodes.rate_hz)}
         return Config(

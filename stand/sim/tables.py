@@ -108,6 +108,8 @@ class NodesTable(_Table):
     ``canopen``: a SYNC producer and two analog input modules (:mod:`stand.sim.canopen_emit`)."""
     counter: bool = True
     """``scan`` only: whether the module sends its scan counter."""
+    scans_per_frame: Literal[1, 2, 3, 4, 6, 8] = 1
+    """``scan`` only: CAN FD frames of this many 8-byte scans (1: a classic frame a scan)."""
     sync_jitter_s: Annotated[float, Field(ge=0.0, le=1e-3)] = 0.0
     """``canopen`` only: the SYNC's timing jitter (rms): the modules sample when it comes."""
 
