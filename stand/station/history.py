@@ -61,7 +61,7 @@ def history_screen(station: Station) -> None:
         )
     columns = [{"name": k, "label": k, "field": k, "align": "left"}
                for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
-                         "plane 2", "report")]  # fmt: skip
+                         "plane 2", "report", "note")]  # fmt: skip
     table = (
         ui.table(columns=columns, rows=[], row_key="run", selection="multiple")
         .classes("w-full")
@@ -114,6 +114,7 @@ def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
         "verdict": (r["verdict"] or "") + (" (check)" if r["checks_run"] else ""),
         "plane 1": planes.get(1, ""),
         "plane 2": planes.get(2, ""),
+        "note": r.get("note") or "",  # a balancer test's verdict, the operator's note
         "report": f"/report/{r['id']}",
     }
 
