@@ -194,6 +194,9 @@ def configure_modules(bus: Any, layout: PdoLayout, channel: str) -> list[dict[st
             m.write(0x1007, 0, window_us)
             _inputs(m, period_us)
             _tpdo(m)
+    except can.CanError as exc:  # the interface refused to send: bus-off, unplugged
+        raise BusError(f"cannot set the CANopen modules up: the interface refused to send "
+                       f"({type(exc).__name__}: {exc})", channel=channel) from exc  # fmt: skip
     finally:
         network.notifier.stop(1.0)  # the bus stays open: it is the caller's
     return [s.to_dict() for s in steps]
@@ -207,19 +210,28 @@ class SyncProducer:
         self._task: Any = None
         self._started = False
 
-    def start(self, *, produce: bool = True) -> None:
-        """NMT start every module, then (``produce``) the SYNC at the sample rate."""
+    def start(self, *, produce: bool = True, channel: str = "bus") -> None:
+        """NMT start every module, then (``produce``) the SYNC at the sample rate.
+
+        Raises
+        ------
+        BusError
+            The interface refused to send (one line).
+        """
         import can
 
-        for n in self.layout.nodes:
-            _nmt(self.bus, NMT_START, n.node_id)
-        self._started = True
-        if not produce:
-            return
         sync = can.Message(arbitration_id=self.layout.sync_id, data=b"", is_extended_id=False)
         if not math.isfinite(self.layout.rate_hz) or self.layout.rate_hz <= 0:
             raise ValueError(f"SYNC rate {self.layout.rate_hz} Hz")
-        self._task = self.bus.send_periodic(sync, 1.0 / self.layout.rate_hz)
+        try:
+            for n in self.layout.nodes:
+                _nmt(self.bus, NMT_START, n.node_id)
+            self._started = True
+            if produce:
+                self._task = self.bus.send_periodic(sync, 1.0 / self.layout.rate_hz)
+        except (can.CanError, NotImplementedError) as exc:
+            raise BusError(f"cannot start the CANopen modules and their SYNC "
+                           f"({type(exc).__name__}: {exc})", channel=channel) from exc  # fmt: skip
 
     def stop(self) -> None:
         """Stop the SYNC and put the modules back in pre-operational (idempotent; a bus

@@ -91,7 +91,10 @@ def onset(w: np.ndarray, motion: np.ndarray, reference: np.ndarray) -> float | N
     if not len(w):
         return None
     order = np.argsort(w)
-    w, ratio = w[order], np.log(np.abs(motion[order]) / np.abs(reference[order]))
+    tiny = np.finfo(float).tiny  # a motion or reference of 0 (no test unbalance) stays finite
+    ratio = np.log(np.maximum(np.abs(motion[order]), tiny)
+                   / np.maximum(np.abs(reference[order]), tiny))  # fmt: skip
+    w = w[order]
     below = ratio < 0
     if not below[-1]:
         return None
@@ -158,8 +161,8 @@ def verdict(starts: Sequence[Start], table: Any, q: StandParameters) -> tuple[st
     w = rpm * math.pi / 30
     notes: list[str] = []
     if driving_point(q, table.plane, w).real >= 0:
-        first = windows(q, table.plane, 4 * float(natural_frequencies(q)[-1]))[0][0]
-        where = "below_onset" if w < first else "in_gap"
+        found = windows(q, table.plane, max(4 * float(natural_frequencies(q)[-1]), 1.5 * w))
+        where = "below_onset" if not found or w < found[0][0] else "in_gap"
         notes.append(f"at {rpm:.0f} rpm Re H_PP >= 0: the balls gather on the heavy side")
         return where, notes
     predicted = [s.predicted for s in starts if s.predicted is not None]

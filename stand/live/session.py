@@ -120,9 +120,16 @@ class LiveSession:
         quiet = () if self._canopen is None else (self._canopen.sync_id,)
         self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,
                                 quiet_ids=quiet)  # fmt: skip
-        self._install_signals()
         if self._sync is not None:
-            self._sync.start(produce=self._scene_frames is None)  # a scene plays its SYNCs
+            try:
+                self._sync.start(produce=self._scene_frames is None, channel=self.where)
+            except BusError:
+                self.reader.close()
+                self._shut_modules()
+                self.bus.shutdown()
+                self.writer.discard()
+                raise
+        self._install_signals()
         if self._player is not None:
             self._player.start()
         self.start = time.monotonic()

@@ -177,3 +177,24 @@ def test_the_hosts_own_sync_does_not_keep_a_dead_bus_alive(buses: tuple[Any, Any
         task.stop()
         reader.close()
     assert reader.frames_received > 10  # the SYNCs were received (and would be recorded)
+
+
+def test_an_interface_that_refuses_to_send_is_one_line(
+    buses: tuple[Any, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Bus-off, an unplugged adapter: python-can's CanOperationError from send becomes one
+    BusError, at the set-up and at the SYNC's start."""
+    import can
+
+    host, _ = buses
+
+    def refuse(*_: Any, **__: Any) -> None:
+        raise can.CanOperationError("Transmit buffer full")
+
+    monkeypatch.setattr(host, "send", refuse)
+    monkeypatch.setattr(host, "send_periodic", refuse)
+    with pytest.raises(BusError, match="cannot set the CANopen modules up: the interface "
+                       "refused to send"):  # fmt: skip
+        configure_modules(host, _layout(), "virtual:x")
+    with pytest.raises(BusError, match="cannot start the CANopen modules and their SYNC"):
+        SyncProducer(host, _layout()).start(channel="virtual:x")

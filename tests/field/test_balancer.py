@@ -168,3 +168,14 @@ def test_a_malformed_test_unbalance_in_a_run_is_one_line(
     assert main(["autobalance", "test", str(bad), "--config", str(cfg), "--no-archive"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "'test_unbalance_json' is not a test unbalance" in err, err
+
+
+def test_an_onset_against_a_zero_reference_stays_finite() -> None:
+    """A test unbalance of 0 makes the reference 0: no warning, no onset (never below)."""
+    import warnings
+
+    w = np.array([10.0, 20.0, 30.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert onset(w, np.ones(3), np.zeros(3)) is None
+        assert onset(w, np.zeros(3), np.zeros(3)) is None
