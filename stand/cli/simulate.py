@@ -78,6 +78,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
 
+    if args.series is not None and args.starts is not None:
+        raise UsageError("stand simulate: --series (a production) or --starts (a balancer's "
+                         "test), not both")  # fmt: skip
     if args.series is not None:
         return _series(args)
     if args.starts is not None:
@@ -122,8 +125,11 @@ def _write(
     believed: Any,
     source: str,
     more: dict[str, str] | None = None,
+    out: str | None = None,
 ) -> None:
-    """The run written to --out (a run file, or a python-can log by its extension)."""
+    """The run written to ``out`` (default --out: a run file, or a python-can log by its
+    extension), ``more`` attributes with it."""
+    out = out or args.out
 
     job = job_from(args)
     rec = Recording(
@@ -140,12 +146,12 @@ def _write(
     )
     write_recording(
         rec,
-        args.out,
+        out,
         rebuild(sim.frames, strict_status=False),
         force=args.force,
         inputs=[source, *([args.config] if args.config else [])],
     )
-    print(f"wrote {args.out}", file=sys.stderr)
+    print(f"wrote {out}", file=sys.stderr)
 
 
 def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
@@ -211,7 +217,11 @@ def _starts(args: argparse.Namespace) -> int:
     names = [folder / f"start-{k + 1:02d}.h5" for k in range(args.starts)]
     for name in names:
         check_output(str(name), force=args.force)  # before the work
+    stored, believed = None, None
+    if args.config:
+        believed, _, stored = load_config_text(args.config)
     base, params, source = load_scene(args.scene)
+    base = with_masses(base, scene_masses(args), args.rpm, args.index)
     if base.effects.autobalancer is None:
         raise UsageError(f"stand simulate: {args.scene} has no [effects.autobalancer]: "
                          "--starts simulates a ball balancer's test")  # fmt: skip
@@ -220,11 +230,9 @@ def _starts(args: argparse.Namespace) -> int:
         scene = turned(base, 180.0 * k, (args.seed if args.seed is not None else base.run.seed) + k)
         sim = simulate(scene, params)
         test = [[u.real, u.imag] for u in unbalance_from_polar(*unbalance_kg_m(scene))]
-        args.out = str(name)
-        _write(args, scene, sim, label, None, None, source,
-               {TEST_UNBALANCE_ATTR: json.dumps(test)})  # fmt: skip
-        args.out = None
+        _write(args, scene, sim, label, stored, believed, source,
+               {TEST_UNBALANCE_ATTR: json.dumps(test)}, out=str(name))  # fmt: skip
     print(f"{args.starts} starts of {Path(source).stem} in {folder}, the unbalance turned 180 "
           "deg each: stand autobalance test " + " ".join(str(n) for n in names) + " --config "
-          "CFG")  # fmt: skip
+          f"CFG (stand inspect {names[0]} --config-out CFG writes theirs)")  # fmt: skip
     return 0

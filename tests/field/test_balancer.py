@@ -179,3 +179,38 @@ def test_an_onset_against_a_zero_reference_stays_finite() -> None:
         warnings.simplefilter("error")
         assert onset(w, np.ones(3), np.zeros(3)) is None
         assert onset(w, np.zeros(3), np.zeros(3)) is None
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["demo-balls", "--starts", "0", "--out-dir", "D"], "--starts takes 1 to 99"),
+        (["demo-balls", "--starts", "2"], "--starts N needs --out-dir DIR"),
+        (["demo-balls", "--starts", "2", "--series", "2", "--out-dir", "D"], "not both"),
+        (["demo", "--starts", "2", "--out-dir", "D"], "has no [effects.autobalancer]"),
+        (["demo-balls", "--starts", "2", "--out-dir", "D", "--out", "x.h5"],
+         "writes --out-dir only"),
+    ],
+)  # fmt: skip
+def test_bad_starts_are_one_line(
+    argv: list[str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = [str(tmp_path / a) if a in ("D", "x.h5") else a for a in argv]
+    assert main(["simulate", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err, err
+    assert not list(tmp_path.glob("**/*.h5"))
+
+
+def test_starts_honour_the_speed_given(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--rpm`` moves every start (the balancer judged at 430 rpm: in the gap)."""
+    scene = _scene(tmp_path, **{"seconds = 30.0": "seconds = 10.0",
+                                "scale_um_s2 = 100": "scale_um_s2 = 400"})  # fmt: skip
+    out = tmp_path / "starts"
+    assert main(["simulate", str(scene), "--starts", "1", "--out-dir", str(out),
+                 "--rpm", "430"]) == 0  # fmt: skip
+    cfg = tmp_path / "cfg.toml"
+    assert main(["inspect", str(out / "start-01.h5"), "--config-out", str(cfg)]) == 0
+    capsys.readouterr()
+    doc = _test([str(out / "start-01.h5")], cfg, tmp_path, capsys)
+    assert doc["rpm"] == pytest.approx(430.0, abs=0.5) and doc["verdict"] == "in_gap"
