@@ -146,11 +146,23 @@ def measure_until_precise(
         if on_progress:
             on_progress(Progress(elapsed, m, goal))
         short = any(w.code == "short_window" for w in m.warnings)
-        if not short and all(m.radius95_kg_m[i] <= goal[i] for i in range(2)):
+        if (
+            not short
+            and all(m.radius95_kg_m[i] <= goal[i] for i in range(2))
+            and _settled(cfg, estimates.full)
+        ):
             stopped_by = "precision"
             break
         next_check = _next_check(elapsed, m, goal, MIN_REVS, max_interval_s)
     return _final_result(session, cfg, params, options, targets, last, stopped_by)
+
+
+def _settled(cfg: Any, full: Any) -> bool:
+    """A rotor with a ball balancer stops for precision only once the last full pass saw
+    its balls settled (a precise average of balls on their way is not the answer)."""
+    if cfg.autobalancer is None:
+        return True
+    return full is not None and not any(w.code == "balls_unsettled" for w in full.warnings)
 
 
 class Estimates:
@@ -164,6 +176,8 @@ class Estimates:
     def __init__(self, session: LiveSession, cfg: Any, params: Any, options: SolveOptions):
         self.session, self.cfg, self.params, self.options = session, cfg, params, options
         self.last: Any = None
+        self.full: Any = None
+        """The last full pass (an update knows no drift across the window)."""
         self.next_full = 0.0
         self.joined_at = 0  # frames received when the fits last gained a revolution
         self.costs: list[tuple[float, float, str, int]] = []
@@ -182,6 +196,7 @@ class Estimates:
             self.next_full = elapsed + max(1.0, GROWTH * elapsed)
             self.joined_at = frames
             self._read += frames
+            self.full = m
         self.last = m
         self.costs.append((elapsed, time.perf_counter() - t0, kind, self._read))
         return m

@@ -92,3 +92,23 @@ def test_a_bad_balancer_is_one_line(
     assert main(["simulate", str(path), "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err, err
+
+
+@pytest.mark.realtime
+def test_a_live_balance_waits_for_the_balls(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``stand balance --scene demo-balls``: precise after 6 s with the balls still on
+    their way, the live loop goes on until a full pass sees them settled, and the answer
+    is the residual the prediction says (within 3 of its 95 % radii: a gathered or moving
+    state is hundreds of g mm off)."""
+    out = tmp_path / "b.h5"
+    live = _json(["balance", "--scene", "demo-balls", "--out", str(out), "--json", "--quiet"],
+                 capsys)  # fmt: skip
+    assert live["stopped_by"] == "precision"
+    assert not [w for w in live["warnings"] if "balls" in w], live["warnings"]
+    want = _json(["autobalance", "--scene", "demo-balls", "--rpm", "900", "--json"], capsys)
+    for got, pred in zip(live["planes"], want["balanced"]["residual"], strict=True):
+        miss = abs(_U(got["unbalance_g_mm"], got["angle_deg"])
+                   - _U(pred["unbalance_g_mm"], pred["angle_deg"]))  # fmt: skip
+        assert miss <= 3 * got["uncertainty_g_mm"], (got, pred)
