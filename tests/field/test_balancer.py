@@ -74,10 +74,9 @@ def test_a_working_balancer_passes_and_each_start_is_archived(
     ("changes", "verdict"),
     [
         ({"rpm = 900.0": "rpm = 300.0"}, "below_onset"),
-        ({"rpm = 900.0": "rpm = 430.0", "scale_um_s2 = 100": "scale_um_s2 = 400"}, "in_gap"),
+        ({"rpm = 900.0": "rpm = 430.0"}, "in_gap"),
         ({"ball_g = 50.0": "ball_g = 20.0"}, "over_capacity"),
-        ({"seconds = 30.0": "seconds = 5.0", "scale_um_s2 = 100": "scale_um_s2 = 400"},
-         "unsettled"),
+        ({"seconds = 30.0": "seconds = 5.0"}, "unsettled"),
         ({"drag_n_s_m = 0.5": "drag_n_s_m = 0.5\nrolling = 0.01",
           "start_deg = [90.0, 120.0]": "start_deg = [0.0, 180.0]"}, "stuck"),
     ],
@@ -204,8 +203,7 @@ def test_bad_starts_are_one_line(
 
 def test_starts_honour_the_speed_given(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """``--rpm`` moves every start (the balancer judged at 430 rpm: in the gap)."""
-    scene = _scene(tmp_path, **{"seconds = 30.0": "seconds = 10.0",
-                                "scale_um_s2 = 100": "scale_um_s2 = 400"})  # fmt: skip
+    scene = _scene(tmp_path, **{"seconds = 30.0": "seconds = 10.0"})
     out = tmp_path / "starts"
     assert main(["simulate", str(scene), "--starts", "1", "--out-dir", str(out),
                  "--rpm", "430"]) == 0  # fmt: skip
