@@ -63,9 +63,9 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
     return BusError(message, channel=failure.channel, frames_received=frames)
 
 
-def _record(args: argparse.Namespace, session: Any) -> None:
+def _record(args: argparse.Namespace, session: Any, decode: Any) -> None:
     """Read the bus until stopped (Ctrl-C, --seconds, a failure), a speed line every
-    :data:`STATUS_EVERY_S` on stderr."""
+    :data:`STATUS_EVERY_S` on stderr (its streams by ``decode``, None: protocol v1's)."""
 
     next_status = STATUS_EVERY_S
     window: collections.deque[tuple[float, Any]] = collections.deque()
@@ -81,7 +81,7 @@ def _record(args: argparse.Namespace, session: Any) -> None:
             window.popleft()
         if not args.quiet and session.elapsed_s >= next_status:
             next_status += STATUS_EVERY_S
-            line = speed_line(window, session.elapsed_s, session.frames_received, args.decode)
+            line = speed_line(window, session.elapsed_s, session.frames_received, decode)
             print(line, file=sys.stderr)
 
 
@@ -94,12 +94,11 @@ def run(args: argparse.Namespace) -> int:
         cfg, _, config_text = load_config_text(args.config)
         table, layout = cfg.bus, layout_of(cfg, args.config)
     kwargs = bus_kwargs(args, table)
-    args.decode = None if layout is None else decoder(layout)
     with LiveSession(
         kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout,
         builder=builder_for(layout), canopen=canopen_of(layout),
     ) as session:  # fmt: skip
-        _record(args, session)
+        _record(args, session, None if layout is None else decoder(layout))
     streams = session.close()
     frames = session.builder.frames
     if session.stop_signal is not None and not args.quiet:

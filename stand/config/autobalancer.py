@@ -52,6 +52,16 @@ class AutobalancerTable(BaseModel):
         return self
 
     @property
+    def ball_kg(self) -> float:
+        """One ball's mass [kg]."""
+        return self.ball_g * 1e-3
+
+    @property
+    def radius_m(self) -> float:
+        """The balls' running radius [m]."""
+        return self.radius_mm * 1e-3
+
+    @property
     def capacity_kg_m(self) -> float:
         """``n m R``: the most unbalance the balls can make [kg m]."""
         return self.balls * self.ball_g * 1e-3 * self.radius_mm * 1e-3

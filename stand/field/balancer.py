@@ -32,13 +32,14 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm
-from stand.core.autobalance import balanced, driving_point, receptance, windows, with_balls
+from stand.core.autobalance import balanced, driving_point, receptance, windows
 from stand.core.model import StandParameters, natural_frequencies
 from stand.drivers import read_recording
 from stand.drivers.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import MeasurementError, RecordingError
 from stand.measuring.track import track_1x
 from stand.solve import solve_recording, stored_streams
+from stand.solve.autobalance import balls_stand
 
 STUCK_SHARE = 0.5
 """``stuck``: between starts the race plane's residual moves, beyond what the prediction
@@ -133,12 +134,12 @@ def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
     rec = read_recording(path)
     test = _test_unbalance(rec.meta, path, first, k, moved_deg)  # bad input before the work
     result = solve_recording(path, config)
-    q = with_balls(params, table.plane, table.balls * table.ball_g * 1e-3)
+    q = balls_stand(params, table)
     w = result.measurement.omega_rad_s
     predicted = None
     if test is not None and driving_point(q, table.plane, w).real < 0:
-        m, R = table.ball_g * 1e-3, table.radius_mm * 1e-3
-        predicted = balanced(q, table.plane, test, w, balls=table.balls, ball_kg=m, radius_m=R)
+        predicted = balanced(q, table.plane, test, w, balls=table.balls, ball_kg=table.ball_kg,
+                             radius_m=table.radius_m)  # fmt: skip
     found = None
     if test is not None:
         gamma = math.radians(cfg.stand.reference_angle_deg)
@@ -224,7 +225,7 @@ def balancer_test(runs: Sequence[str], config: str, cfg: Any, params: StandParam
     if table is None:
         raise MeasurementError(f"{config} has no [autobalancer]: which balancer is tested?")
     starts = [one_start(r, k, config, cfg, params, first, moved_deg) for k, r in enumerate(runs)]
-    q = with_balls(params, table.plane, table.balls * table.ball_g * 1e-3)
+    q = balls_stand(params, table)
     w = float(np.median([s.rpm for s in starts])) * math.pi / 30
     found = windows(q, table.plane, max(4 * float(natural_frequencies(q)[-1]), 1.5 * w))
     edge = next((lo for lo, hi in found if lo <= w and (hi is None or w <= hi)), None)

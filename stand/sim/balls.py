@@ -27,8 +27,8 @@ TRUTH_HZ = 50.0
 
 def balls_of(table: Any) -> Balls:
     """The core's balls from an ``[autobalancer]`` table (SI)."""
-    return Balls(plane=table.plane, n=table.balls, mass_kg=table.ball_g * 1e-3,
-                 radius_m=table.radius_mm * 1e-3, drag_n_s_m=table.drag_n_s_m,
+    return Balls(plane=table.plane, n=table.balls, mass_kg=table.ball_kg,
+                 radius_m=table.radius_m, drag_n_s_m=table.drag_n_s_m,
                  gravity_m_s2=G_M_S2 if table.gravity else 0.0, rolling=table.rolling)  # fmt: skip
 
 

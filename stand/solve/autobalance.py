@@ -47,7 +47,7 @@ def predict(
     (``[low, high]``, ``high`` null when open), ``natural_rpm``, ``antiresonance_rpm``,
     and with ``rpm`` and ``unbalance_kg_m`` (per plane, ``U = q R e^{-i phi}``) the
     balanced state under ``balanced``."""
-    q = with_balls(p, table.plane, table.balls * table.ball_g * 1e-3)
+    q = balls_stand(p, table)
     natural = [float(x) for x in natural_frequencies(q)]
     top = max_rpm or max(SPAN_OVER_MODES * float(rad_s_to_rpm(natural[-1])), 1.5 * (rpm or 0))
     found = windows(q, table.plane, float(rpm_to_rad_s(top)))
@@ -82,8 +82,8 @@ def _balanced(
             "outside every window the balls gather on the heavy side: the vibration rises instead"
         )
         return out
-    b = balanced(q, table.plane, U, w, balls=table.balls, ball_kg=table.ball_g * 1e-3,
-                 radius_m=table.radius_mm * 1e-3)  # fmt: skip
+    b = balanced(q, table.plane, U, w, balls=table.balls, ball_kg=table.ball_kg,
+                 radius_m=table.radius_m)  # fmt: skip
     polar = _g_mm(b.balls_kg_m)
     out |= {
         "balls_g_mm": polar["unbalance_g_mm"],
@@ -119,7 +119,7 @@ def balls_note(cfg: Any, p: StandParameters, m: Any) -> Any:
         return None
     omega_rad_s, codes = m.omega_rad_s, {w.code for w in m.warnings}
     drift = max((w.drift for w in m.windows), key=lambda d: d[0], default=(0.0, 0.0))
-    q = with_balls(p, table.plane, table.balls * table.ball_g * 1e-3)
+    q = balls_stand(p, table)
     rpm = float(rad_s_to_rpm(omega_rad_s))
     if driving_point(q, table.plane, omega_rad_s).real >= 0:
         return Diagnostic("balls_outside_window", f"the ball balancer cannot balance at "
@@ -134,8 +134,8 @@ def balls_note(cfg: Any, p: StandParameters, m: Any) -> Any:
     return None
 
 
-def with_the_balls(cfg: Any, p: StandParameters) -> StandParameters:
-    """The stand the config measures with: its rotor and, with an ``[autobalancer]``, the
-    balls' mass at their race (the ``[rotor]`` table is the rotor without them)."""
-    t = cfg.autobalancer
-    return p if t is None else with_balls(p, t.plane, t.balls * t.ball_g * 1e-3)
+def balls_stand(p: StandParameters, table: Any) -> StandParameters:
+    """The stand with an ``[autobalancer]`` table's balls at their race (``p`` itself
+    without a table): what a config with a balancer measures with, the ``[rotor]`` table
+    being the rotor without them."""
+    return p if table is None else with_balls(p, table.plane, table.balls * table.ball_kg)

@@ -35,7 +35,7 @@ from stand.errors import ConfigError
 from stand.measuring import Measurement
 from stand.measuring.live_fit import remeasure
 from stand.measuring.measure import measure
-from stand.solve.autobalance import balls_note, with_the_balls
+from stand.solve.autobalance import balls_note, balls_stand
 from stand.solve.correct import corrections as plane_corrections
 from stand.solve.result import (
     Check,
@@ -307,8 +307,8 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
     """The measurement of a run's streams with the config's sensor calibration (and the
     options' influence matrix in place of the model, if any)."""
     m = measure(
-        streams, with_the_balls(cfg, params), **cfg.measure_options(), taper=options.taper,
-        gate=options.gate,
+        streams, balls_stand(params, cfg.autobalancer), **cfg.measure_options(),
+        taper=options.taper, gate=options.gate,
         influence=None if options.matrix is None else options.matrix.imap,
         beam=cfg.rotor.beam(),
     )  # fmt: skip
@@ -323,7 +323,7 @@ def remeasure_streams(
     is due."""
 
     m = remeasure(
-        prev, tails, with_the_balls(cfg, params), **cfg.measure_options(),
+        prev, tails, balls_stand(params, cfg.autobalancer), **cfg.measure_options(),
         influence=None if options.matrix is None else options.matrix.imap,
         beam=cfg.rotor.beam(),
     )  # fmt: skip

@@ -150,12 +150,13 @@ def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> 
 def stored_streams(rec: Any) -> RunStreams:
     """A recording's streams as the configuration it carries reads its frames (protocol
     v1's when it carries none)."""
-    streams = rebuild(rec.frames, strict_status=False)
-    if not rec.meta.get("config_toml"):
-        return streams
-    cfg, _, _ = stored_config(rec.meta, rec.path)
-    layout = layout_of(cfg, f"{rec.path} (stored)")
-    return streams if layout is None else decoder(layout)(rec.frames)
+    layout = None
+    if rec.meta.get("config_toml"):
+        cfg, _, _ = stored_config(rec.meta, rec.path)
+        layout = layout_of(cfg, f"{rec.path} (stored)")
+    if layout is None:
+        return rebuild(rec.frames, strict_status=False)
+    return decoder(layout)(rec.frames)
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:
