@@ -12,8 +12,11 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import weakref
 from collections.abc import Callable, Sequence
+from types import FrameType
 
 from stand import __version__
 from stand.errors import StandError, UsageError
@@ -92,10 +95,39 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+INTERRUPT_AGAIN_S = 0.005
+"""An interrupt that came inside a finalizer is delivered again this much later [s]."""
+
+
+def swallowed_there(frame: FrameType | None) -> bool:
+    """Whether an exception raised at ``frame`` would be swallowed: inside a weakref
+    callback or a ``__del__``, Python prints "Exception ignored" and carries on."""
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name == "__del__" or code.co_filename == weakref.__file__:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _interrupt(signum: int, frame: FrameType | None) -> None:
+    """Ctrl-C as KeyboardInterrupt, but not where it would be swallowed: there it comes
+    again :data:`INTERRUPT_AGAIN_S` later (SIGALRM), so a long command (``stand
+    reprocess`` solving run after run) never runs on to its end after an interrupt."""
+    if swallowed_there(frame):
+        signal.setitimer(signal.ITIMER_REAL, INTERRUPT_AGAIN_S)
+        return
+    raise KeyboardInterrupt
+
+
 def entry() -> int:
-    """The ``stand`` program (its console script and ``python -m stand.cli``): :func:`main`,
-    then the interpreter's last collection skipped
+    """The ``stand`` program (its console script and ``python -m stand.cli``): Ctrl-C that
+    always counts (:func:`_interrupt`, unless the program started with SIGINT ignored, as
+    under ``nohup``), :func:`main`, then the interpreter's last collection skipped
     (:func:`stand.process.program.skip_last_collection`: 7 % of a 3 s solve)."""
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGALRM, _interrupt)
+        signal.signal(signal.SIGINT, _interrupt)
     code = main()
     skip_last_collection()
     return code

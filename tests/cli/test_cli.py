@@ -190,3 +190,45 @@ def test_finite_names_the_first_bad_key_and_passes_good_objects() -> None:
     assert finite(good) is good
     with pytest.raises(ModelError, match=r"a\[1\]\.b \(inf\)"):
         finite({"a": [1.0, {"b": float("inf")}]})
+
+
+def test_an_interrupt_inside_a_finalizer_comes_again_later() -> None:
+    """CPython swallows an exception raised inside a weakref callback or a ``__del__``
+    ("Exception ignored"): a Ctrl-C landing there would be lost and ``stand reprocess``
+    would run on to its end.  The program's handler sees where it landed and delivers it
+    again a moment later (SIGALRM) instead."""
+    import gc
+    import signal
+    import sys
+    import weakref
+
+    from stand.cli import _interrupt, swallowed_there
+
+    class Thing:
+        pass
+
+    seen: list[bool] = []
+    thing = Thing()
+    weakref.finalize(thing, lambda: seen.append(swallowed_there(sys._getframe())))
+    del thing
+    gc.collect()
+    assert seen == [True]
+    assert not swallowed_there(sys._getframe())
+    before = signal.signal(signal.SIGALRM, signal.SIG_IGN)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            _interrupt(signal.SIGINT, sys._getframe())
+        fired: list[float] = []
+
+        def inside() -> None:  # no exception: deferred, the timer set
+            _interrupt(signal.SIGINT, sys._getframe())
+            fired.append(signal.getitimer(signal.ITIMER_REAL)[0])
+
+        thing = Thing()
+        weakref.finalize(thing, inside)
+        del thing
+        gc.collect()
+        assert len(fired) == 1 and 0 < fired[0] <= 0.005
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, before)
