@@ -23,8 +23,14 @@ from typing import Any
 
 import numpy as np
 
-from stand.drivers.logs import messages_from_frames
-from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
+from stand.drivers.frames import (
+    FLAG_ERROR,
+    FLAG_EXTENDED,
+    FLAG_FD,
+    FLAG_REMOTE,
+    Frames,
+    messages_from_frames,
+)
 from stand.errors import BusError, BusTimeoutError
 
 MAX_PENDING = 1_000_000
@@ -44,7 +50,7 @@ def describe_bus(kwargs: dict[str, Any]) -> str:
 
 
 PRODUCT_KEYS = ("protocol", "scan", "canopen")
-"""``[bus]`` keys the product reads itself (:mod:`stand.config.scan`); never python-can's."""
+"""``[bus]`` keys the product reads itself (:mod:`stand.drivers.scan.table`); never python-can's."""
 
 URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
 """A channel like ``spy://``, ``loop://``, ``rfc2217://``, ``socket://``: serial interfaces

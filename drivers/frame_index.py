@@ -1,7 +1,7 @@
 """A node's sample index kept as its frames' numbers (8 bytes a frame, not 24).
 
-A SAMPLES frame carries three samples, so sample ``i`` of a node's stream has
-the index ``3 F[i // 3] + i % 3``, ``F`` the frame's unwrapped ``seq``.
+Where each frame carries ``k`` samples (protocol v1's SAMPLES frame: 3), sample ``i`` of
+a node's stream has the index ``k F[i // k] + i % k``, ``F`` the frame's unwrapped ``seq``.
 When every sample is valid and the node never restarted (the common case:
 one segment, ``F`` strictly increasing) that is all the index is, and
 :class:`FrameIndex` keeps ``F`` alone: a one-hour node's index is 38 MB
@@ -23,18 +23,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from stand.drivers.protocol import SAMPLES_PER_FRAME as PER_FRAME
-
 
 class FrameIndex:
-    """``3 F[i // 3] + i % 3`` for samples ``lo <= i < hi`` (``F`` strictly increasing)."""
+    """``k F[i // k] + i % k`` (``k`` samples a frame) for samples ``lo <= i < hi`` (``F``
+    strictly increasing)."""
 
-    __slots__ = ("_F", "_hi", "_lo")
+    __slots__ = ("_F", "_hi", "_lo", "_per")
 
-    def __init__(self, F: NDArray[np.int64], lo: int = 0, hi: int | None = None) -> None:
+    def __init__(self, F: NDArray[np.int64], per: int, lo: int = 0, hi: int | None = None
+                 ) -> None:  # fmt: skip
         self._F = F
+        self._per = per
         self._lo = lo
-        self._hi = PER_FRAME * len(F) if hi is None else hi
+        self._hi = per * len(F) if hi is None else hi
 
     def __len__(self) -> int:
         return self._hi - self._lo
@@ -49,20 +50,20 @@ class FrameIndex:
 
     def _at(self, g: NDArray[np.int64]) -> NDArray[np.int64]:
         """The values at absolute sample positions ``g``."""
-        f, k = np.divmod(g, PER_FRAME)
-        out: NDArray[np.int64] = PER_FRAME * self._F[f] + k
+        f, k = np.divmod(g, self._per)
+        out: NDArray[np.int64] = self._per * self._F[f] + k
         return out
 
     def _range(self, lo: int, hi: int) -> NDArray[np.int64]:
         """The values of absolute samples ``lo:hi``, frame by frame (no division per sample)."""
         if hi <= lo:
             return np.zeros(0, np.int64)
-        f0, f1 = lo // PER_FRAME, -(-hi // PER_FRAME)
-        rows = np.empty((f1 - f0, PER_FRAME), np.int64)
-        np.multiply(self._F[f0:f1], PER_FRAME, out=rows[:, 0])
-        for k in range(1, PER_FRAME):
+        f0, f1 = lo // self._per, -(-hi // self._per)
+        rows = np.empty((f1 - f0, self._per), np.int64)
+        np.multiply(self._F[f0:f1], self._per, out=rows[:, 0])
+        for k in range(1, self._per):
             np.add(rows[:, 0], k, out=rows[:, k])
-        first = lo - PER_FRAME * f0
+        first = lo - self._per * f0
         return rows.reshape(-1)[first : first + hi - lo]
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> NDArray[Any]:
@@ -81,7 +82,7 @@ class FrameIndex:
             return self._at(np.array(self._lo + i))[()]
         if isinstance(key, slice) and key.step in (None, 1):
             start, stop, _ = key.indices(n)
-            return FrameIndex(self._F, self._lo + start, self._lo + max(start, stop))
+            return FrameIndex(self._F, self._per, self._lo + start, self._lo + max(start, stop))
         k = np.asarray(key)
         if k.dtype.kind in "iu" and k.ndim == 1:
             if len(k) and (k.min() < -n or k.max() >= n):
@@ -100,11 +101,11 @@ class FrameIndex:
         finite = np.isfinite(whole)
         K = np.clip(np.where(finite, whole, 0), -(2**62), 2**62).astype(np.int64)  # past all
         # the first frame whose last sample reaches K, then the sample within it
-        f = np.searchsorted(self._F, -((PER_FRAME - 1 - K) // PER_FRAME), side="left")
+        f = np.searchsorted(self._F, -((self._per - 1 - K) // self._per), side="left")
         F = self._F[np.minimum(f, len(self._F) - 1)] if len(self._F) else np.zeros_like(K)
         g = np.where(
-            f < len(self._F), PER_FRAME * f + np.clip(K - PER_FRAME * F, 0, PER_FRAME - 1),
-            PER_FRAME * len(self._F),
+            f < len(self._F), self._per * f + np.clip(K - self._per * F, 0, self._per - 1),
+            self._per * len(self._F),
         )  # fmt: skip
         n = len(self)
         out = np.clip(g - self._lo, 0, n)

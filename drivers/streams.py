@@ -1,57 +1,155 @@
-"""Per-node sample streams rebuilt from decoded frames.
-
-For every node: the sample index and acceleration of every valid sample,
-the reference edges as sub-sample positions, the node's rate and scale, its
-flags, and the bookkeeping (lost frames, invalid samples, restarts).  The
-rules (``spec/can-protocol.md``):
-
-* ``seq`` is unwrapped; a forward jump is lost frames, whose samples are
-  missing: later samples keep their true index (a gap is never closed by
-  concatenation).  A repeated ``seq`` is a duplicate and is dropped.
-* A node restart starts a new *segment*, with its own sample clock: ``seq``
-  jumps back, or a STATUS arrives after the node was silent for
-  :data:`stand.drivers.node_build.SILENCE_S` and ``seq`` does not run on as the time that passed
-  predicts (if it does, the silence was a bus dropout: lost frames).
-  Segment ``k``'s indices only compare with segment ``k``'s.
-* The count -32768 is an invalid sample: counted, never a value.
-* A MARK is matched to SAMPLES by ``seq``, whichever arrived first: its
-  ``seq`` is unwrapped against the nearest SAMPLES frame of the same node.
-* Samples are scaled by the node's latest STATUS (the first one for frames
-  that came before it).  No STATUS within the node's first
-  :data:`stand.drivers.node_build.STATUS_WITHIN_S` of frames is an error in strict mode, a warning
-  otherwise.
-* STATUS flags become warnings, with the time they were seen.
-
-Everything is vectorised per node; nodes are few (1..15).  This module holds
-the streams (:class:`NodeStream`, :class:`RunStreams`) and their rebuilding
-from frames, whole or as they come (:class:`StreamBuilder`); one node's
-stream is built by :mod:`stand.drivers.node_build`, where the rules above
-are carried out step by step.
-"""
+"""Per-support sample streams, whatever family of hardware sent them: :class:`NodeStream`
+(one support's samples and reference edges) and :class:`RunStreams` (a run's).  Each
+family's decoder builds them from frames (:mod:`stand.drivers.family`); the measuring path
+reads nothing else of the hardware."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
-from itertools import pairwise
-from typing import Any
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.drivers.codec import concat_decoded, decode
-from stand.drivers.node_build import rebuild_node
-from stand.drivers.node_stream import NodeStream as NodeStream  # the streams' element
-from stand.drivers.protocol import (
-    SUPPORT_NODES as SUPPORT_NODES,  # re-exported: the measuring path reads it here
-)
-from stand.drivers.protocol import (
-    BadFrame,
-    Decoded,
-    Frames,
-    node_records,
-    shift_decoded,
-)
+from stand.drivers.frame_index import FrameIndex
+from stand.drivers.frames import BadFrame
+
+SUPPORT_NODES = (1, 2)
+"""The streams a measurement needs: support 1's and support 2's (a v1 node's id is its
+support's number)."""
+
+
+@dataclass(frozen=True)
+class NodeStream:
+    """One node's samples and reference edges.
+
+    Attributes
+    ----------
+    node : int
+        Node id (1 = support 1, 2 = support 2).
+    rate_hz : float or None
+        Nominal sample rate from STATUS [Hz] (None: no STATUS seen).
+    scale_um_s2 : float or None
+        Scale from STATUS [µm/s² per count] (the latest one if it changed).
+    index : ndarray of int64, or FrameIndex
+        Sample index of every valid sample, within its segment; a node whose
+        samples are all valid, in one segment, keeps it as its frames' numbers
+        (:class:`~stand.drivers.frame_index.FrameIndex`, which reads as the array).
+    counts : ndarray of int16
+        The count of every valid sample.
+    segment_start : ndarray of int64
+        Where each segment (node restart) begins in ``index``: segment ``k``
+        is ``index[segment_start[k]:segment_start[k + 1]]`` (samples arrive in
+        segment order).  ``segment`` gives it per sample.
+    scale_start, scale_m_s2 : ndarray or None
+        The scale in force, as runs: from ``counts[scale_start[j]]`` on, one
+        count is ``scale_m_s2[j]`` [m/s²].  None without STATUS.
+        ``accel_m_s2`` and :meth:`accel` apply it; nothing else stores the
+        accelerations, so a long run costs 2 bytes a sample and its index (8/3 or 8).
+    mark_position : ndarray of float64
+        Reference edges, as sample positions (sub-sample) within their segment.
+    mark_segment : ndarray of int32
+        Segment of every edge.
+    mark_rev : ndarray of int64
+        Unwrapped revolution counter of every edge.
+    frames, samples, invalid_samples, lost_frames, duplicate_frames,
+    status_frames, lost_marks : int
+        Counts: SAMPLES frames kept, samples received (3 per frame, invalid
+        included), invalid samples, frames missing from ``seq`` gaps,
+        repeated frames dropped, STATUS frames, edges missing from ``rev``.
+    flags : tuple of str
+        STATUS flag names seen (``overrange``, ``sensor_fault``, ``no_reference``).
+    first_t_s, last_t_s : float
+        Host time of the node's first and last frame [s].
+    """
+
+    node: int
+    rate_hz: float | None
+    scale_um_s2: float | None
+    index: NDArray[np.int64] | FrameIndex
+    counts: NDArray[np.int16]
+    segment_start: NDArray[np.int64]
+    scale_start: NDArray[np.int64] | None
+    scale_m_s2: NDArray[np.float64] | None
+    mark_position: NDArray[np.float64]
+    mark_segment: NDArray[np.int32]
+    mark_rev: NDArray[np.int64]
+    frames: int
+    samples: int
+    invalid_samples: int
+    lost_frames: int
+    duplicate_frames: int
+    status_frames: int
+    lost_marks: int
+    segments: int
+    flags: tuple[str, ...]
+    first_t_s: float
+    last_t_s: float
+
+    @property
+    def marks(self) -> int:
+        """Number of reference edges received."""
+        return len(self.mark_position)
+
+    @property
+    def segment(self) -> NDArray[np.int32]:
+        """Segment (node restart count) of every valid sample."""
+        sizes = np.diff(np.append(self.segment_start, len(self.index)))
+        return np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
+
+    def segment_bounds(self, k: int) -> tuple[int, int]:
+        """``(lo, hi)``: segment ``k``'s samples are ``index[lo:hi]``."""
+        lo = int(self.segment_start[k])
+        hi = int(self.segment_start[k + 1]) if k + 1 < len(self.segment_start) else len(self.index)
+        return lo, hi
+
+    @property
+    def accel_m_s2(self) -> NDArray[np.float64] | None:
+        """Acceleration of every valid sample [m/s²]; None without STATUS."""
+        return None if self.scale_m_s2 is None else self.accel(0, len(self.counts))
+
+    def accel(self, lo: int, hi: int) -> NDArray[np.float64]:
+        """Acceleration of the valid samples ``lo:hi`` [m/s²] (scaled as they came)."""
+        assert self.scale_start is not None and self.scale_m_s2 is not None, "no STATUS"
+        starts = np.clip(self.scale_start, lo, hi) - lo
+        sizes = np.diff(np.append(starts, hi - lo))
+        if np.count_nonzero(sizes) == 1:  # one scale over the samples: the common case
+            one: NDArray[np.float64] = self.counts[lo:hi] * self.scale_m_s2[int(np.argmax(sizes))]
+            return one
+        scale = np.repeat(self.scale_m_s2, sizes)
+        return self.counts[lo:hi] * scale
+
+    def take(self, keep: NDArray[np.bool_]) -> NodeStream:
+        """The same node with only the samples where ``keep`` is true (edges unchanged)."""
+        pos = np.concatenate(([0], np.cumsum(keep)))
+        return replace(
+            self,
+            index=self.index[keep],
+            counts=self.counts[keep],
+            segment_start=pos[self.segment_start],
+            scale_start=None if self.scale_start is None else pos[self.scale_start],
+        )
+
+    def rpm(self) -> float | None:
+        """Mean shaft speed from the reference edges [rpm] (None: < 2 edges or no rate).
+
+        Counts revolutions with the ``rev`` counter, so lost MARK frames do
+        not bias it; each segment is timed on its own clock.
+        """
+        if self.rate_hz is None or self.rate_hz <= 0:
+            return None
+        revs = 0
+        samples = 0.0
+        for s in np.unique(self.mark_segment).tolist():
+            sel = self.mark_segment == s
+            if np.count_nonzero(sel) < 2:
+                continue
+            p, r = self.mark_position[sel], self.mark_rev[sel]
+            revs += int(r[-1] - r[0])
+            samples += float(p[-1] - p[0])
+        if revs == 0 or samples <= 0:
+            return None
+        return 60.0 * revs * self.rate_hz / samples
 
 
 @dataclass(frozen=True)
@@ -69,190 +167,3 @@ class RunStreams:
     @property
     def bad_frames(self) -> int:
         return len(self.bad)
-
-
-def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
-    """Rebuild every node's stream from a run's frames (arrival order).
-
-    Parameters
-    ----------
-    frames
-        All frames of the run, in the order they arrived.
-    strict_status
-        If True, a node without STATUS in its first :data:`stand.drivers.node_build.STATUS_WITHIN_S`
-        raises :class:`~stand.errors.NoStatusError`; if False it is a warning
-        (and a node with no STATUS at all has ``accel_m_s2 = None``).
-
-    Returns
-    -------
-    RunStreams
-        Nodes by id, counts of unknown and bad frames, duration, warnings.
-    """
-    return rebuild_decoded(decode(frames), frames.t_s, strict_status=strict_status)
-
-
-def rebuild_decoded(
-    dec: Decoded | list[Decoded],
-    t_s: NDArray[np.float64],
-    *,
-    strict_status: bool = True,
-    release: bool = False,
-) -> RunStreams:
-    """:func:`rebuild` from frames already decoded (``t_s``: every frame's host time [s]).
-
-    ``dec`` may be the decoded blocks one after the other: each node's records
-    are gathered from them on their own, so the blocks are never joined whole.
-    ``release``: the list of blocks is this function's to empty once every
-    node's records are gathered (a long run's blocks are let go before the
-    nodes are rebuilt: 140 MiB less at the peak of a one-hour run).
-    """
-    parts = [dec] if isinstance(dec, Decoded) else dec
-    t0 = float(t_s[0]) if len(t_s) else 0.0
-    seen = np.zeros(256, np.int64)  # node ids are u8: a count per id, in one pass each
-    for p in parts:
-        for records in (p.samples, p.status, p.marks):
-            seen += np.bincount(records.node, minlength=256)
-    present = [int(n) for n in np.flatnonzero(seen)]
-
-    bad = tuple(b for p in parts for b in p.bad)
-    errors = sum(p.error_frames for p in parts)
-    unknown = sum(p.unknown_frames for p in parts)
-    if len(parts) == 1:
-        mine = dict.fromkeys(present, parts[0])
-    else:
-        mine = {node: node_records(parts, node) for node in present}
-    if release and isinstance(dec, list):
-        dec.clear()
-    del parts
-    nodes: dict[int, NodeStream] = {}
-    warnings: list[Diagnostic] = []
-    for node in present:
-        stream, w = rebuild_node(node, mine.pop(node), t_s, t0, strict_status)
-        nodes[node] = stream
-        warnings.extend(w)
-    if bad:
-        b = bad[0]
-        warnings.append(
-            Diagnostic(
-                "bad_frames",
-                f"{len(bad)} malformed protocol frame(s) ignored; the first: frame {b.frame} "
-                f"(id 0x{b.can_id:03X}): {b.reason}",
-                float(len(bad)),
-            )
-        )
-    if errors:
-        warnings.append(
-            Diagnostic("error_frames", f"{errors} CAN error frame(s) on the bus", float(errors))
-        )
-    duration = float(t_s[-1] - t_s[0]) if len(t_s) else 0.0
-    return RunStreams(
-        nodes=nodes,
-        frames=len(t_s),
-        unknown_frames=unknown,
-        error_frames=errors,
-        bad=bad,
-        duration_s=duration,
-        warnings=tuple(warnings),
-    )
-
-
-class StreamBuilder:
-    """Frames decoded once, as they arrive; the node streams rebuilt from them on demand.
-
-    A live session :meth:`add` s each block as it comes (decoding it, and
-    nothing else); :meth:`streams` rebuilds the nodes from everything
-    decoded so far without decoding again.  ``rebuild(frames)`` and a
-    builder fed the same frames in any blocks give the same streams.
-    ``merge=False`` keeps every block's records apart: a file read once in
-    a few large blocks needs no merging (each merge copies the records).
-    """
-
-    def __init__(self, *, merge: bool = True) -> None:
-        self._merge = merge
-        self._parts: list[Decoded] = []
-        self._times: list[NDArray[np.float64]] = []
-        self._sizes: list[int] = []
-        self.frames = 0
-        self.last_block = Frames.empty()
-        """The block added last (for a display of what just came)."""
-
-    def add(self, frames: Frames) -> None:
-        """Decode a block of frames (in arrival order, after those added before)."""
-        if not len(frames):
-            return
-        self.last_block = frames
-        self._parts.append(shift_decoded(decode(frames), self.frames))
-        self._sizes.append(len(frames))
-        self._times.append(frames.t_s)
-        self.frames += len(frames)
-        # merge the newest blocks while they are as large as the one before them: like a
-        # binary counter, a run of n frames is held in about log2(n) parts, and each frame
-        # is copied about log2(n) times in all
-        while self._merge and len(self._sizes) > 1 and self._sizes[-1] >= self._sizes[-2]:
-            self._parts[-2:] = [concat_decoded(self._parts[-2:])]
-            self._times[-2:] = [np.concatenate(self._times[-2:])]
-            self._sizes[-2:] = [self._sizes[-2] + self._sizes[-1]]
-
-    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
-        """The node streams of every frame added so far (the blocks are not joined whole).
-
-        ``release``: the builder is done with: its decoded blocks are let go as
-        soon as every node's records are gathered from them.
-        """
-        t_s = _joined(self._times)
-        if not release:
-            return rebuild_decoded(list(self._parts), t_s, strict_status=strict_status)
-        parts, self._parts, self._times, self._sizes = self._parts, [], [], []
-        self.frames, self.last_block = 0, Frames.empty()
-        return rebuild_decoded(parts, t_s, strict_status=strict_status, release=True)
-
-    def tail(self, from_frame: int) -> RunStreams:
-        """The node streams of the frames from ``from_frame`` (arrival order) on.
-
-        Costs what the tail holds, not the run: each part is cut by a binary
-        search.  A tail is its own run: its sample indices count from its first
-        frame's ``seq``, and a node whose STATUS is older than the tail has no
-        scale in it (never an error here).
-        """
-        from_frame = max(int(from_frame), 0)
-        parts, times, at = [], [], 0
-        for part, t in zip(self._parts, self._times, strict=True):
-            if at + len(t) > from_frame:
-                parts.append(shift_decoded(_records_from(part, from_frame), -from_frame))
-                times.append(t[max(from_frame - at, 0) :])
-            at += len(t)
-        t_s = np.concatenate(times) if times else np.zeros(0)
-        return rebuild_decoded(parts, t_s, strict_status=False)
-
-
-def _joined(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
-    """The arrays one after the other: the very array they are consecutive views of (a run
-    file's times, read whole), else a copy."""
-    if not parts:
-        return np.zeros(0)
-    base = parts[0].base
-    if (
-        isinstance(base, np.ndarray)
-        and base.ndim == 1
-        and base.dtype == parts[0].dtype
-        and base.flags.c_contiguous
-        and all(p.base is base and p.flags.c_contiguous for p in parts)
-        and all(a.ctypes.data + a.nbytes == b.ctypes.data for a, b in pairwise(parts))
-    ):
-        start = (parts[0].ctypes.data - base.ctypes.data) // base.itemsize
-        joined: NDArray[np.float64] = base[start : start + sum(len(p) for p in parts)]
-        return joined
-    return np.concatenate(parts)
-
-
-def _records_from(dec: Decoded, frame: int) -> Decoded:
-    """The records of ``dec`` from arrival ``frame`` on (``frame`` indices ascend in a part)."""
-
-    def cut(records: Any) -> Any:
-        k = int(np.searchsorted(records.frame, frame))
-        if k == 0:
-            return records
-        return type(records)(**{f.name: getattr(records, f.name)[k:] for f in fields(records)})
-
-    bad = tuple(b for b in dec.bad if b.frame >= frame)
-    return Decoded(cut(dec.samples), cut(dec.status), cut(dec.marks), 0, 0, bad)

@@ -26,13 +26,13 @@ from stand import __version__
 from stand.archive.results import add_result, file_digest
 from stand.archive.store import Archive
 from stand.config import config_toml
-from stand.drivers import rebuild
-from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
+from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.errors import UsageError
 from stand.health import datum_row
 from stand.sim import Mass, load_scene, simulate, with_masses
 from stand.sim.tables import PlaneUnbalance
 from stand.solve import Job, solve_check, solve_recording
+from stand.solve.acquisition import acquisition_of
 from stand.solve.recordings import result_masses
 
 
@@ -50,7 +50,8 @@ def _write(scene: Any, params: Any, path: Path, believed: str, force: bool, job:
             JOB_ATTR: job.to_text(),
         },
     )
-    write_recording(rec, path, rebuild(sim.frames, strict_status=False), force=force)
+    streams = acquisition_of(scene.config(), None).streams(sim.frames, strict_status=False)
+    write_recording(rec, path, streams, force=force)
 
 
 def _rotor(scene: Any, rng: np.random.Generator, index: int) -> Any:

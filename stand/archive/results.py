@@ -12,8 +12,8 @@ from typing import Any
 
 from stand.archive.schema import runs
 from stand.archive.store import Archive, default_url
-from stand.drivers.files import check_input
 from stand.errors import RecordingError, StandError
+from stand.files import check_input
 from stand.solve import Result, json_text, solve_recording, to_json
 
 READ_CHUNK = 1 << 20

@@ -11,6 +11,7 @@ Alembic migration, applied when an archive is opened.
 from __future__ import annotations
 
 import datetime as dt
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -27,6 +28,10 @@ CONNECT_TIMEOUT_S = 10
 """A database server must answer a new connection within this [s] (libpq's
 ``connect_timeout``; a URL's own ``?connect_timeout=`` wins)."""
 MIGRATIONS = Path(__file__).resolve().parent / "migrations"
+MIGRATING = threading.Lock()
+"""Alembic's ``context`` is one module-wide proxy: two threads of one process (the station's
+and the OPC UA server's, a test's) migrating at once mix their options ("KeyError:
+'script'", seen in the test suite).  One at a time."""
 
 
 def default_url() -> str:
@@ -100,7 +105,7 @@ class Archive:
 
         cfg = Config()
         cfg.set_main_option("script_location", str(MIGRATIONS))
-        with self.engine.begin() as conn:
+        with MIGRATING, self.engine.begin() as conn:
             if not self.sqlite:  # one migrating process at a time on a shared server
                 conn.exec_driver_sql("SELECT pg_advisory_xact_lock(727274)")
             cfg.attributes["connection"] = conn

@@ -20,8 +20,8 @@ from collections.abc import Iterable, Iterator
 from typing import Any
 
 from stand.core.model import MAX_SPEED_RPM
-from stand.drivers.files import strict_json
 from stand.errors import ArchiveRowError
+from stand.files import strict_json
 
 VERDICTS = frozenset({"pass", "fail", "none"})
 MODES = frozenset({"remove", "add", "drill", "mill"})

@@ -23,9 +23,9 @@ from stand.cli.panel import archive_live, measure_live_from_args
 from stand.config import SAME_SPEED
 from stand.config.typed import parse_mass, parse_rpm
 from stand.core import rad_s_to_rpm
-from stand.drivers.files import check_output
 from stand.errors import ArchiveError, StandError, UsageError
 from stand.field import balance_speeds, speeds_json
+from stand.files import check_output
 from stand.health import datum_row, with_drift
 from stand.report import render, render_speeds
 from stand.solve import to_json, with_check

@@ -18,8 +18,8 @@ from stand.cli.common import add_archive_argument, add_force_argument, write_tex
 from stand.cli.format import dump_json
 from stand.config.edit import updated_toml
 from stand.config.schema import STRICT, load_config, read_toml, validate
-from stand.drivers.files import check_output
 from stand.errors import ConfigError, ModelError, UsageError
+from stand.files import check_output
 from stand.health.monitor import answers, refit
 from stand.solve import measure_recording
 

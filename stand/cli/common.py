@@ -12,8 +12,8 @@ from stand.calib import Tolerances
 from stand.config import read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
-from stand.drivers.files import output
 from stand.errors import UsageError
+from stand.files import output
 from stand.solve import Job
 from stand.solve.pipeline import SolveOptions, precision_targets
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from stand.drivers import read_recording, rebuild, write_recording
-from stand.drivers.files import check_output
+from stand.drivers import read_recording, write_recording
+from stand.files import check_output
+from stand.solve import stored_streams
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -18,7 +19,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_output(args.dest, force=args.force, inputs=[args.source])  # before reading
     rec = read_recording(args.source)
-    streams = rebuild(rec.frames, strict_status=False) if len(rec.frames) else None
+    streams = stored_streams(rec) if len(rec.frames) else None  # its own family's
     write_recording(rec, args.dest, streams, force=args.force, inputs=[args.source])
     print(f"{args.dest}: {len(rec.frames)} frames from {args.source}")
     return 0

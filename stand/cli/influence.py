@@ -24,7 +24,7 @@ from stand.config.tables import Rpm, TrialMass, TrialRadius
 from stand.config.typed import positive_float
 from stand.core import rad_s_to_rpm
 from stand.core.influence import InfluenceMap
-from stand.drivers.recording import config_digest
+from stand.drivers.runs.recording import config_digest
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.field import field_from_runs, influence_runs, solve_initial_run
 from stand.field.planes import field_json

@@ -1,6 +1,6 @@
-"""Record the sensor nodes from a CAN bus into an HDF5 run file, as frames arrive (CANopen
-modules set up over SDO first, and clocked by the SYNC this command sends, when the
-config's ``[bus] protocol = "canopen"``)."""
+"""Record the stand's acquisition hardware from a CAN bus into an HDF5 run file, as frames
+arrive (the config's ``[bus] protocol`` family; CANopen modules set up over SDO first, and
+clocked by the SYNC this command sends)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,11 @@ from typing import Any
 
 from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs
 from stand.cli.format import print_recording
-from stand.drivers import Frames, Recording, rebuild
+from stand.drivers import Frames, Recording
 from stand.errors import BusError, BusTimeoutError, UsageError
 from stand.live import LiveSession
 from stand.solve import load_config_text
-from stand.solve.protocols import builder_for, canopen_of, decoder, layout_of
+from stand.solve.acquisition import Acquired, acquisition_of, default_acquisition
 
 STATUS_EVERY_S = 1.0
 SPEED_WINDOW_S = 2.0
@@ -36,12 +36,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def speed_line(window: collections.deque[Any], elapsed: float, frames: int,
-               decode: Any = None) -> str:  # fmt: skip
+               acq: Acquired) -> str:  # fmt: skip
     """The speed each node saw over the last seconds (from the blocks in ``window``, read by
-    ``decode``: frames -> streams; default protocol v1's)."""
+    the family ``acq``)."""
 
-    blocks = Frames.concat([b for _, b in window])
-    recent = decode(blocks) if decode else rebuild(blocks, strict_status=False)
+    builder = acq.builder()
+    builder.add(Frames.concat([b for _, b in window]))
+    recent = builder.streams(strict_status=False, release=True)
     nodes = []
     for n, s in sorted(recent.nodes.items()):
         rpm = s.rpm()
@@ -63,9 +64,9 @@ def _reraise_with_path(failure: BusError, path: str, frames: int) -> BusError:
     return BusError(message, channel=failure.channel, frames_received=frames)
 
 
-def _record(args: argparse.Namespace, session: Any, decode: Any) -> None:
+def _record(args: argparse.Namespace, session: Any, acq: Acquired) -> None:
     """Read the bus until stopped (Ctrl-C, --seconds, a failure), a speed line every
-    :data:`STATUS_EVERY_S` on stderr (its streams by ``decode``, None: protocol v1's)."""
+    :data:`STATUS_EVERY_S` on stderr (its streams by the family ``acq``)."""
 
     next_status = STATUS_EVERY_S
     window: collections.deque[tuple[float, Any]] = collections.deque()
@@ -81,7 +82,7 @@ def _record(args: argparse.Namespace, session: Any, decode: Any) -> None:
             window.popleft()
         if not args.quiet and session.elapsed_s >= next_status:
             next_status += STATUS_EVERY_S
-            line = speed_line(window, session.elapsed_s, session.frames_received, decode)
+            line = speed_line(window, session.elapsed_s, session.frames_received, acq)
             print(line, file=sys.stderr)
 
 
@@ -89,16 +90,16 @@ def run(args: argparse.Namespace) -> int:
 
     if args.seconds is not None and not args.seconds > 0:
         raise UsageError(f"stand record: --seconds must be > 0, got {args.seconds}")
-    config_text, table, layout = "", None, None
+    config_text, table, acq = "", None, default_acquisition()
     if args.config:
         cfg, _, config_text = load_config_text(args.config)
-        table, layout = cfg.bus, layout_of(cfg, args.config)
+        table, acq = cfg.bus, acquisition_of(cfg, args.config)
     kwargs = bus_kwargs(args, table)
     with LiveSession(
         kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout,
-        builder=builder_for(layout), canopen=canopen_of(layout),
+        acquisition=acq,
     ) as session:  # fmt: skip
-        _record(args, session, None if layout is None else decoder(layout))
+        _record(args, session, acq)
     streams = session.close()
     frames = session.builder.frames
     if session.stop_signal is not None and not args.quiet:

@@ -12,9 +12,9 @@ from stand.cli.common import (
     solve_options,
     write_text_output,
 )
-from stand.drivers.files import check_output
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
+from stand.files import check_output
 from stand.report import render, render_speeds, write_pdf
 from stand.solve import solve_check, solve_recording
 

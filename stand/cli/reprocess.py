@@ -10,8 +10,8 @@ from typing import Any
 from stand.archive import url_for
 from stand.cli.common import add_archive_argument, add_date_arguments, write_text_output
 from stand.cli.format import dump_json
-from stand.drivers.files import check_output
 from stand.errors import UsageError
+from stand.files import check_output
 from stand.report import render_reprocess
 from stand.reprocess import (
     KINDS,

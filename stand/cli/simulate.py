@@ -22,15 +22,15 @@ from stand.cli.common import (
 from stand.cli.panel import scene_masses
 from stand.config import config_toml
 from stand.core import unbalance_from_polar
-from stand.drivers import rebuild
 from stand.drivers.bus import describe_bus, open_bus, play
-from stand.drivers.files import check_output
-from stand.drivers.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
-from stand.drivers.run_format import TEST_UNBALANCE_ATTR
+from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
+from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
+from stand.files import check_output
 from stand.sim import load_scene, shipped_scenes, simulate, turned, with_masses
 from stand.sim.scene import unbalance_kg_m
 from stand.solve import load_config_text
+from stand.solve.acquisition import acquisition_of
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -103,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
     if args.seed is not None:
         scene = scene.model_copy(update={"run": scene.run.model_copy(update={"seed": args.seed})})
     label = args.scene if args.scene in shipped_scenes() else source
+    _same_family(believed, args.config, scene, label)
     sim = simulate(scene, params)
     print(
         f"{Path(source).stem}: {len(sim.frames)} frames, {scene.run.seconds:g} s at "
@@ -114,6 +115,13 @@ def run(args: argparse.Namespace) -> int:
     if args.bus:
         _play(args, scene, sim)
     return 0
+
+
+def _same_family(believed: Any, config: str | None, scene: Any, label: str) -> None:
+    """A config stored with a scene's run reads the family of hardware the scene sends (and
+    its description files read): else the run would decode to nothing."""
+    if believed is not None:
+        acquisition_of(believed, config, scene_bus=scene.config().bus, scene=label)
 
 
 def _write(
@@ -132,6 +140,8 @@ def _write(
     out = out or args.out
 
     job = job_from(args)
+    # the run keeps the description files (DBC, EDS) its stored config reads
+    kept = acquisition_of(believed or scene.config(), args.config).descriptions_attr()
     rec = Recording(
         path=source,
         frames=sim.frames,
@@ -141,13 +151,14 @@ def _write(
             "software": f"stand {__version__}",
             JOB_ATTR: job.to_text() if job else "",
             STAND_ATTR: (believed or scene).stand.stand_id(),
+            **kept,
             **(more or {}),
         },
     )
     write_recording(
         rec,
         out,
-        rebuild(sim.frames, strict_status=False),
+        acquisition_of(scene.config(), None).streams(sim.frames, strict_status=False),
         force=args.force,
         inputs=[source, *([args.config] if args.config else [])],
     )
@@ -226,6 +237,7 @@ def _starts(args: argparse.Namespace) -> int:
         raise UsageError(f"stand simulate: {args.scene} has no [effects.autobalancer]: "
                          "--starts simulates a ball balancer's test")  # fmt: skip
     label = args.scene if args.scene in shipped_scenes() else source
+    _same_family(believed, args.config, base, label)
     for k, name in enumerate(names):
         scene = turned(base, 180.0 * k, (args.seed if args.seed is not None else base.run.seed) + k)
         sim = simulate(scene, params)

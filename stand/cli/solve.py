@@ -22,9 +22,9 @@ from stand.cli.common import (
     write_text_output,
 )
 from stand.cli.format import dump_json, print_speeds, show
-from stand.drivers.files import check_output
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
+from stand.files import check_output
 from stand.solve import json_text, to_json
 from stand.solve.recordings import solve_many, solve_recording
 

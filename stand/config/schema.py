@@ -30,12 +30,13 @@ import json
 import socket
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Literal, TypeVar
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, ValidationError, field_validator
+from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, field_validator
 from pydantic_core import PydanticCustomError
 
 from stand.config.autobalancer import AutobalancerTable
+from stand.config.bus import bus_choice
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config.correction import check_correction
 from stand.config.plant import PlantTable as PlantTable  # re-exported
@@ -43,8 +44,11 @@ from stand.config.rotor import SHAFT_AGREE
 from stand.config.rotor import RotorTable as RotorTable  # re-exported
 from stand.config.tables import STRICT as STRICT  # re-exported: every table's model config
 from stand.config.tables import Angle, Mass, Name, Stiffness
+from stand.config.validation import BUS_VALUE, shown
+from stand.config.validation import validate as validate  # re-exported
 from stand.core.model import STAND_KEYS, StandParameters
 from stand.core.shaft import shaft_rotor
+from stand.drivers.family import FAMILIES
 from stand.errors import ConfigError, ModelError, ParameterError
 
 
@@ -165,18 +169,16 @@ class Config(BaseModel):
     rotor: RotorTable
     bus: dict[str, str | int | float | bool | list[Any] | dict[str, Any]] | None = None
     """Passed to ``can.Bus`` as given (lists for options such as ``can_filters``), but for
-    ``protocol`` and the ``[bus.scan]`` table, the product's (:mod:`stand.config.scan`)."""
+    ``protocol`` and the family's own table, the product's (:mod:`stand.config.bus`)."""
 
     @field_validator("bus", mode="before")
     @classmethod
     def _plain_values(cls, bus: Any) -> Any:
-        """A table inside ``[bus]`` only as ``[bus.scan]`` or ``[bus.canopen]``: can.Bus
+        """A table inside ``[bus]`` only as a family's own (``[bus.scan]``, ...): can.Bus
         takes plain values."""
         for key, value in bus.items() if isinstance(bus, dict) else ():
-            if isinstance(value, dict) and key not in ("scan", "canopen"):
-                raise PydanticCustomError(
-                    "bus_value", BUS_VALUE, {"key": key, "got": _shown(value)}
-                )
+            if isinstance(value, dict) and key not in FAMILIES:
+                raise PydanticCustomError("bus_value", BUS_VALUE, {"key": key, "got": shown(value)})
         return bus
 
     tolerance: ToleranceTable | None = None
@@ -207,57 +209,6 @@ class Config(BaseModel):
         return StandParameters(**values)
 
 
-_UNION_MEMBERS = {"str", "int", "float", "bool"}
-BUS_VALUE = "expected text, a number or true/false (a can.Bus option), got {got}"
-
-
-SHOWN_CHARS = 80
-"""A refused value is quoted up to this many characters (a 10^4-entry list is no message)."""
-
-
-def _shown(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3] + "..."
-
-
-def _describe(err: dict[str, Any]) -> tuple[str, str]:
-    loc = [str(x) for x in err["loc"]]
-    if err["type"] == "bus_value":
-        return f"bus.{err['ctx']['key']}", str(err["msg"])
-    if loc and loc[0] == "bus" and loc[-1] in _UNION_MEMBERS:  # one error per member of the union
-        return ".".join(loc[:-1]), BUS_VALUE.format(got=_shown(err["input"]))
-    key = ".".join(loc)
-    msg = str(err["msg"])
-    if err["type"] == "extra_forbidden":
-        msg = "unknown key (not part of the configuration)" if len(loc) > 1 else "unknown table"
-    elif err["type"] == "value_error" and not loc:  # a whole table's check: its own words
-        msg = msg.removeprefix("Value error, ")
-    elif err["type"] != "missing":
-        msg = f"{msg}, got {_shown(err['input'])}"
-    return key, msg
-
-
-M = TypeVar("M", bound=BaseModel)
-
-
-def validate(model: type[M], data: dict[str, Any], source: str, prefix: str = "") -> M:
-    """Validate parsed TOML against a pydantic model; one :class:`ConfigError` if it fails.
-
-    The error names ``source``, the first bad key and what is wrong with it;
-    an unknown key is reported first (it is usually a typo, and the cause of
-    a "missing" one).  ``prefix`` goes before the key (``"autobalancer."``: a table
-    validated on its own, named as in the file).
-    """
-    try:
-        return model.model_validate(data)
-    except ValidationError as exc:
-        errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
-        described = list(dict.fromkeys(_describe(dict(e)) for e in errors))
-        key, msg = described[0]
-        more = f" (and {len(described) - 1} more)" if len(described) > 1 else ""
-        raise ConfigError(msg + more, source=source, key=(prefix + key).rstrip(".")) from None
-
-
 def parameters_of(cfg: Config, source: str) -> StandParameters:
     """The core parameters of a validated configuration (physical checks as ConfigError)."""
     try:
@@ -281,6 +232,8 @@ def config_from_dict(
     """
     cfg = with_shaft(validate(Config, data, source), source)
     check_correction(cfg.correction, cfg.rotor, source)
+    if cfg.bus is not None:  # the family and its table, checked now
+        bus_choice(cfg.bus, source)
     return cfg, parameters_of(cfg, source)
 
 

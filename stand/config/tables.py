@@ -4,11 +4,9 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import ConfigDict, Field, FiniteFloat
+from pydantic import Field, FiniteFloat
 
-STRICT = ConfigDict(extra="forbid", strict=True, frozen=True)
-"""Every table of every TOML file: unknown keys refused, no strings for numbers, frozen."""
-
+from stand.drivers.family import STRICT as STRICT  # one home: the families' tables too
 
 # Magnitudes beyond these describe no balancing stand, and the model's arithmetic would
 # overflow into meaninglessness: refused, naming the key.

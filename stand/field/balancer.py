@@ -35,7 +35,7 @@ from stand.core import rad_s_to_rpm
 from stand.core.autobalance import balanced, driving_point, receptance, windows
 from stand.core.model import StandParameters, natural_frequencies
 from stand.drivers import read_recording
-from stand.drivers.run_format import TEST_UNBALANCE_ATTR
+from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import MeasurementError, RecordingError
 from stand.measuring.track import track_1x
 from stand.solve import solve_recording, stored_streams

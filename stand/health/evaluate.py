@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
-from stand.drivers import rebuild
 from stand.measuring import Measurement
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable
 from stand.solve import SolveOptions, measure_streams
+from stand.solve.acquisition import acquisition_of
 
 POSITIONS = 12
 SPREAD_LIMIT = 0.12
@@ -62,7 +62,10 @@ def _measure(scene: Scene, p: StandParameters) -> Measurement:
     """One simulated run measured as every run is (:func:`stand.solve.pipeline.measure_streams`,
     with the scene's own configuration: its sensors, a bending shaft's beam model)."""
     m: Measurement = measure_streams(
-        rebuild(simulate(scene, p).frames), scene.config(), p, SolveOptions()
+        acquisition_of(scene.config(), None).streams(simulate(scene, p).frames),
+        scene.config(),
+        p,
+        SolveOptions(),
     )
     return m
 

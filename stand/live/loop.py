@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.recording import JOB_ATTR, STAND_ATTR, config_digest
-from stand.drivers.streams import StreamBuilder
+from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, config_digest
+from stand.drivers.v1.build import StreamBuilder
 from stand.errors import (
     BusError,
     MeasurementError,
@@ -45,7 +45,6 @@ from stand.solve.pipeline import (
     measure_streams,
     remeasure_streams,
 )
-from stand.solve.protocols import builder_for, canopen_of
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
 
@@ -346,8 +345,7 @@ def measure_live(
         scene_frames=source.scene_frames,
         silence_timeout_s=silence_timeout_s,
         run_attrs=attrs,
-        builder=builder_for(source.layout),
-        canopen=canopen_of(source.layout),
+        acquisition=source.acquisition,
         modules=source.modules,
     ) as session:
         if on_start:

@@ -3,13 +3,12 @@ the run file, the decoded streams and the signals, owned by one context manager.
 
 ``stand record``, ``stand measure`` and ``stand balance`` all run through
 :class:`LiveSession`.  Frames are decoded once, as they arrive
-(:class:`~stand.drivers.streams.StreamBuilder`); the run file is written as
+(the family's builder, :mod:`stand.solve.acquisition`); the run file is written as
 they come; nothing is read back from it.  SIGINT and SIGTERM end the session
 cleanly (also when SIGINT was ignored when the process started, as under
-``nohup``): the run is kept and marked complete.  With CANopen modules
-(``canopen``: their :class:`~stand.drivers.canopen_stream.PdoLayout`) the session sets
-them up over SDO before it reads (the dialogue stored in the run,
-:mod:`stand.drivers.canopen_setup`), starts them, and on a real bus produces the SYNC
+``nohup``): the run is kept and marked complete.  A family with a set-up
+on the bus (CANopen: :mod:`stand.drivers.canopen.setup`) is set up before the session
+reads (the dialogue stored in the run), started, and on a real bus clocked by the host
 until it closes; a scene's modules (``modules``) answer that set-up on the private bus.
 The measuring loop on it is :func:`stand.live.loop.measure_until_precise`.
 """
@@ -25,11 +24,10 @@ from typing import Any
 
 from stand.core import Diagnostic
 from stand.drivers.bus import BusReader, describe_bus, open_bus, play
-from stand.drivers.canopen_setup import SyncProducer, configure_modules
-from stand.drivers.run_format import CANOPEN_SETUP_ATTR
-from stand.drivers.run_writer import RunWriter
-from stand.drivers.streams import StreamBuilder
+from stand.drivers.family import FrameBuilder
+from stand.drivers.runs.run_writer import RunWriter
 from stand.errors import BusError
+from stand.solve.acquisition import Acquired, default_acquisition
 from stand.solve.pipeline import SOFTWARE
 
 
@@ -61,23 +59,23 @@ class LiveSession:
         scene_frames: Any = None,
         silence_timeout_s: float = 2.0,
         run_attrs: dict[str, str] | None = None,
-        builder: Any = None,
-        canopen: Any = None,
+        acquisition: Acquired | None = None,
         modules: Any = None,
     ):
-
-        if canopen is not None and scene_frames is None:  # the SYNCs it sends are recorded
+        acquisition = acquisition or default_acquisition()
+        self._setup = acquisition.setup()
+        if self._setup is not None and scene_frames is None:  # its clock frames are recorded
             bus_kwargs = {"receive_own_messages": True, **bus_kwargs}
         self.bus_kwargs = bus_kwargs
-        self._canopen, self._modules = canopen, modules
+        self._modules = modules
         self._modules_bus: Any = None
-        self._sync: SyncProducer | None = None
+        self._started = False
         self.run_path = run_path
         self.config_toml = config_toml
-        self.run_attrs = run_attrs or {}
+        self.run_attrs = {**acquisition.descriptions_attr(), **(run_attrs or {})}
         self.where = describe_bus(bus_kwargs)
-        self.builder = builder if builder is not None else StreamBuilder()
-        """Protocol v1's decoder, or the one ``builder`` names (a scan module's)."""
+        self.builder: FrameBuilder = acquisition.builder()
+        """The family's decoder (:mod:`stand.solve.acquisition`)."""
         self.failure: BusError | None = None
         self.stop_signal: int | None = None
         self._scene_frames = scene_frames
@@ -117,12 +115,12 @@ class LiveSession:
             self._player = threading.Thread(
                 target=lambda: (play(tx, frames, stop=stop), tx.shutdown()), daemon=True
             )
-        quiet = () if self._canopen is None else (self._canopen.sync_id,)
+        quiet = () if self._setup is None else self._setup.clock_ids
         self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,
                                 quiet_ids=quiet)  # fmt: skip
-        if self._sync is not None:
+        if self._setup is not None:
             try:
-                self._sync.start(produce=self._scene_frames is None, channel=self.where)
+                self._setup.start(produce=self._scene_frames is None, channel=self.where)
             except BusError:
                 self.reader.close()
                 self._shut_modules()
@@ -143,14 +141,13 @@ class LiveSession:
         if self._modules is not None:
             self._modules_bus = open_bus(self.bus_kwargs)
             self._modules.attach(self._modules_bus)
-        if self._canopen is not None:
-            steps = configure_modules(self.bus, self._canopen, self.where)
-            self.writer.add_attrs({CANOPEN_SETUP_ATTR: json.dumps(steps)})
-            self._sync = SyncProducer(self.bus, self._canopen)
+        if self._setup is not None:
+            steps = self._setup.configure(self.bus, self.where)
+            self.writer.add_attrs({self._setup.attr: json.dumps(steps)})
 
     def _shut_modules(self) -> None:
-        if self._sync is not None:
-            self._sync.stop()
+        if self._setup is not None:
+            self._setup.stop()
         if self._modules is not None:
             self._modules.detach()
         if self._modules_bus is not None:

@@ -11,11 +11,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from stand.config import config_toml
-from stand.config.scan import bus_protocol
+from stand.config.bus import bus_choice
 from stand.errors import UsageError
 from stand.sim import load_scene, scene_modules, simulate, with_masses
+from stand.solve.acquisition import Acquired, acquisition_of
 from stand.solve.pipeline import load_config_text
-from stand.solve.protocols import layout_of
 
 
 @dataclass(frozen=True)
@@ -32,8 +32,8 @@ class LiveSource:
     bus_table: dict[str, Any] | None = None
     scene_frames: Any = None
     scene_bus: dict[str, Any] | None = None
-    layout: Any = None
-    """The ``[bus] protocol``'s layout: a scan module's or the CANopen modules' (or None)."""
+    acquisition: Acquired | None = None
+    """The family the config reads and its layout (None: the default family's)."""
     modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
 
 
@@ -64,13 +64,13 @@ def live_source(
         if config:
             cfg, params, text = load_config_text(config)
             sent = sc.config().bus
-            if scene_hardware and bus_protocol(cfg.bus, config)[0] != bus_protocol(sent, scene)[0]:
+            if scene_hardware and bus_choice(cfg.bus, config).name != bus_choice(sent, scene).name:
                 cfg = cfg.model_copy(update={"bus": sent})
                 text = config_toml(cfg)
         else:
             cfg, params = sc.config(), physical
             text = config_toml(cfg)
-        layout = layout_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
+        acq = acquisition_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
         return LiveSource(
             cfg,
@@ -78,7 +78,7 @@ def live_source(
             text,
             scene_frames=simulate(sc, physical).frames,
             scene_bus={"interface": "virtual", "channel": channel},
-            layout=layout,
+            acquisition=acq,
             modules=scene_modules(sc),
         )
     if masses or rpm is not None or index_deg is not None:
@@ -88,4 +88,5 @@ def live_source(
     if not config:
         raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params, text = load_config_text(config)
-    return LiveSource(cfg, params, text, bus_table=cfg.bus, layout=layout_of(cfg, config))
+    return LiveSource(cfg, params, text, bus_table=cfg.bus,
+                      acquisition=acquisition_of(cfg, config))  # fmt: skip

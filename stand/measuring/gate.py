@@ -17,7 +17,7 @@ import numpy as np
 
 from stand.core.dsp import median
 from stand.core.fitsums import block_fits
-from stand.drivers.node_stream import NodeStream
+from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 
 SPEED_TOLERANCE = 0.03

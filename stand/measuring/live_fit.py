@@ -6,7 +6,7 @@ full passes a live update need not: the fit's normal equations are sums over
 samples (:mod:`stand.core.fitsums`), so the revolutions that came since the
 last update are added to them and the 9 x 9 system solved again.  An update
 reads only the frames of the last few revolutions
-(:meth:`stand.drivers.streams.StreamBuilder.tail`), so it costs the same at
+(:meth:`stand.drivers.v1.build.StreamBuilder.tail`), so it costs the same at
 10 s and at 10 min.
 
 What carries over from the last full pass: the gate's start of the window,
@@ -34,8 +34,8 @@ from stand.core.dsp import angle_at, angle_knots
 from stand.core.fitsums import base_rows
 from stand.core.influence import InfluenceMap
 from stand.core.trig import cos_sin
-from stand.drivers.protocol import WRAP
 from stand.drivers.streams import SUPPORT_NODES, NodeStream, RunStreams
+from stand.drivers.v1.protocol import WRAP
 from stand.measuring.gate import FULL_SCALE_COUNT, SPEED_TOLERANCE
 from stand.measuring.measure import CLOCK_TOLERANCE, Measurement, combine, judge_support
 from stand.measuring.passes import NodeFit, sums_phasor

@@ -40,7 +40,7 @@ from stand.core.fitsums import (
     side_band_sums,
 )
 from stand.core.trig import cos_sin
-from stand.drivers.node_stream import NodeStream
+from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.gate import (
     BLOCK_REVS,

@@ -16,7 +16,7 @@ import numpy as np
 
 from stand.core.dsp import shaft_angle
 from stand.core.fitsums import block_fits, block_sums
-from stand.drivers.node_stream import NodeStream
+from stand.drivers.streams import NodeStream
 from stand.measuring.gate import node_segment
 
 

@@ -27,8 +27,8 @@ import zoneinfo
 from dataclasses import dataclass
 from typing import Any
 
-from stand.drivers.files import output
 from stand.errors import UsageError
+from stand.files import output
 from stand.plant.qdas_parts import Measured, Part, per_rotor, per_run, read
 
 VALUE_SEP, FIELD_SEP = "\x0f", "\x14"

@@ -3,7 +3,7 @@
 Chromium prints the page with its print layout (A4, ``@media print``), as a
 browser would; nothing is fetched (the page embeds everything, and the
 browser starts with its network features off).  The PDF is written safely
-(:func:`stand.drivers.files.output`).  ``STAND_CHROMIUM`` names the browser
+(:func:`stand.files.output`).  ``STAND_CHROMIUM`` names the browser
 when it is not ``chromium`` (or ``chromium-browser``, ``google-chrome``) on
 the PATH.
 """
@@ -17,8 +17,8 @@ import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
-from stand.drivers.files import output
 from stand.errors import UsageError, WriteError
+from stand.files import output
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 FLAGS = (

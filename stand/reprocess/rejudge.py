@@ -21,9 +21,9 @@ from stand.archive import Archive
 from stand.archive.query import chunks, plane_json, plane_rows
 from stand.archive.revisions import STATUSES, add_revised, open_revision, revised_ids
 from stand.archive.schema import revised
-from stand.drivers.files import check_input
-from stand.drivers.recording import config_digest
+from stand.drivers.runs.recording import config_digest
 from stand.errors import UsageError
+from stand.files import check_input
 from stand.reprocess.engine import tasks
 from stand.reprocess.selection import Archived, Selection, items, select
 from stand.solve import ConfigText

@@ -1,6 +1,6 @@
 """The simulator's CANopen modules (``[nodes] protocol = "canopen"``): a SYNC producer at
 the sample rate (CiA 301, COB-ID 0x80, its jitter ``[nodes] sync_jitter_s``), and per
-support an analog input module (``drivers/canopen_ai.eds``, node ids 1 and 2) that samples
+support an analog input module (``drivers/canopen/canopen_ai.eds``, node ids 1 and 2) that samples
 its accelerometer and the reference sensor when the SYNC arrives and answers with TPDO1
 (0x180 + node id: the two inputs' CiA 404 AI input PV, INTEGER16 0x7130 sub 1 and 2, and
 their AI status, UNSIGNED8 0x6150 sub 1 and 2) 100 us per node later.  The inputs are the
@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.drivers.protocol import Frames
+from stand.drivers.frames import Frames
 from stand.sim.scan_emit import (
     MARK_HIGH_V,
     SENSITIVITY_M_S2_PER_V,
@@ -36,7 +36,7 @@ EMCY_HARDWARE = 0x5000
 
 def eds_path() -> str:
     """The simulated module's EDS, shipped with the drivers."""
-    return str(resources.files("stand.drivers") / "canopen_ai.eds")
+    return str(resources.files("stand.drivers.canopen") / "canopen_ai.eds")
 
 
 def bus_table(rate_hz: float) -> dict[str, Any]:

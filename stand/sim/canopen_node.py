@@ -1,6 +1,6 @@
 """The simulated CANopen modules' own side of the bus: each a ``canopen`` ``LocalNode``
-built from ``drivers/canopen_ai.eds`` that answers NMT and SDO (the host's set-up,
-:mod:`stand.drivers.canopen_setup`) from its object dictionary, as a real CiA 404 module
+built from ``drivers/canopen/canopen_ai.eds`` that answers NMT and SDO (the host's set-up,
+:mod:`stand.drivers.canopen.setup`) from its object dictionary, as a real CiA 404 module
 would, and can answer each SYNC with its TPDO1.
 
 ``[effects.canopen]`` makes one module show another identity (``vendor_id``) or refuse

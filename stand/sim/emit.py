@@ -23,8 +23,8 @@ from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
 from stand.drivers import Frames
-from stand.drivers.budget import frames_budget
-from stand.drivers.nodes import STATUS_PERIOD_S, merge, node_frames
+from stand.drivers.runs.budget import frames_budget
+from stand.drivers.v1.nodes import STATUS_PERIOD_S, merge, node_frames
 from stand.errors import ConfigError
 from stand.sim.balls import free_balls
 from stand.sim.canopen_emit import module_frames as canopen_frames

@@ -1,5 +1,5 @@
 """The simulator's scan-stream module (``[nodes] protocol = "scan"``): one simultaneous-
-sampling module, a frame per scan (``drivers/scan_module.dbc``): a 16-bit counter, both
+sampling module, a frame per scan (``drivers/scan/scan_module.dbc``): a 16-bit counter, both
 accelerometers (IEPE, 100 mV/g) and the once-per-revolution sensor (0..5 V) on three
 +-10 V, 16-bit inputs.  One clock for all three channels, so no per-node clock effect.
 ``[nodes] counter = false`` leaves the counter's bits at 0 and the decoder is told there
@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from stand.drivers.protocol import FLAG_FD, Frames
-from stand.drivers.scan import mark_wave, scan_frames
+from stand.drivers.frames import FLAG_FD, Frames
+from stand.drivers.scan.codec import mark_wave, scan_frames
 
 VOLTS_PER_COUNT = 10.0 / 32768
 """The module's inputs: +-10 V on 16 bits."""
@@ -30,7 +30,7 @@ SCAN_ID = 0x300
 
 def dbc_path() -> str:
     """The simulated module's DBC, shipped with the drivers."""
-    return str(resources.files("stand.drivers") / "scan_module.dbc")
+    return str(resources.files("stand.drivers.scan") / "scan_module.dbc")
 
 
 def bus_table(rate_hz: float, counter: bool, per_frame: int = 1) -> dict[str, Any]:

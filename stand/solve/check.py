@@ -13,19 +13,16 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from stand.config import SAME_SPEED
+from stand.config import SAME_SPEED, config_toml
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
-from stand.drivers import read_recording, read_streams
 from stand.errors import UsageError
 from stand.measuring import Measurement
 from stand.solve.pipeline import (
     ConfigText,
     SolveOptions,
-    load_config_text,
     measure_streams,
-    stored_config,
 )
-from stand.solve.recordings import named_errors, solve_recording
+from stand.solve.recordings import named_errors, read_run, solve_recording
 from stand.solve.result import Check, Result
 
 
@@ -51,10 +48,10 @@ def check_against(
         The previous run is of another rotor, stand or speed (and ``strict``).
     """
 
-    with named_errors(previous):
-        rec, streams = read_streams(previous)
+    own = read_run(previous, None, fallback=ConfigText(config_toml(cfg), "the check run's config"))
+    rec, streams = own.rec, own.streams  # decoded by its own family (its stored config)
     if strict and rec.meta.get("config_toml"):
-        _same_rotor_and_stand(previous, stored_config(rec.meta, previous)[0], cfg)
+        _same_rotor_and_stand(previous, own.cfg, cfg)
     with named_errors(previous):
         before = measure_streams(streams, cfg, params, SolveOptions(matrix=matrix))
     if strict and abs(before.omega_rad_s / after.omega_rad_s - 1) > SAME_SPEED:
@@ -144,10 +141,6 @@ def solve_check(
     checked against ``previous`` (:func:`with_check`) with the same config: the given one,
     else the check run's stored one."""
     result = solve_recording(run, config, options)
-    if isinstance(config, ConfigText):
-        cfg, params, _ = config.load()
-    elif config:
-        cfg, params, _ = load_config_text(config)
-    else:
-        cfg, params, _ = stored_config(read_recording(run).meta, run)
+    prov = result.provenance  # the config it was solved with, without reading the run again
+    cfg, params, _ = ConfigText(prov.config_toml, prov.config_source).load()
     return with_check(result, previous, cfg, params, strict=strict, matrix=options.matrix)

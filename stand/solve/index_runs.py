@@ -17,7 +17,7 @@ from stand.config import SAME_SPEED
 from stand.core import rad_s_to_rpm
 from stand.core.balance import index_split
 from stand.core.same import is_same_data
-from stand.drivers.recording import config_digest
+from stand.drivers.runs.recording import config_digest
 from stand.errors import ConfigError, UsageError
 from stand.solve.recordings import measure_recording
 from stand.solve.tooling import TOOLING_NAME, Tooling

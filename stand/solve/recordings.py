@@ -19,23 +19,25 @@ import os
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 from stand.config import parse_matrix
 from stand.core import StandParameters
-from stand.drivers.recording import (
+from stand.drivers.family import FrameBuilder
+from stand.drivers.runs.recording import (
     JOB_ATTR,
     MATRIX_ATTR,
     STAND_ATTR,
+    Recording,
     config_digest,
-    read_recording,
     read_streams,
 )
-from stand.drivers.streams import RunStreams, rebuild
+from stand.drivers.streams import RunStreams
 from stand.errors import MeasurementError, NoStatusError, RecordingError, StandError
 from stand.measuring import Measurement
 from stand.measuring.measure import measure
+from stand.solve.acquisition import acquisition_of, default_acquisition, stored_descriptions
 from stand.solve.correct import removed_masses
 from stand.solve.pipeline import (
     SOFTWARE,
@@ -47,7 +49,6 @@ from stand.solve.pipeline import (
     measure_streams,
     stored_config,
 )
-from stand.solve.protocols import decoder, layout_of
 from stand.solve.result import Job, Provenance, Result
 
 
@@ -94,18 +95,9 @@ def solve_recording(
         Bad input, naming the file and what is wrong.
     """
 
-    with named_errors(path):
-        rec, streams = read_streams(path)
-    if isinstance(config, ConfigText):
-        cfg, params, text = config.load()
-        source = config.source
-    elif config:
-        cfg, params, text = load_config_text(config)
-        source = config
-    else:
-        cfg, params, text = stored_config(rec.meta, rec.path)
-        source = f"{rec.path} (stored)"
-    streams = _protocol_streams(path, cfg, source, streams)
+    run = read_run(path, config)
+    rec, cfg, params, text, source, streams = (run.rec, run.cfg, run.params, run.text,
+                                               run.source, run.streams)  # fmt: skip
     stored = rec.meta.get(MATRIX_ATTR)
     if options.matrix is None and stored:  # measured with a matrix: reprocessed with it
         options = replace(options, matrix=parse_matrix(str(stored), f"{path} (stored matrix)"))
@@ -135,28 +127,62 @@ def solve_recording(
     )  # fmt: skip
 
 
-def _protocol_streams(path: str, cfg: Any, source: str, streams: RunStreams) -> RunStreams:
-    """The run's streams as its config's ``[bus] protocol`` reads its frames: protocol v1's
-    (``streams``, already rebuilt), else the frames read again and decoded by the
-    protocol's decoder (:mod:`stand.solve.protocols`)."""
-    layout = layout_of(cfg, source)
-    if layout is None:
-        return streams
+@dataclass(frozen=True)
+class RunRead:
+    """A recording read once and decoded once: its attributes, the config it is solved
+    with (given, or the one it carries), and its streams as that config's family reads
+    them."""
+
+    rec: Recording
+    cfg: Any
+    params: StandParameters
+    text: str
+    source: str
+    streams: RunStreams
+
+
+def read_run(path: str, config: str | ConfigText | None, *, strict_status: bool = True,
+             fallback: ConfigText | None = None) -> RunRead:  # fmt: skip
+    """Read ``path`` once: its attributes first, then the config (``config``, else the
+    run's own, else ``fallback``) chooses the family
+    (:func:`stand.solve.acquisition.acquisition_of`, with the description files the run
+    kept), whose builder decodes the frames block by block."""
+    chosen: list[tuple[Any, StandParameters, str, str]] = []
+
+    def choose(meta: dict[str, Any]) -> FrameBuilder:
+        if config is None and fallback is not None and not meta.get("config_toml"):
+            cfg, params, text = fallback.load()
+            source = fallback.source
+        elif isinstance(config, ConfigText):
+            cfg, params, text = config.load()
+            source = config.source
+        elif config:
+            cfg, params, text = load_config_text(config)
+            source = config
+        else:
+            cfg, params, text = stored_config(meta, path)
+            source = f"{path} (stored)"
+        chosen[:] = [(cfg, params, text, source)]
+        own = source.endswith(" (stored)")  # its own config: the description files it kept
+        acq = acquisition_of(cfg, source, stored=stored_descriptions(meta, path, own=own))
+        return acq.builder()
+
     with named_errors(path):
-        frames = read_recording(path).frames
-    return decoder(layout)(frames)
+        rec, streams = read_streams(path, choose, strict_status=strict_status)
+    cfg, params, text, source = chosen[0]
+    return RunRead(rec, cfg, params, text, source, streams)
 
 
-def stored_streams(rec: Any) -> RunStreams:
-    """A recording's streams as the configuration it carries reads its frames (protocol
-    v1's when it carries none)."""
-    layout = None
+def stored_streams(rec: Recording) -> RunStreams:
+    """The streams of a recording read whole (its frames in memory), as the configuration
+    it carries reads them (protocol v1's when it carries none)."""
     if rec.meta.get("config_toml"):
         cfg, _, _ = stored_config(rec.meta, rec.path)
-        layout = layout_of(cfg, f"{rec.path} (stored)")
-    if layout is None:
-        return rebuild(rec.frames, strict_status=False)
-    return decoder(layout)(rec.frames)
+        acq = acquisition_of(cfg, f"{rec.path} (stored)",
+                             stored=stored_descriptions(rec.meta, rec.path))  # fmt: skip
+    else:
+        acq = default_acquisition()
+    return acq.streams(rec.frames, strict_status=False)
 
 
 def _solve_or_error(path: str, config: str | None, options: SolveOptions) -> Result | StandError:
@@ -205,9 +231,8 @@ def measure_recording(
     measurement, the config, its parameters and its text.
     """
 
-    with named_errors(path):
-        rec, streams = read_streams(path)
-    cfg, params, text = load_config_text(config) if config else stored_config(rec.meta, rec.path)
+    run = read_run(path, config)
+    streams, cfg, params, text = run.streams, run.cfg, run.params, run.text
     with named_errors(path):
         if raw_sensors:
             m = measure(streams, params, reference_angle_deg=cfg.stand.reference_angle_deg)

@@ -21,8 +21,8 @@ import numpy as np
 
 from stand.config import data_folder
 from stand.core.model import MAX_SPEED_RPM, rpm_to_rad_s
-from stand.drivers.files import output, strict_json
 from stand.errors import ConfigError, RecordingError
+from stand.files import output, strict_json
 from stand.measuring import with_unbalance_covariance
 
 TOOLING_VERSION = 1

@@ -25,8 +25,8 @@ from typing import Any
 from stand.archive import archive_result, drift_rows
 from stand.config import default_stand_id, load_config
 from stand.drivers.bus import ALLOW_URL
-from stand.drivers.files import output
 from stand.errors import StandError, StationBusyError, UsageError
+from stand.files import output
 from stand.health import with_drift
 from stand.live import live_source, measure_live
 from stand.plant import publish_archived

@@ -243,7 +243,7 @@ def _made(n: int, systematic: complex, spread_kg_m: float, seed: int) -> list[np
 def _batch_results(n: int, systematic: complex, spread_kg_m: float, seed: int):
     """``n`` rotors of one type (:func:`_made`), each measured on the simulated demo stand
     (2 s runs)."""
-    from stand.drivers import rebuild
+    from stand.drivers.v1.build import rebuild
     from stand.sim import load_scene, simulate
     from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 

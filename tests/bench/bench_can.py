@@ -33,11 +33,12 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
 from synth import sine_run
 
 from stand.cli.record import speed_line
-from stand.drivers import Frames, rebuild
+from stand.drivers import Frames
 from stand.drivers.bus import BusReader, play
-from stand.drivers.logs import read_log, write_log
-from stand.drivers.recording import Recording, read_run, write_recording
-from stand.drivers.run_writer import RunWriter
+from stand.drivers.runs.logs import read_log, write_log
+from stand.drivers.runs.recording import Recording, read_run, write_recording
+from stand.drivers.runs.run_writer import RunWriter
+from stand.drivers.v1.build import rebuild
 from stand.errors import BusError
 
 
@@ -134,7 +135,7 @@ def live(tmp: Path, seconds: float) -> None:
 
 
 def safe_writes(tmp: Path) -> None:
-    from stand.drivers.logs import write_log
+    from stand.drivers.runs.logs import write_log
 
     frames = sine_run(seconds=60.0)
     rec = Recording("bench", frames)

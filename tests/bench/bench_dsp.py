@@ -37,7 +37,7 @@ from scenes import BASE
 from stand.config import validate
 from stand.core import forward, rpm_to_rad_s, solve_unbalance, unbalance_from_polar
 from stand.core.dsp import radius_factor
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.measuring.measure import measure
 from stand.sim import Scene, simulate
 

@@ -3,7 +3,7 @@
     .venv/bin/python tests/bench/bench_live.py [--seconds 620] [--every 0.4]
 
 The demo scene is simulated for ``--seconds`` and replayed, as fast as the
-machine goes, into the live path's :class:`~stand.drivers.streams.StreamBuilder`
+machine goes, into the live path's :class:`~stand.drivers.v1.build.StreamBuilder`
 in blocks of 0.1 s (as a live session reads them); every ``--every`` seconds
 of the run (the station asks every 0.4 s) :class:`stand.live.loop.Estimates` gives
 the estimate of the run so far: a full pass on its schedule, an update in

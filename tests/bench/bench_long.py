@@ -176,7 +176,7 @@ def compile_bytecode() -> None:
 def make_run(tmp: Path, seconds: float) -> tuple[Path, Path, Path]:
     from stand.config import config_toml
     from stand.drivers import Recording, write_recording
-    from stand.drivers.logs import write_log
+    from stand.drivers.runs.logs import write_log
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from stand.core import forward
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.errors import StandError
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.sim import load_scene, simulate
 from stand.sim.scan_emit import SENSITIVITY_M_S2_PER_V, VOLTS_PER_COUNT
 from stand.solve import SolveOptions, measure_streams

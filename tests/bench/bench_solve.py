@@ -20,7 +20,7 @@ from pathlib import Path
 
 from stand.config import config_toml
 from stand.drivers import Recording, write_recording
-from stand.drivers.logs import write_log
+from stand.drivers.runs.logs import write_log
 from stand.sim import load_scene, simulate
 
 STAND = str(Path(sys.executable).with_name("stand"))
@@ -57,7 +57,7 @@ def main() -> None:
     try:
         runs = make_runs(tmp, args.batch)
         log = tmp / "run000.log"
-        from stand.drivers.recording import read_run
+        from stand.drivers.runs.recording import read_run
 
         write_log(read_run(runs[0]).frames, log)
         cfg = tmp / "cfg.toml"

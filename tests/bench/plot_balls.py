@@ -24,7 +24,7 @@ import numpy as np
 
 from stand.core import rad_s_to_rpm, rpm_to_rad_s, unbalance_from_polar
 from stand.core.autobalance import balanced, receptance, windows, with_balls
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.field.balancer import onset, race_motion
 from stand.sim import load_scene, simulate
 from stand.sim.scene import unbalance_kg_m

@@ -12,8 +12,9 @@ import pytest
 from stand.cli import main
 from stand.config import config_toml
 from stand.drivers import Recording, write_recording
-from stand.drivers.logs import write_log
-from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
+from stand.drivers.frames import Frames
+from stand.drivers.runs.logs import write_log
+from stand.drivers.v1.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE
 from stand.sim import load_scene, simulate
 
 ROOT = Path(__file__).resolve().parents[2]

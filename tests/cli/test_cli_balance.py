@@ -92,7 +92,7 @@ def test_a_signal_stops_cleanly_keeps_the_recording_and_still_answers(
     def ignore_sigint() -> None:  # what nohup, a shell script's background job, a service do
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
-    from stand.drivers.recording import read_run
+    from stand.drivers.runs.recording import read_run
 
     run = tmp_path / "r.h5"
     proc = subprocess.Popen(

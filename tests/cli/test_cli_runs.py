@@ -17,8 +17,8 @@ from synth import sine_run
 from stand.cli import main
 from stand.drivers import Frames
 from stand.drivers.bus import play
-from stand.drivers.logs import write_log
-from stand.drivers.recording import read_run
+from stand.drivers.runs.logs import write_log
+from stand.drivers.runs.recording import read_run
 
 ROOT = Path(__file__).resolve().parents[2]
 DEMO = ROOT / "examples" / "demo-stand.toml"

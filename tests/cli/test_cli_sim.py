@@ -14,7 +14,7 @@ import pytest
 
 from stand.cli import main
 from stand.config import config_from_dict
-from stand.drivers.recording import read_recording, read_run
+from stand.drivers.runs.recording import read_recording, read_run
 from stand.sim import load_scene, shipped_scenes, simulate
 
 

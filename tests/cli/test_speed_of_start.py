@@ -81,7 +81,7 @@ def test_solving_a_rigid_rotor_imports_only_what_it_needs(
     demo_run: Path, tmp_path: Path, suffix: str
 ) -> None:
     from stand.drivers import read_recording
-    from stand.drivers.logs import write_log
+    from stand.drivers.runs.logs import write_log
 
     argv = ["solve", str(demo_run), "--json"]
     if suffix == ".log":

@@ -12,7 +12,7 @@ from scenes import scene
 
 from stand.core import forward, unbalance_from_polar
 from stand.core.dsp import fit_1x, radius_factor, shaft_angle
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.measuring.measure import measure
 from stand.sim import simulate
 
@@ -223,7 +223,7 @@ def test_local_period_is_the_median_of_its_neighbours(rows: list[tuple[float, in
     (computed without it: numpy's imports ``numpy.ma``)."""
     import warnings
 
-    from stand.drivers.node_build import _local_period
+    from stand.drivers.v1.node_build import _local_period
 
     dp = np.array([r[0] for r in rows])
     dr = np.array([r[1] for r in rows], dtype=np.int64)

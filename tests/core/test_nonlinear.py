@@ -24,7 +24,7 @@ from stand.core.nonlinear import (
     fit_columns,
     force_1x,
 )
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
 
@@ -168,8 +168,8 @@ def test_the_5x_is_read_from_the_residual(phase5: float) -> None:
     """A 5x of 0.1 m/s^2 put in the counts is read back to 1e-4 m/s^2 (quantisation of
     100 um/s^2 per count, rms 29 um/s^2 a sample, leaves about 1e-6 over 32,000 samples;
     the single-precision residual 1e-7 of 2.4 m/s^2)."""
-    from stand.drivers import rebuild
-    from stand.drivers.nodes import merge, node_frames
+    from stand.drivers.v1.build import rebuild
+    from stand.drivers.v1.nodes import merge, node_frames
 
     rate, rpm, n = 4000.0, 900.0, 32000
     period = rate * 60 / rpm

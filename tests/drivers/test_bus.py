@@ -14,7 +14,7 @@ import pytest
 from synth import sine_run
 
 from stand.drivers.bus import BusReader, open_bus, play
-from stand.drivers.protocol import FLAG_ERROR, Frames
+from stand.drivers.frames import FLAG_ERROR, Frames
 from stand.errors import BusError, BusTimeoutError
 
 

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stand.drivers import candump, logs
+from stand.drivers.runs import candump, logs
 from stand.errors import RecordingError
 
 FIELDS = ("t_s", "can_id", "dlc", "data", "flags")
@@ -87,7 +87,8 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Blocks already decoded are dropped and the whole file is read the slow way."""
-    from stand.drivers import read_streams, rebuild
+    from stand.drivers import read_streams
+    from stand.drivers.v1.build import StreamBuilder, rebuild
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -97,7 +98,7 @@ def test_streaming_a_log_falls_back_whole_when_a_late_block_is_unusual(
     with path.open("a") as f:
         f.write("(99.000000) can0 123#R\n")  # a remote frame: only the slow path reads it
     monkeypatch.setattr(candump, "CANDUMP_BLOCK", 50_000)
-    _, got = read_streams(path, strict_status=False)
+    _, got = read_streams(path, lambda meta: StreamBuilder(), strict_status=False)
     want = rebuild(logs.read_log(path), strict_status=False)
     assert got.frames == want.frames == len(frames) + 1
     for n in (1, 2):

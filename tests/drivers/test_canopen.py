@@ -86,15 +86,16 @@ def test_lost_and_late_tpdos_keep_their_place(
 def test_the_spread_sits_at_the_cramer_rao_bound() -> None:
     """100 runs of 2 s at 2 kHz without SYNC jitter: the support 1 phasor's spread within
     1.2x of sqrt(2 sigma^2 / N) (noise and quantization), as the scan module's."""
-    from stand.config.scan import bus_protocol
-    from stand.drivers.canopen_stream import load_pdo_layout, pdo_streams
+    from stand.config.bus import bus_choice
+    from stand.drivers.canopen.codec import pdo_streams
+    from stand.drivers.canopen.layout import load_pdo_layout
     from stand.sim import load_scene, simulate
     from stand.sim.scan_emit import SENSITIVITY_M_S2_PER_V, VOLTS_PER_COUNT
     from stand.solve import SolveOptions, measure_streams
 
     sc, p, _ = load_scene("demo-canopen")
     cfg = sc.config()
-    layout = load_pdo_layout(bus_protocol(cfg.bus, "x")[1], Path("."), "x")
+    layout = load_pdo_layout(bus_choice(cfg.bus, "x").table, Path("."), "x")
     z = []
     for seed in range(100):
         run = sc.run.model_copy(update={"seconds": 2.0, "seed": seed})
@@ -115,7 +116,7 @@ def test_the_spread_sits_at_the_cramer_rao_bound() -> None:
         (('accel = "0x7130:1"', 'accel = "0x6114:1"'), "0x6114:1 is not mapped in TPDO1"),
         (('accel = "0x7130:1"', 'accel = "0x1018:1"'), "0x1018:1 is not mapped in TPDO1"),
         (("node_id = 2", "node_id = 1"), "two modules cannot share a node id"),
-        (('eds = "../drivers/canopen_ai.eds"', 'eds = "nope.eds"'), "cannot read"),
+        (('eds = "../drivers/canopen/canopen_ai.eds"', 'eds = "nope.eds"'), "cannot read"),
         (('accel = "0x7130:1"', 'accel = "7130:1"'), "bus.canopen.nodes.0.accel"),
         (("rate_hz = 2000.0", "rate_hz = 2000.0\nwindow_s = 0.0005"), "is not within a SYNC"),
     ],
@@ -128,9 +129,11 @@ def test_bad_eds_and_mappings_are_one_line(
     capsys.readouterr()
     text = CONFIG.read_text()
     assert edit[0] in text
-    (tmp_path / "canopen_ai.eds").write_text((ROOT / "drivers" / "canopen_ai.eds").read_text())
+    (tmp_path / "canopen_ai.eds").write_text(
+        (ROOT / "drivers" / "canopen" / "canopen_ai.eds").read_text()
+    )
     bad = tmp_path / "bad.toml"
-    bad.write_text(text.replace(edit[0], edit[1], 1).replace("../drivers/", ""))
+    bad.write_text(text.replace(edit[0], edit[1], 1).replace("../drivers/canopen/", ""))
     assert main(["solve", str(run), "--config", str(bad)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err, err

@@ -1,4 +1,4 @@
-"""Setting CANopen modules up over SDO (``stand.drivers.canopen_setup``) against the
+"""Setting CANopen modules up over SDO (``stand.drivers.canopen.setup``) against the
 simulated modules (``canopen`` LocalNodes on python-can's virtual bus): the dialogue, a
 wrong identity, a refused mapping, a silent module; the host's own SYNC producer answered
 frame by frame; its SYNCs no sign of life for the silence timeout."""
@@ -15,11 +15,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from stand.config.canopen import CanopenTable
 from stand.drivers.bus import BusReader
-from stand.drivers.canopen_setup import SyncProducer, configure_modules
-from stand.drivers.canopen_stream import PdoLayout, load_pdo_layout, pdo_streams
-from stand.drivers.protocol import Frames
+from stand.drivers.canopen.codec import pdo_streams
+from stand.drivers.canopen.layout import PdoLayout, load_pdo_layout
+from stand.drivers.canopen.setup import SyncProducer, configure_modules
+from stand.drivers.canopen.table import CanopenTable
+from stand.drivers.frames import Frames
 from stand.errors import BusError, BusTimeoutError
 from stand.sim import SimulatedModules
 from stand.sim.canopen_emit import bus_table

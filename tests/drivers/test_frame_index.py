@@ -29,7 +29,7 @@ def _array(F: np.ndarray) -> np.ndarray:
 @settings(max_examples=300, deadline=None)
 @given(frames(), st.integers(-5, 200), st.integers(-5, 200), st.data())
 def test_a_frame_index_is_its_array(F: np.ndarray, a: int, b: int, data: st.DataObject) -> None:
-    full, lazy = _array(F), FrameIndex(F)
+    full, lazy = _array(F), FrameIndex(F, 3)
     want, got = full[a:b], lazy[a:b]  # a view of a view, as the passes take them
     assert isinstance(got, FrameIndex) and len(got) == len(want)
     assert np.array_equal(np.asarray(got), want)
@@ -60,7 +60,7 @@ def test_a_frame_index_is_its_array(F: np.ndarray, a: int, b: int, data: st.Data
 
 
 def test_out_of_bounds_is_an_index_error_as_for_the_array() -> None:
-    lazy = FrameIndex(np.array([4, 5, 9], np.int64))
+    lazy = FrameIndex(np.array([4, 5, 9], np.int64), 3)
     with pytest.raises(IndexError):
         lazy[9]
     with pytest.raises(IndexError):

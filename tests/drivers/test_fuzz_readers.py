@@ -19,7 +19,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from stand.drivers import Frames, Recording, read_recording, read_streams, write_recording
-from stand.drivers.logs import write_log
+from stand.drivers.runs.logs import write_log
+from stand.drivers.v1.build import StreamBuilder
 from stand.errors import StandError
 from stand.sim import load_scene, simulate
 
@@ -30,7 +31,7 @@ FUZZ = settings(
     suppress_health_check=[HealthCheck.function_scoped_fixture],
     # the same 40 examples every run: a random one once made libhdf5 loop for ever inside
     # h5py's attrs.get on a damaged run file (2026-11-22); such a file is now refused by the
-    # time-limited child read (stand.drivers.seal), but a suite that fails on a rare input
+    # time-limited child read (stand.drivers.runs.seal), but a suite that fails on a rare input
     # now and then is worse than one that explores on request: the thorough profile does
     derandomize=not THOROUGH,
 )
@@ -59,7 +60,7 @@ def _seed(ext: str) -> bytes:
 
 def _read_all_ways(path: Path) -> None:
     """Read as the commands do: frames whole, and streams in blocks."""
-    for read in (read_recording, read_streams):
+    for read in (read_recording, lambda p: read_streams(p, lambda meta: StreamBuilder())):
         try:
             read(path)
         except StandError:

@@ -8,16 +8,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from stand.drivers.codec import decode, edge_fields, encode_marks, encode_samples, encode_status
-from stand.drivers.protocol import (
-    DBC_PATH,
-    FLAG_ERROR,
-    FLAG_EXTENDED,
-    FLAG_FD,
-    FLAG_REMOTE,
-    LAYOUT,
-    Frames,
-)
+from stand.drivers.frames import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, Frames
+from stand.drivers.v1.codec import decode, edge_fields, encode_marks, encode_samples, encode_status
+from stand.drivers.v1.protocol import DBC_PATH, LAYOUT
 
 DB = cantools.database.load_file(DBC_PATH, strict=True)
 KINDS = {0x100: "SAMPLES", 0x140: "STATUS", 0x180: "MARK"}

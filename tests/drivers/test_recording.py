@@ -16,12 +16,12 @@ import pytest
 from synth import sine_run
 
 from stand.core import Diagnostic
-from stand.drivers import rebuild
-from stand.drivers.logs import read_candump, read_log, write_log
-from stand.drivers.protocol import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
-from stand.drivers.recording import Recording, read_recording, read_run, write_recording
-from stand.drivers.run_writer import FLUSH_INTERVAL_S, RunWriter
-from stand.drivers.seal import MAGIC, USERBLOCK_BYTES, read_in_child, seal_state
+from stand.drivers.frames import FLAG_ERROR, FLAG_EXTENDED, FLAG_REMOTE, Frames
+from stand.drivers.runs.logs import read_candump, read_log, write_log
+from stand.drivers.runs.recording import Recording, read_recording, read_run, write_recording
+from stand.drivers.runs.run_writer import FLUSH_INTERVAL_S, RunWriter
+from stand.drivers.runs.seal import MAGIC, USERBLOCK_BYTES, read_in_child, seal_state
+from stand.drivers.v1.build import rebuild
 from stand.errors import RecordingError, WriteError
 
 TESTS = Path(__file__).resolve().parents[1]
@@ -96,7 +96,7 @@ def test_python_can_logs_round_trip(tmp_path: Path, suffix: str) -> None:
 def test_fast_candump_reader_equals_python_can(tmp_path: Path) -> None:
     import can
 
-    from stand.drivers.logs import frames_from_messages
+    from stand.drivers.frames import frames_from_messages
 
     path = tmp_path / "run.log"
     write_log(_mixed(), path)

@@ -63,11 +63,12 @@ def test_a_lost_frame_with_a_counter_is_a_lost_sample_in_place(
     for a, b in zip(whole["planes"], lost["planes"], strict=True):
         assert abs((a["angle_deg"] - b["angle_deg"] + 180) % 360 - 180) < 0.05
     from stand.config import load_config
-    from stand.config.scan import bus_protocol
-    from stand.drivers.scan import load_layout, scan_streams
+    from stand.config.bus import bus_choice
+    from stand.drivers.scan.codec import scan_streams
+    from stand.drivers.scan.layout import load_layout
 
     cfg = load_config(CONFIG)[0]
-    layout = load_layout(bus_protocol(cfg.bus, str(CONFIG))[1], CONFIG.parent, str(CONFIG))
+    layout = load_layout(bus_choice(cfg.bus, str(CONFIG)).table, CONFIG.parent, str(CONFIG))
     streams = scan_streams(read_recording(str(cut)).frames, layout)
     assert streams.nodes[1].lost_frames == int(np.count_nonzero(~keep))
 
@@ -102,15 +103,16 @@ def test_the_spread_sits_at_the_cramer_rao_bound(tmp_path: Path) -> None:
     """100 runs of 2 s at 2 kHz: the support 1 phasor's spread (both components) within 1.2x
     of sqrt(2 sigma^2 / N), sigma the sensor noise with the module's quantization (q^2/12);
     100 runs estimate a standard deviation to about 7 % (1.2 is 2.8 of those above 1)."""
-    from stand.config.scan import bus_protocol
-    from stand.drivers.scan import load_layout, scan_streams
+    from stand.config.bus import bus_choice
+    from stand.drivers.scan.codec import scan_streams
+    from stand.drivers.scan.layout import load_layout
     from stand.sim import load_scene, simulate
     from stand.sim.scan_emit import SENSITIVITY_M_S2_PER_V, VOLTS_PER_COUNT
     from stand.solve import SolveOptions, measure_streams
 
     sc, p, _ = load_scene("demo-scan")
     cfg = sc.config()
-    layout = load_layout(bus_protocol(cfg.bus, "demo-scan")[1], Path("."), "demo-scan")
+    layout = load_layout(bus_choice(cfg.bus, "demo-scan").table, Path("."), "demo-scan")
     phasors = []
     for seed in range(100):
         run = sc.run.model_copy(update={"seconds": 2.0, "seed": seed})
@@ -130,7 +132,7 @@ def test_the_spread_sits_at_the_cramer_rao_bound(tmp_path: Path) -> None:
     [
         (('signal = "ai3"', 'signal = "ai9"'), "has no signal 'ai9'"),
         (('role = "mark"\n', 'role = "accel"\nsupport = 1\n'), "exactly one channel for the mark"),
-        (('dbc = "../drivers/scan_module.dbc"', 'dbc = "nope.dbc"'), "cannot read"),
+        (('dbc = "../drivers/scan/scan_module.dbc"', 'dbc = "nope.dbc"'), "cannot read"),
         (('protocol = "scan"', 'protocol = "canbus"'), "[bus] protocol"),
         (('counter = "counter"', 'counter = "ctr"'), "has no signal 'ctr'"),
     ],
@@ -144,8 +146,10 @@ def test_bad_mappings_are_one_line(
     text = CONFIG.read_text()
     assert edit[0] in text
     bad = tmp_path / "bad.toml"
-    (tmp_path / "scan_module.dbc").write_text((ROOT / "drivers" / "scan_module.dbc").read_text())
-    bad.write_text(text.replace(edit[0], edit[1]).replace("../drivers/scan_module.dbc",
+    (tmp_path / "scan_module.dbc").write_text(
+        (ROOT / "drivers" / "scan" / "scan_module.dbc").read_text()
+    )
+    bad.write_text(text.replace(edit[0], edit[1]).replace("../drivers/scan/scan_module.dbc",
                                                           "scan_module.dbc"))  # fmt: skip
     assert main(["solve", str(run), "--config", str(bad)]) == 2
     err = capsys.readouterr().err
@@ -235,7 +239,7 @@ def test_can_fd_frames_of_eight_scans(tmp_path: Path, capsys: pytest.CaptureFixt
 @pytest.mark.parametrize(
     ("edit", "says"),
     [
-        ("scans_per_frame = 9", "more than a CAN FD frame's 64"),
+        ("scans_per_frame = 9", "not a CAN FD payload length"),
         ("scans_per_frame = 8\nscan_bytes = 6", "beyond a scan's 6 bytes"),
         ("scan_bytes = 0", "bus.scan.scan_bytes"),
     ],

@@ -11,10 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from synth import sine_run
 
-from stand.drivers import rebuild
-from stand.drivers.codec import decode
-from stand.drivers.nodes import merge, node_frames
-from stand.drivers.protocol import INVALID_COUNT, MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
+from stand.drivers.frames import Frames
+from stand.drivers.v1.build import rebuild
+from stand.drivers.v1.codec import decode
+from stand.drivers.v1.nodes import merge, node_frames
+from stand.drivers.v1.protocol import INVALID_COUNT, MARK_BASE, SAMPLES_BASE, STATUS_BASE
 from stand.errors import NoStatusError
 
 
@@ -232,7 +233,7 @@ def test_samples_ids_are_the_protocol_ids() -> None:
 @given(cuts=st.lists(st.integers(0, 21_588), max_size=30))
 def test_a_builder_fed_in_any_blocks_gives_what_rebuild_gives(cuts: list[int]) -> None:
     """Live, blocks are decoded as they come and merged; the streams are the same."""
-    from stand.drivers.streams import StreamBuilder
+    from stand.drivers.v1.build import StreamBuilder
 
     frames = _demo_frames()
     bounds = sorted({0, len(frames), *cuts})

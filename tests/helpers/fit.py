@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from stand.drivers.node_stream import NodeStream
+from stand.drivers.streams import NodeStream
 
 
 def theta_at(s: NodeStream, gamma_deg: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from stand.drivers import Frames
-from stand.drivers.nodes import merge, node_frames
+from stand.drivers.v1.nodes import merge, node_frames
 
 
 def sine_run(

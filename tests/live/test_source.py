@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from stand.drivers.canopen_stream import PdoLayout
-from stand.drivers.scan import ScanLayout
+from stand.drivers.canopen.layout import PdoLayout
+from stand.drivers.scan.layout import ScanLayout
 from stand.errors import UsageError
 from stand.live import live_source
 
@@ -25,7 +25,7 @@ def test_the_station_takes_the_scenes_sensors(scene: str, kind: type, protocol: 
     with pytest.raises(UsageError, match=f"sends protocol {protocol} frames"):
         live_source(scene, DEMO, "balance")
     src = live_source(scene, DEMO, "station", scene_hardware=True)
-    assert isinstance(src.layout, kind)
+    assert src.acquisition is not None and isinstance(src.acquisition.layout, kind)
     assert f'protocol = "{protocol}"' in src.config_toml
     assert src.cfg.rotor.type == "demo-auger"  # the rest is the config's own
     assert (src.modules is not None) == (protocol == "canopen")
@@ -33,4 +33,5 @@ def test_the_station_takes_the_scenes_sensors(scene: str, kind: type, protocol: 
 
 def test_a_scene_of_the_configs_protocol_keeps_the_config_text() -> None:
     src = live_source("demo", DEMO, "station", scene_hardware=True)
-    assert src.layout is None and src.config_toml == Path(DEMO).read_text()
+    assert src.acquisition is not None and src.acquisition.name == "v1"
+    assert src.config_toml == Path(DEMO).read_text()

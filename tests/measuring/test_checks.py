@@ -18,8 +18,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from stand.cli import main
-from stand.drivers import rebuild
-from stand.drivers.protocol import SAMPLES_BASE, STATUS_BASE, Frames
+from stand.drivers.frames import Frames
+from stand.drivers.v1.build import rebuild
+from stand.drivers.v1.protocol import SAMPLES_BASE, STATUS_BASE
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.measure import measure
 from stand.sim import load_scene, simulate
@@ -213,7 +214,7 @@ def test_a_speed_beyond_the_sample_rate_s_band_is_refused(rpm: float, refused: b
 
 def _mark_corrupted(k: int, byte: int, value: int) -> Frames:
     """The demo's frames with byte ``byte`` of node 1's ``k``-th MARK frame set to ``value``."""
-    from stand.drivers.protocol import MARK_BASE
+    from stand.drivers.v1.protocol import MARK_BASE
 
     f, _ = _demo()
     data = f.data.copy()

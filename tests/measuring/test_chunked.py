@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import reference_measure
 
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.measuring import measure, passes
 from stand.sim import load_scene, simulate
 

@@ -28,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from stand.drivers import rebuild
+from stand.drivers.v1.build import rebuild
 from stand.live.loop import replay_estimates
 from stand.measuring.live_fit import extend
 from stand.measuring.measure import measure

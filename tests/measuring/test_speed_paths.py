@@ -144,7 +144,7 @@ def test_no_fork_with_other_threads_or_when_told(monkeypatch: pytest.MonkeyPatch
 
 @pytest.mark.skipif(not beside.can_fork(), reason="no fork here")
 def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.MonkeyPatch) -> None:
-    from stand.drivers import rebuild
+    from stand.drivers.v1.build import rebuild
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -168,7 +168,7 @@ def test_a_node_measured_beside_gives_the_same_answer(monkeypatch: pytest.Monkey
 
 def test_streams_released_are_the_streams() -> None:
     """A builder's blocks let go during the rebuild give the streams kept blocks give."""
-    from stand.drivers.streams import StreamBuilder
+    from stand.drivers.v1.build import StreamBuilder
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -224,8 +224,9 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
     """Read in blocks, a run file's times are views of the one array read whole: the
     streams take that array itself (and what live blocks bring is still joined); the
     streams are those of the run read whole."""
-    from stand.drivers import Recording, read_streams, recording, write_recording
-    from stand.drivers.streams import StreamBuilder, _joined
+    from stand.drivers import Recording, read_streams, write_recording
+    from stand.drivers.v1 import build
+    from stand.drivers.v1.build import StreamBuilder, _joined
     from stand.sim import load_scene, simulate
 
     sc, p, _ = load_scene("demo")
@@ -239,10 +240,9 @@ def test_a_run_files_times_are_read_once_and_taken_without_a_copy(
             seen.append(block.t_s)  # type: ignore[attr-defined]
             super().add(block)  # type: ignore[arg-type]
 
-    whole = read_streams(run)[1]
-    monkeypatch.setattr(recording, "READ_ROWS", 7000)
-    monkeypatch.setattr(recording, "StreamBuilder", Watch)
-    blocks = read_streams(run)[1]
+    whole = read_streams(run, lambda meta: StreamBuilder())[1]
+    monkeypatch.setattr(build, "READ_ROWS", 7000)
+    blocks = read_streams(run, lambda meta: Watch())[1]
     assert len(seen) > 1 and seen[0].base is not None
     assert all(t.base is seen[0].base for t in seen)
     joined = _joined(seen)

@@ -9,8 +9,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from stand.drivers import rebuild
-from stand.drivers.nodes import merge, node_frames
+from stand.drivers.v1.build import rebuild
+from stand.drivers.v1.nodes import merge, node_frames
 from stand.measuring.track import track_1x
 
 RATE = 4000.0

@@ -25,7 +25,7 @@ def _result(sc: Any, p: Any, k: int, amount_g_mm: float, serial: str, day: int) 
     """Rotor ``serial`` measured on the simulated demo stand (2 s) with ``amount_g_mm`` in
     each plane at random angles, started on November ``day`` (July for k % 4 == 0: a
     summer time)."""
-    from stand.drivers import rebuild
+    from stand.drivers.v1.build import rebuild
     from stand.sim import simulate
     from stand.solve import Job, Provenance, SolveOptions, build_result, measure_streams
 

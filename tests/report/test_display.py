@@ -84,7 +84,7 @@ def test_the_live_panel_shows_each_plane_against_its_goal_and_tolerance() -> Non
     from rich.console import Console
 
     from stand.cli.panel import panel
-    from stand.drivers import rebuild
+    from stand.drivers.v1.build import rebuild
     from stand.live import Progress
     from stand.sim import load_scene, simulate
     from stand.solve import SolveOptions, measure_streams

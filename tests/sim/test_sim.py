@@ -23,9 +23,9 @@ from stand.core import (
     unbalance_from_polar,
     unbalance_to_polar,
 )
-from stand.drivers import rebuild
-from stand.drivers.codec import decode
-from stand.drivers.protocol import SAMPLES_BASE
+from stand.drivers.v1.build import rebuild
+from stand.drivers.v1.codec import decode
+from stand.drivers.v1.protocol import SAMPLES_BASE
 from stand.errors import ConfigError
 from stand.sim import Scene, load_scene, shipped_scenes, simulate
 
@@ -283,11 +283,9 @@ def test_shipped_scenes_run_and_give_their_phasors_back(name: str) -> None:
     sc, p, _ = load_scene(name)
     sim = simulate(sc, p)
     if sc.nodes.protocol != "v1":  # a scan module's or CANopen's frames: their decoder
-        from stand.solve.protocols import decoder, layout_of
+        from stand.solve.acquisition import acquisition_of
 
-        layout = layout_of(sc.config(), None)
-        assert layout is not None
-        r = decoder(layout)(sim.frames)
+        r = acquisition_of(sc.config(), None).decode(sim.frames)
         assert sorted(r.nodes) == [1, 2] and r.unknown_frames == 0
         for i in (1, 2):
             got = fit(r.nodes[i], sc.stand.reference_angle_deg)[1]

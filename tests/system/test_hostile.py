@@ -11,7 +11,8 @@ import pytest
 
 from stand.cli import main
 from stand.drivers import read_recording
-from stand.drivers.protocol import SAMPLES_BASE, Frames
+from stand.drivers.frames import Frames
+from stand.drivers.v1.protocol import SAMPLES_BASE
 
 ROOT = Path(__file__).resolve().parents[2]
 CFG = (ROOT / "examples" / "demo-stand.toml").read_text()
@@ -26,7 +27,7 @@ def test_a_stray_frame_from_an_unused_node_is_left_aside(
         f.t_s[:1] + 1.0, np.array([SAMPLES_BASE + 3], np.uint32), f.dlc[:1], f.data[:1], f.flags[:1]
     )
     log = tmp_path / "stray.log"
-    from stand.drivers.logs import write_log
+    from stand.drivers.runs.logs import write_log
 
     write_log(Frames.concat([f, stray]), log)
     cfg = tmp_path / "cfg.toml"
@@ -140,7 +141,7 @@ def test_frames_of_the_wrong_length_are_named_not_called_no_samples(
     dlc = f.dlc.copy()
     dlc[f.can_id == SAMPLES_BASE + 1] = 7
     log = tmp_path / "dlc7.log"
-    from stand.drivers.logs import write_log
+    from stand.drivers.runs.logs import write_log
 
     write_log(Frames(f.t_s, f.can_id, dlc, f.data, f.flags), log)
     cfg = tmp_path / "cfg.toml"

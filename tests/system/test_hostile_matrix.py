@@ -22,9 +22,10 @@ from hostile import registry
 
 from stand.cli import main
 from stand.drivers import read_recording
-from stand.drivers.logs import write_log
-from stand.drivers.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE, Frames
-from stand.drivers.seal import USERBLOCK_BYTES
+from stand.drivers.frames import Frames
+from stand.drivers.runs.logs import write_log
+from stand.drivers.runs.seal import USERBLOCK_BYTES
+from stand.drivers.v1.protocol import MARK_BASE, SAMPLES_BASE, STATUS_BASE
 
 ROOT = Path(__file__).resolve().parents[2]
 CFG = (ROOT / "examples" / "demo-stand.toml").read_text()

@@ -18,9 +18,10 @@ ROOT = Path(__file__).resolve().parents[2]
 
 FLOORS: list[set[str]] = [
     {"stand", "stand.errors"},  # the version, the one exception tree
+    {"stand.files"},  # safe writes: a temporary name, then a rename
     {"stand.core"},  # pure numerics: arrays in, arrays out
     {"stand.process"},  # work forked beside, the allocator: process-level tricks
-    {"stand.drivers"},  # frames, protocol, logs, run files
+    {"stand.drivers"},  # frames, streams, the families' seam and wings, run files
     {"stand.calib"},  # calibration numerics on the core's model
     {"stand.config"},  # the TOML schema, rotor and correction tables, stored matrix
     {"stand.sim", "stand.measuring"},  # the simulated stand; streams -> 1x -> unbalance
@@ -248,8 +249,62 @@ def test_importing_the_core_and_the_cli_loads_no_heavy_module() -> None:
 def test_decoding_loads_neither_python_can_nor_h5py() -> None:
     """The bulk decoder is numpy only: can and h5py load where a bus or a file is opened."""
     code = (
-        "import sys, stand.drivers.protocol, stand.drivers.streams, stand.drivers.nodes; "
+        "import sys, stand.drivers.v1.protocol, stand.drivers.streams, stand.drivers.v1.nodes; "
         "print([m for m in ('can', 'h5py', 'cantools') if m in sys.modules])"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+FAMILY_WINGS = ("v1", "scan", "canopen")
+"""The families' wings of ``drivers/``; ``runs`` is the run files' own."""
+
+
+def _room(module: str) -> str:
+    """``stand.drivers.scan.codec`` -> ``scan``; a root module (or the face) -> ``root``."""
+    parts = module.split(".")
+    return parts[2] if len(parts) > 3 and (ROOT / "drivers" / parts[2]).is_dir() else "root"
+
+
+def drivers_rooms_wrong(root: Path = ROOT) -> list[str]:
+    """Imports against the rooms of ``drivers/``: the root (but its face) imports no wing;
+    a family's wing imports no other family's; the run files' wing imports no family's."""
+    wrong = []
+    for path, name in sources(root):
+        if not name.startswith("stand.drivers.") or (
+            path.name == "__init__.py" and name.count(".") == 1
+        ):
+            continue
+        here = "root" if name.count(".") == 2 and path.name != "__init__.py" else name.split(".")[2]
+        here = here if (root / "drivers" / here).is_dir() else "root"
+        for imported, line, _ in imports(path, name):
+            if not imported.startswith("stand.drivers."):
+                continue
+            there = _room(imported)
+            if there in (here, "root"):
+                continue
+            if (
+                here == "root"
+                or (here in FAMILY_WINGS and there in FAMILY_WINGS)
+                or (here == "runs" and there in FAMILY_WINGS)
+            ):
+                wrong.append(f"{path.relative_to(root)}:{line} imports {imported}")
+    return wrong
+
+
+def test_the_drivers_rooms_keep_their_order() -> None:
+    assert drivers_rooms_wrong() == []
+
+
+def test_a_wing_importing_another_wing_is_caught(tmp_path: Path) -> None:
+    for folder in ("stand", "calib", "drivers/scan", "drivers/canopen"):
+        (tmp_path / folder).mkdir(parents=True)
+    (tmp_path / "drivers/scan/__init__.py").write_text("")
+    (tmp_path / "drivers/scan/codec.py").write_text("x = 1\n")
+    (tmp_path / "drivers/canopen/__init__.py").write_text("")
+    (tmp_path / "drivers/canopen/codec.py").write_text("from stand.drivers.scan.codec import x\n")
+    (tmp_path / "drivers/frames.py").write_text("from stand.drivers.scan.codec import x\n")
+    assert sorted(drivers_rooms_wrong(tmp_path)) == [
+        "drivers/canopen/codec.py:1 imports stand.drivers.scan.codec.x",
+        "drivers/frames.py:1 imports stand.drivers.scan.codec.x",
+    ]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 PROBE = (
-    "import importlib.util as u, stand.drivers.protocol as p, stand.calib.identify as c; "
+    "import importlib.util as u, stand.drivers.family as p, stand.calib.identify as c; "
     "print(p.__file__); print(c.__file__); print(u.find_spec('drivers'), u.find_spec('calib'))"
 )
 
@@ -31,6 +31,11 @@ def test_every_package_is_named_in_pyproject() -> None:
     found = {
         ".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "stand").rglob("__init__.py")
     } | set(dirs)
+    for folder, package in dirs.items():  # drivers/ and calib/ with their wings
+        found |= {
+            ".".join((folder, *p.parent.relative_to(ROOT / package).parts))
+            for p in (ROOT / package).rglob("*/__init__.py")
+        }
     assert sorted(setup["packages"]) == sorted(found)
     assert dirs == {"stand.drivers": "drivers", "stand.calib": "calib"}
 
@@ -67,5 +72,7 @@ def test_a_regular_install_maps_them_too(tmp_path: Path) -> None:
     drivers, calib, specs = _probe(tmp_path, env)
     assert Path(drivers).is_relative_to(site / "stand" / "drivers")
     assert Path(calib).is_relative_to(site / "stand" / "calib")
-    assert (site / "stand" / "drivers" / "sensor_node_v1.dbc").is_file()
+    assert (site / "stand" / "drivers" / "v1" / "sensor_node_v1.dbc").is_file()
+    assert (site / "stand" / "drivers" / "scan" / "scan_module.dbc").is_file()
+    assert (site / "stand" / "drivers" / "canopen" / "canopen_ai.eds").is_file()
     assert specs == "None None"

@@ -1,5 +1,5 @@
 """``[bus] protocol = "canopen"`` and the ``[bus.canopen]`` table: one CANopen analog input
-module per support sampling on SYNC (the decoder: :mod:`stand.drivers.canopen_stream`).
+module per support sampling on SYNC (the decoder: :mod:`stand.drivers.canopen.codec`).
 
 ::
 
@@ -37,7 +37,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
-from stand.config.tables import STRICT
+from stand.drivers.family import STRICT
 
 Object = Annotated[str, Field(pattern=r"^0x[0-9A-Fa-f]{4}:(0x[0-9A-Fa-f]{1,2}|[0-9]{1,3})$")]
 """``0xIIII:S``: an object's index and sub-index."""
@@ -79,7 +79,7 @@ class CanopenTable(BaseModel):
     mark_threshold: FiniteFloat | None = None
     configure: bool = True
     """Whether ``stand record`` (``balance``, ``measure``, the station) sets the modules up
-    over SDO before recording and produces the SYNC (:mod:`stand.drivers.canopen_setup`);
+    over SDO before recording and produces the SYNC (:mod:`stand.drivers.canopen.setup`);
     false: the modules are set up and the SYNC produced by something else."""
     window_s: Annotated[FiniteFloat, Field(gt=0.0, le=1.0)] | None = None
     """The synchronous window written to 0x1007 [s] (default: half a SYNC period)."""

@@ -5,7 +5,7 @@ field is a slice (:func:`_fast_candump`, in blocks of :data:`CANDUMP_BLOCK`
 bytes); epoch time stamps (candump -l, python-can's logger) are parsed as
 two integers, no precision lost.  A file with anything unusual (remote or
 CAN FD frames, odd spacing, a bad line) goes through one regular expression,
-which also names the first bad line.  Part of :mod:`stand.drivers.logs`.
+which also names the first bad line.  Part of :mod:`stand.drivers.runs.logs`.
 """
 
 from __future__ import annotations
@@ -17,8 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.budget import log_budget, slow_text_budget
-from stand.drivers.protocol import (
+from stand.drivers.frames import (
     FLAG_ERROR,
     FLAG_EXTENDED,
     FLAG_FD,
@@ -27,6 +26,7 @@ from stand.drivers.protocol import (
     MAX_PAYLOAD,
     Frames,
 )
+from stand.drivers.runs.budget import log_budget, slow_text_budget
 from stand.errors import RecordingError, UnusualLogError
 
 CAN_ERR_FLAG = 0x20000000
@@ -220,7 +220,7 @@ def read_candump(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
 
 def _read_candump_text(path: Path, warn: list[Diagnostic] | None = None) -> Frames:
     """A candump log read whole by the regular expression (refused first when this machine
-    has no memory for it: :func:`stand.drivers.budget.slow_text_budget`)."""
+    has no memory for it: :func:`stand.drivers.runs.budget.slow_text_budget`)."""
 
     slow_text_budget(path)
     return _read_candump_whole(path, warn)

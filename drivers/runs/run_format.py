@@ -1,6 +1,6 @@
 """A run file's names: its format's name and version, its attributes, the frames' fields,
-and the :class:`Recording` read from it (:mod:`stand.drivers.recording` reads and writes
-run files, :mod:`stand.drivers.run_writer` writes one as it is recorded)."""
+and the :class:`Recording` read from it (:mod:`stand.drivers.runs.recording` reads and writes
+run files, :mod:`stand.drivers.runs.run_writer` writes one as it is recorded)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.protocol import Frames
+from stand.drivers.frames import Frames
 
 RUN_FORMAT = "rotor-stand-run"
 RUN_FORMAT_VERSION = 1
@@ -26,11 +26,16 @@ STAND_ATTR = "stand_id"
 host name), so a plant's shared archive knows where each run was made."""
 CANOPEN_SETUP_ATTR = "canopen_setup"
 """Run file attribute: how the CANopen modules were set up over SDO before the run (JSON: a
-list of steps, :mod:`stand.drivers.canopen_setup`)."""
+list of steps, :mod:`stand.drivers.canopen.setup`)."""
 TEST_UNBALANCE_ATTR = "test_unbalance_json"
 """Run file attribute: the test unbalance a simulated start of a ball balancer's test
 carried (JSON: ``[[re, im], [re, im]]`` per plane, kg m, ``U = q R e^{-i phi}``)."""
-CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR, CANOPEN_SETUP_ATTR, TEST_UNBALANCE_ATTR)
+DESCRIPTIONS_ATTR = "descriptions_json"
+"""Run file attribute: the description files (DBC, EDS) the run was recorded through
+(JSON: ``{file name: text}``), so that it decodes as recorded even after a file changed
+(:func:`stand.drivers.family.read_description`)."""
+CARRIED_ATTRS = (JOB_ATTR, MATRIX_ATTR, STAND_ATTR, CANOPEN_SETUP_ATTR, TEST_UNBALANCE_ATTR,
+                 DESCRIPTIONS_ATTR)  # fmt: skip
 """Text attributes a converted or rewritten run keeps."""
 FRAME_FIELDS = {
     "t_s": np.float64,

@@ -3,7 +3,7 @@
 Runs move to and from other CAN tools as python-can logs (``.log``,
 ``.asc``, ``.blf``, ``.trc``, ``.csv`` ...): the format follows the file
 extension, as in ``can.LogReader`` and ``can.Logger``.  candump ``.log``
-files, the common case, are read by :mod:`stand.drivers.candump` (numpy
+files, the common case, are read by :mod:`stand.drivers.runs.candump` (numpy
 columns, fast); every other format goes through python-can message by
 message.
 
@@ -16,74 +16,17 @@ from __future__ import annotations
 import re
 import sqlite3
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
 from stand.core import Diagnostic
-from stand.drivers.candump import iter_candump, iter_candump_fast
-from stand.drivers.candump import read_candump as read_candump  # re-exported
-from stand.drivers.files import check_input, check_timestamps
-from stand.drivers.protocol import (
-    FLAG_ERROR,
-    FLAG_EXTENDED,
-    FLAG_FD,
-    FLAG_REMOTE,
-    Frames,
-)
+from stand.drivers.frames import Frames, frames_from_messages, messages_from_frames
+from stand.drivers.runs.candump import iter_candump, iter_candump_fast
+from stand.drivers.runs.candump import read_candump as read_candump  # re-exported
 from stand.errors import RecordingError
-
-
-def frames_from_messages(messages: Iterable[Any]) -> Frames:
-    """Frames from python-can ``Message`` objects (any iterable, e.g. a LogReader)."""
-    t: list[float] = []
-    ids: list[int] = []
-    dlcs: list[int] = []
-    flags: list[int] = []
-    payloads: list[bytes] = []
-    for m in messages:
-        t.append(m.timestamp)
-        ids.append(m.arbitration_id)
-        dlcs.append(m.dlc)
-        flags.append(
-            (FLAG_EXTENDED if m.is_extended_id else 0)
-            | (FLAG_REMOTE if m.is_remote_frame else 0)
-            | (FLAG_ERROR if m.is_error_frame else 0)
-            | (FLAG_FD if m.is_fd else 0)
-        )
-        payloads.append(bytes(m.data))
-    return Frames.from_lists(t, ids, dlcs, flags, payloads)
-
-
-def messages_from_frames(frames: Frames, channel: str | None = None) -> Iterator[Any]:
-    """python-can ``Message`` objects for the frames (the payload cut to each DLC)."""
-    import can
-
-    data = frames.data.tobytes()
-    width = frames.data.shape[1]
-    for i, (t, cid, dlc, fl) in enumerate(
-        zip(
-            frames.t_s.tolist(),
-            frames.can_id.tolist(),
-            frames.dlc.tolist(),
-            frames.flags.tolist(),
-            strict=True,
-        )
-    ):
-        remote = bool(fl & FLAG_REMOTE)
-        yield can.Message(
-            timestamp=t,
-            arbitration_id=cid,
-            is_extended_id=bool(fl & FLAG_EXTENDED),
-            is_remote_frame=remote,
-            is_error_frame=bool(fl & FLAG_ERROR),
-            is_fd=bool(fl & FLAG_FD),
-            dlc=dlc,
-            data=None if remote else data[i * width : i * width + dlc],
-            channel=channel,
-            check=False,
-        )
+from stand.files import check_input, check_timestamps
 
 
 def iter_log(

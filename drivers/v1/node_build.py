@@ -14,13 +14,12 @@ from numpy.typing import NDArray
 
 from stand.core import Diagnostic
 from stand.drivers.frame_index import FrameIndex
-from stand.drivers.node_stream import NodeStream
-from stand.drivers.protocol import (
+from stand.drivers.streams import SUPPORT_NODES, NodeStream
+from stand.drivers.v1.protocol import (
     FRAC_SCALE,
     INVALID_COUNT,
     SAMPLES_PER_FRAME,
     STATUS_FLAG_NAMES,
-    SUPPORT_NODES,
     WRAP,
     Decoded,
 )
@@ -348,7 +347,7 @@ def _samples(F: NDArray[np.int64], counts: NDArray[Any], one_segment: bool) -> t
     flat = counts.reshape(-1)
     valid = flat != INVALID_COUNT
     if bool(valid.all()) and one_segment:
-        return FrameIndex(F), flat, valid, _Triple()
+        return FrameIndex(F, SAMPLES_PER_FRAME), flat, valid, _Triple()
     index = np.empty(SAMPLES_PER_FRAME * len(F), np.int64)
     triples = index.reshape(-1, SAMPLES_PER_FRAME)
     np.multiply(F, SAMPLES_PER_FRAME, out=triples[:, 0])  # no temporary of the run's length

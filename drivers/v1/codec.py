@@ -4,7 +4,7 @@
 STATUS, MARK) in one numpy pass, naming every frame it cannot decode and why
 (:class:`BadReason`); the encoders make frames (the simulated nodes, the
 tests).  The layout, the constants and the record types are
-:mod:`stand.drivers.protocol`'s.
+:mod:`stand.drivers.v1.protocol`'s.
 """
 
 from __future__ import annotations
@@ -17,13 +17,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from stand.drivers.protocol import (
-    FLAG_ERROR,
-    FLAG_EXTENDED,
-    FLAG_FD,
-    FLAG_REMOTE,
+from stand.drivers.frames import FLAG_ERROR, FLAG_EXTENDED, FLAG_FD, FLAG_REMOTE, FRAME_DLC, Frames
+from stand.drivers.v1.protocol import (
     FRAC_SCALE,
-    FRAME_DLC,
     LAYOUT,
     MARK_BASE,
     MAX_NODE,
@@ -33,7 +29,6 @@ from stand.drivers.protocol import (
     STATUS_BASE,
     BadFrame,
     Decoded,
-    Frames,
     MarkRecords,
     SamplesRecords,
     StatusRecords,

@@ -37,7 +37,8 @@ CHILD_SECONDS = 10.0
 CHILD_BYTES_PER_S = 10e6
 """A tenth of the speed the readers reach on this project's test machine (about 100 MB/s)."""
 _READ = (
-    "import sys; from stand.drivers.recording import read_run; read_run(sys.argv[1], guard=False)"
+    "import sys; from stand.drivers.runs.recording import read_run; "
+    "read_run(sys.argv[1], guard=False)"
 )
 
 SealState = Literal["intact", "none", "broken"]

@@ -1,5 +1,5 @@
 """Setting CANopen analog input modules up over SDO before a recording, and the SYNC that
-clocks them (CiA 301 + CiA 404; the decoder is :mod:`stand.drivers.canopen_stream`).
+clocks them (CiA 301 + CiA 404; the decoder is :mod:`stand.drivers.canopen.codec`).
 
 Per module, in this order, each step kept in the dialogue stored with the run:
 
@@ -26,11 +26,13 @@ module or a wrong identity is a :class:`~stand.errors.BusError` in one line.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from typing import Any
 
-from stand.drivers.canopen_stream import PdoLayout, PdoNode
+from stand.drivers.canopen.layout import PdoLayout, PdoNode
+from stand.drivers.runs.run_format import CANOPEN_SETUP_ATTR
 from stand.errors import BusError
 
 SDO_TIMEOUT_S = 0.3
@@ -249,3 +251,41 @@ class SyncProducer:
                 _nmt(self.bus, NMT_PRE_OPERATIONAL, n.node_id)
         except (can.CanError, OSError):
             pass
+
+
+class CanopenSetup:
+    """The family's :class:`~stand.drivers.family.BusSetup`: the modules set up over SDO
+    (:func:`configure_modules`), started, and clocked by the host's SYNC
+    (:class:`SyncProducer`) until :meth:`stop`."""
+
+    attr = CANOPEN_SETUP_ATTR
+
+    def __init__(self, layout: PdoLayout) -> None:
+        self.layout = layout
+        self.clock_ids = (layout.sync_id,)
+        self._sync: SyncProducer | None = None
+
+    def configure(self, bus: Any, channel: str) -> list[dict[str, Any]]:
+        quiet_library_log()
+        steps = configure_modules(bus, self.layout, channel)
+        self._sync = SyncProducer(bus, self.layout)
+        return steps
+
+    def start(self, *, produce: bool, channel: str) -> None:
+        if self._sync is not None:
+            self._sync.start(produce=produce, channel=channel)
+
+    def stop(self) -> None:
+        if self._sync is not None:
+            self._sync.stop()
+
+
+def quiet_library_log() -> None:
+    """The canopen library logs an aborted transfer ("Transfer aborted ...") before it
+    raises; Python's last-resort handler would print that line to stderr before the
+    product's own.  A NullHandler on the library's logger (what a library's user is
+    meant to give it) keeps it quiet; an application that configured logging still
+    gets the records."""
+    log = logging.getLogger("canopen")
+    if not log.handlers:
+        log.addHandler(logging.NullHandler())

@@ -1,6 +1,6 @@
 """The run file's writer: frames appended as they arrive, safe at any crash.
 
-The format and its reader are :mod:`stand.drivers.recording` (its docstring
+The format and its reader are :mod:`stand.drivers.runs.recording` (its docstring
 describes the file, the crash safety and the seal); this module writes it:
 :class:`RunWriter` keeps the file closed between flushes, and
 :func:`write_streams` adds the decoded per-node streams at the end.
@@ -17,15 +17,8 @@ from typing import Any
 import numpy as np
 
 from stand.core import Diagnostic
-from stand.drivers.files import (
-    check_output,
-    ensure_room,
-    publish,
-    temporary_beside,
-    write_error,
-)
-from stand.drivers.protocol import FRAME_DLC, MAX_PAYLOAD, Frames
-from stand.drivers.run_format import (
+from stand.drivers.frames import FRAME_DLC, MAX_PAYLOAD, Frames
+from stand.drivers.runs.run_format import (
     FRAME_FIELDS,
     RUN_FORMAT,
     RUN_FORMAT_VERSION,
@@ -33,9 +26,10 @@ from stand.drivers.run_format import (
     h5py_module,
     utc_now,
 )
-from stand.drivers.seal import USERBLOCK_BYTES, seal
+from stand.drivers.runs.seal import USERBLOCK_BYTES, seal
 from stand.drivers.streams import RunStreams
 from stand.errors import RecordingError, WriteError
+from stand.files import check_output, ensure_room, publish, temporary_beside, write_error
 
 FLUSH_INTERVAL_S = 0.5
 """Frames reach the disk at least this often [s]; a crash loses at most this much."""

@@ -1,5 +1,5 @@
-"""``[bus] protocol`` and the ``[bus.scan]`` table: a scan-stream DAQ module described by a
-DBC and a mapping of its channels (the decoder: :mod:`stand.drivers.scan`).
+"""The ``[bus.scan]`` table: a scan-stream DAQ module described by a DBC and a mapping of
+its channels (``[bus] protocol = "scan"``; the decoder: :mod:`stand.drivers.scan.codec`).
 
 ::
 
@@ -31,18 +31,13 @@ before.
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
-from stand.config.canopen import CanopenTable
-from stand.config.schema import validate
-from stand.config.tables import STRICT
-from stand.errors import ConfigError
+from stand.drivers.family import STRICT
+from stand.drivers.frames import FD_LENGTHS
 
-PROTOCOLS = ("v1", "scan", "canopen")
-"""``[bus] protocol``: the sensor nodes' protocol v1, a scan-stream module, or CANopen
-modules sampling on SYNC (:mod:`stand.config.canopen`)."""
 Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")]
 
 
@@ -93,26 +88,9 @@ class ScanTable(BaseModel):
             if roles.count(want) != 1:
                 raise ValueError(f"channels: exactly one channel for {what}, "
                                  f"found {roles.count(want)}")  # fmt: skip
-        if self.scans_per_frame * self.scan_bytes > 64:
+        need = self.scans_per_frame * self.scan_bytes
+        if self.scans_per_frame > 1 and need not in FD_LENGTHS:
             raise ValueError(f"scans_per_frame x scan_bytes: {self.scans_per_frame} x "
-                             f"{self.scan_bytes} bytes, more than a CAN FD frame's 64")  # fmt: skip
+                             f"{self.scan_bytes} = {need} bytes, not a CAN FD payload length "
+                             f"({', '.join(map(str, FD_LENGTHS[8:]))})")  # fmt: skip
         return self
-
-
-def bus_protocol(bus: dict[str, Any] | None, source: str) -> tuple[str, Any]:
-    """The ``[bus]`` table's protocol and its checked table: ``[bus.scan]``
-    (:class:`ScanTable`), ``[bus.canopen]``
-    (:class:`stand.config.canopen.CanopenTable`), or None for v1."""
-    bus = bus or {}
-    protocol = bus.get("protocol", "v1")
-    if protocol not in PROTOCOLS:
-        raise ConfigError(f"[bus] protocol: {protocol!r}, expected one of "
-                          f"{', '.join(PROTOCOLS)}", source=source)  # fmt: skip
-    if protocol == "v1":
-        return protocol, None
-    table = bus.get(protocol)
-    if not isinstance(table, dict):
-        raise ConfigError(f"[bus] protocol = {protocol!r} needs a [bus.{protocol}] table",
-                          source=source)  # fmt: skip
-    model = ScanTable if protocol == "scan" else CanopenTable
-    return protocol, validate(model, table, source, prefix=f"bus.{protocol}.")

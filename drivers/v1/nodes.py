@@ -20,8 +20,9 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from stand.drivers.codec import edge_fields, encode_marks, encode_samples, encode_status
-from stand.drivers.protocol import SAMPLES_PER_FRAME, Frames
+from stand.drivers.frames import Frames
+from stand.drivers.v1.codec import edge_fields, encode_marks, encode_samples, encode_status
+from stand.drivers.v1.protocol import SAMPLES_PER_FRAME
 
 STATUS_PERIOD_S = 1.0
 """A node sends STATUS at start-up, then once a second."""

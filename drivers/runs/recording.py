@@ -2,7 +2,7 @@
 
 A run file holds everything needed to reprocess a run::
 
-    bytes 0..511     the seal (:mod:`stand.drivers.seal`): the SHA-256 of every
+    bytes 0..511     the seal (:mod:`stand.drivers.runs.seal`): the SHA-256 of every
                      byte after it, written when the run is closed
     /                attrs: format = "rotor-stand-run", format_version = 1,
                      software, start_time (ISO 8601, UTC), source (the bus),
@@ -49,15 +49,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.drivers.budget import frames_budget, log_budget
-from stand.drivers.files import (
-    check_input,
-    check_timestamps,
-    output,
-)
-from stand.drivers.logs import iter_log, read_log, write_log
-from stand.drivers.protocol import Frames
-from stand.drivers.run_format import (
+from stand.drivers.family import FrameBuilder
+from stand.drivers.frames import Frames
+from stand.drivers.runs.budget import frames_budget, log_budget
+from stand.drivers.runs.logs import iter_log, read_log, write_log
+from stand.drivers.runs.run_format import (
     CARRIED_ATTRS,
     FRAME_FIELDS,
     JOB_ATTR,
@@ -70,16 +66,16 @@ from stand.drivers.run_format import (
     config_digest,
     h5py_module,
 )
-from stand.drivers.run_writer import RunWriter
-from stand.drivers.seal import read_in_child, seal_state
-from stand.drivers.streams import RunStreams, StreamBuilder
-from stand.errors import RecordingError, UnusualLogError
+from stand.drivers.runs.run_writer import RunWriter
+from stand.drivers.runs.seal import read_in_child, seal_state
+from stand.drivers.streams import RunStreams
+from stand.errors import RecordingError, StandError, UnusualLogError
+from stand.files import check_input, check_timestamps, output
 
-__all__ = [  # the run file's names (stand.drivers.run_format) are read here too
+__all__ = [  # the run file's names (stand.drivers.runs.run_format) are read here too
     "CARRIED_ATTRS",
     "JOB_ATTR",
     "MATRIX_ATTR",
-    "READ_ROWS",
     "RUN_FORMAT",
     "RUN_FORMAT_VERSION",
     "RUN_SUFFIXES",
@@ -92,9 +88,6 @@ __all__ = [  # the run file's names (stand.drivers.run_format) are read here too
     "read_streams",
     "write_recording",
 ]
-
-READ_ROWS = 1 << 20
-"""Frames read from a run file at a time by :func:`read_streams` (bounded memory)."""
 
 
 def _attr(f: Any, name: str, kind: type, path: Path, default: Any = None) -> Any:
@@ -228,10 +221,14 @@ def _read_run_blocks(
     rows: int | None = None,
     *,
     guard: bool = True,
+    start: Callable[[dict[str, Any]], None] | None = None,
+    rows_of: Callable[[], int | None] | None = None,
 ) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
     """Hand a run file's committed frames to ``take``, ``rows`` at a time (None: all at once);
     return its attributes and warnings.  A file without an intact seal is read by a child
-    process with a time limit first (``guard``; :mod:`stand.drivers.seal`).
+    process with a time limit first (``guard``; :mod:`stand.drivers.runs.seal`).  ``start``
+    is handed the attributes before the first block (a decoder chosen by the run's config),
+    and ``rows_of`` then says the block size (it overrides ``rows``).
 
     Raises
     ------
@@ -247,7 +244,7 @@ def _read_run_blocks(
         raise _unreadable(exc, p) from exc
     if state != "intact":
         read_in_child(p)
-    meta, warnings = _read_checked(p, take, rows)
+    meta, warnings = _read_checked(p, take, rows, start, rows_of)
     if state == "broken":
         raise RecordingError(
             "its bytes no longer match the SHA-256 sealed when the run was closed: the "
@@ -258,13 +255,18 @@ def _read_run_blocks(
 
 
 def _read_checked(
-    p: Path, take: Callable[[Frames], None], rows: int | None
-) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
+    p: Path, take: Callable[[Frames], None], rows: int | None,
+    start: Callable[[dict[str, Any]], None] | None = None,
+    rows_of: Callable[[], int | None] | None = None,
+) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:  # fmt: skip
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
         with h5py_module().File(p, "r", locking=False) as f:
             n, meta, warnings = _open_run(f, p)
-
+            if start is not None:
+                start(meta)
+            if rows_of is not None:
+                rows = rows_of()
             frames_budget(n, str(p))
             step = max(n, 1) if rows is None else rows
             # in blocks: the times read whole, once, so that the blocks' times are views of
@@ -274,7 +276,7 @@ def _read_checked(
                 block = _frame_rows(f, lo, min(lo + step, n), t_s)
                 check_timestamps(block.t_s, p, lo)
                 take(block)
-    except RecordingError:
+    except StandError:  # the file's own refusal, or the config the run carries refused
         raise
     except (
         OSError,
@@ -295,30 +297,55 @@ def read_run(path: str | Path, *, guard: bool = True) -> Recording:
     return Recording(str(path), Frames.concat(blocks), meta, warnings)
 
 
-def read_streams(path: str | Path, *, strict_status: bool = True) -> tuple[Recording, RunStreams]:
-    """A recording's per-node streams, read and decoded in blocks (bounded memory).
+def read_streams(
+    path: str | Path,
+    choose: Callable[[dict[str, Any]], FrameBuilder],
+    *,
+    strict_status: bool = True,
+) -> tuple[Recording, RunStreams]:
+    """A recording's streams, read once and decoded once in blocks (bounded memory).
 
-    The returned :class:`Recording` has the file's attributes and warnings but
-    no frames: they went into the streams block by block and were let go.
+    ``choose`` is handed the run file's attributes (a log: none) before its first block
+    and returns the builder that decodes it (its family's, by the config the run carries
+    or the one given: ``stand.solve.acquisition``).  The returned :class:`Recording` has
+    the file's attributes and warnings but no frames: they went into the streams block by
+    block and were let go.
     """
 
-    builder = StreamBuilder(merge=False)  # a few blocks of READ_ROWS: rebuilt once
+    chosen: list[FrameBuilder] = []
+
+    def start(meta: dict[str, Any]) -> None:
+        chosen[:] = [choose(meta)]
+
     if is_run_file(path):
-        meta, warnings = _read_run_blocks(path, builder.add, READ_ROWS)
+        meta, warnings = _read_run_blocks(
+            path, lambda b: chosen[0].add(b), None, start=start,
+            rows_of=lambda: chosen[0].read_rows,
+        )  # fmt: skip
         rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:
         warn: list[Diagnostic] = []
         if Path(path).suffix.lower() == ".log" and Path(path).is_file():
             log_budget(Path(path))
         try:  # a candump log streams block by block; anything unusual: again, the slow way
-            for block in iter_log(path, fast=True, warn=warn):
-                builder.add(block)
+            _take_log(iter_log(path, fast=True, warn=warn), start, chosen)
         except UnusualLogError:
-            builder = StreamBuilder(merge=False)
-            for block in iter_log(path, warn=warn):
-                builder.add(block)
+            chosen.clear()
+            _take_log(iter_log(path, warn=warn), start, chosen)
         rec = Recording(str(path), Frames.empty(), warnings=tuple(warn))
-    return rec, builder.streams(strict_status=strict_status, release=True)
+    return rec, chosen[0].streams(strict_status=strict_status, release=True)
+
+
+def _take_log(blocks: Iterable[Frames], start: Callable[[dict[str, Any]], None],
+              chosen: list[FrameBuilder]) -> None:  # fmt: skip
+    """A log's blocks into the builder ``start`` chooses (a log has no attributes) when the
+    first block is read: the log's own faults are named before the config's."""
+    for block in blocks:
+        if not chosen:
+            start({})
+        chosen[0].add(block)
+    if not chosen:
+        start({})
 
 
 def is_run_file(path: str | Path) -> bool:
@@ -351,7 +378,7 @@ def write_recording(
     inputs: Iterable[str | Path] = (),
 ) -> None:
     """Write frames as a run file (.h5) or a python-can log (by extension), whole: under a
-    temporary name, published at ``path`` when complete (:func:`stand.drivers.files.output`).
+    temporary name, published at ``path`` when complete (:func:`stand.files.output`).
     """
 
     need = len(recording.frames) * (2 * (14 + recording.frames.data.shape[1]) + 16)

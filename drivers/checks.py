@@ -1,0 +1,107 @@
+"""What the data reveal about a wrong clock or a wrong mapping, for the one-clock families
+(a scan module, CANopen modules): each check refuses in one line naming the figures.
+
+- :func:`check_clock`: the recording is the clock.  The sample rate the recording shows
+  (its sample indices against the receive times, a least-squares slope over the whole
+  run) must agree with the configured rate within :data:`CLOCK_TOLERANCE`; a config that
+  says otherwise would scale every frequency and phase wrong, so it is refused rather
+  than silently replaced (the stated rate may be the one that is right and the recording
+  a wrong device: a person must say which).
+- :func:`check_channels`: the mark channel must be a pulse train (its samples sit near
+  its two levels: few in the middle half of its range) and an accelerometer channel must
+  not be one; two supports whose samples are equal frame for frame are one device fed
+  to both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from stand.drivers.streams import RunStreams
+from stand.errors import ConfigError
+
+CLOCK_TOLERANCE = 0.01
+"""A configured rate may differ from the recording's by this fraction at most (1 %)."""
+MIN_CLOCK_SPAN_S = 0.5
+"""Receive times shorter than this (a live session's first blocks) are not judged."""
+PULSE_MIDDLE = 0.15
+"""A pulse train has at most this fraction of its samples in the middle half of its range
+(a mark with a 4-sample edge at 133 samples a turn: 3 %; a sine: 33 %)."""
+MIN_CHANNEL_SAMPLES = 400
+"""Channels with fewer samples are not judged."""
+MIN_ACCEL_SPAN = 64
+"""An accelerometer channel spanning fewer counts is not judged (a quiet rotor's few
+counts are no pulse train; a mark input's swing spans thousands)."""
+
+
+def recorded_rate(index: NDArray[np.int64], t_s: NDArray[np.float64]) -> float | None:
+    """The sample rate the receive times show [Hz]: the least-squares slope of index
+    against time (receive jitter averages out), or None when the span is too short."""
+    if len(index) < 3 or float(t_s[-1] - t_s[0]) < MIN_CLOCK_SPAN_S:
+        return None
+    t = t_s - t_s.mean()
+    k = index.astype(np.float64) - float(np.mean(index))
+    den = float(t @ t)
+    return float(t @ k) / den if den > 0 else None
+
+
+def check_clock(rate_hz: float, recorded_hz: float | None, source: str, key: str) -> None:
+    """Refuse a configured ``rate_hz`` that the recording's own ``recorded_hz`` contradicts
+    by more than :data:`CLOCK_TOLERANCE` (``key``: the config key that states it)."""
+    if recorded_hz is None or abs(recorded_hz / rate_hz - 1.0) <= CLOCK_TOLERANCE:
+        return
+    raise ConfigError(
+        f"the recording's clock runs at {recorded_hz:.1f} Hz, the config says "
+        f"{rate_hz:g} Hz ({abs(recorded_hz / rate_hz - 1.0):.1%} apart, more than "
+        f"{CLOCK_TOLERANCE:.0%}): decode it with a config of its own rate",
+        source=source, key=key,
+    )  # fmt: skip
+
+
+def middle_fraction(v: NDArray[np.float64] | NDArray[np.int64]) -> float:
+    """The fraction of samples in the middle half of the channel's range (robust ends:
+    the 0.5th and 99.5th percentiles)."""
+    lo, hi = np.percentile(v, [0.5, 99.5])
+    if not hi > lo:
+        return 0.0
+    q = (v - lo) / (hi - lo)
+    return float(np.count_nonzero((q > 0.25) & (q < 0.75))) / len(v)
+
+
+def check_mark(v: NDArray[np.float64], name: str, source: str) -> None:
+    """Refuse a mark channel that is no pulse train (an accelerometer mapped to it)."""
+    if len(v) < MIN_CHANNEL_SAMPLES:
+        return
+    f = middle_fraction(v)
+    if f > PULSE_MIDDLE:
+        raise ConfigError(f"the mark channel {name} is no pulse train: {f:.0%} of its samples "
+                          f"lie mid-range (a mark: under {PULSE_MIDDLE:.0%}); is an "
+                          "accelerometer mapped to it?", source=source)  # fmt: skip
+
+
+def check_accel(v: NDArray[np.int64], name: str, support: int, source: str) -> None:
+    """Refuse an accelerometer channel that is a pulse train (the mark mapped to it)."""
+    if len(v) < MIN_CHANNEL_SAMPLES or np.ptp(v) < MIN_ACCEL_SPAN:
+        return
+    f = middle_fraction(v)
+    if f < PULSE_MIDDLE / 3:
+        raise ConfigError(f"support {support}'s accelerometer {name} reads a pulse train "
+                          f"({f:.1%} of its samples mid-range): is the mark mapped to it?",
+                          source=source)  # fmt: skip
+
+
+def check_distinct(streams: RunStreams, source: str) -> None:
+    """Refuse two supports whose samples are equal at every common index (one device's
+    frames fed to both)."""
+    a, b = streams.nodes.get(1), streams.nodes.get(2)
+    if a is None or b is None or len(a.counts) < MIN_CHANNEL_SAMPLES:
+        return
+    ia, ib = np.asarray(a.index), np.asarray(b.index)
+    common, ka, kb = np.intersect1d(ia, ib, assume_unique=True, return_indices=True)
+    if len(common) < MIN_CHANNEL_SAMPLES or np.ptp(a.counts[ka]) == 0:
+        return
+    if np.array_equal(a.counts[ka], b.counts[kb]):
+        raise ConfigError(f"supports 1 and 2 read the same samples ({len(common)} of them, "
+                          "equal one for one): one device's frames feed both; check the "
+                          "mapping", source=source)  # fmt: skip

@@ -1,0 +1,175 @@
+"""What the one-clock families share: a signal's place in a frame (:class:`Signal`), a
+sampled mark channel's edges (:func:`mark_edges`), one support's stream when its samples
+and the mark's share one clock and one index (:func:`one_clock_stream`), a live builder
+that decodes whole (:class:`WholeBuilder`), and the checks the data allow on a mapping
+and a clock (:mod:`stand.drivers.checks`).  A scan-stream module
+(:mod:`stand.drivers.scan`) and CANopen modules on SYNC (:mod:`stand.drivers.canopen`)
+are such families."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from stand.drivers.family import Kept
+from stand.drivers.frames import Frames
+from stand.drivers.streams import NodeStream, RunStreams
+
+
+@dataclass(frozen=True)
+class Signal:
+    """Where one DBC signal lies: its frame, its bits (little-endian), its scaling."""
+
+    name: str
+    frame_id: int
+    extended: bool
+    start: int
+    length: int
+    signed: bool
+    factor: float
+    offset: float
+
+    def raw(self, data: NDArray[np.uint8]) -> NDArray[np.int64]:
+        """The signal's raw integers in frames' payloads ``data`` (n, >= 8 bytes)."""
+        word = np.ascontiguousarray(data[:, :8]).view("<u8").reshape(-1)
+        mask = np.uint64((1 << self.length) - 1)
+        v = ((word >> np.uint64(self.start)) & mask).astype(np.int64)
+        if self.signed:
+            v = np.where(v >= 1 << (self.length - 1), v - (1 << self.length), v)
+        return v
+
+
+def revolutions(edges: NDArray[np.float64]) -> tuple[NDArray[np.int64], int]:
+    """Each edge's revolution number, counting the turns an edge was lost in (a gap in the
+    samples can hide one): the steps between edges in whole median periods; and how many
+    edges are missing."""
+    if len(edges) < 2:
+        return np.arange(len(edges), dtype=np.int64), 0
+    d = np.diff(edges)
+    steps = np.maximum(1, np.rint(d / np.median(d))).astype(np.int64)
+    return np.concatenate(([0], np.cumsum(steps))), int(np.sum(steps - 1))
+
+
+def edges_between(
+    v: NDArray[np.float64], index: NDArray[np.int64], threshold: float
+) -> NDArray[np.float64]:
+    """Rising crossings of ``threshold`` between consecutive samples (``index`` one apart),
+    as sample positions, linearly interpolated."""
+    if len(v) < 2:
+        return np.zeros(0)
+    a, b = v[:-1], v[1:]
+    hit = (a < threshold) & (b >= threshold) & (np.diff(index) == 1)
+    k = np.flatnonzero(hit)
+    return index[k] + (threshold - a[k]) / (b[k] - a[k])
+
+
+@dataclass(frozen=True)
+class Marks:
+    """A mark channel's edges as sample positions, their revolution numbers, and how many
+    edges the gaps hid."""
+
+    position: NDArray[np.float64]
+    rev: NDArray[np.int64]
+    missed: int
+
+
+def mark_edges(v: NDArray[np.float64], index: NDArray[np.int64], threshold: float | None) -> Marks:
+    """The rising crossings of an analog mark channel ``v`` (``threshold`` None: its
+    mid-range), counted in turns across gaps."""
+    if threshold is None:
+        threshold = (float(np.min(v)) + float(np.max(v))) / 2 if len(v) else 0.0
+    edges = edges_between(v, index, threshold)
+    rev, missed = revolutions(edges)
+    return Marks(edges, rev, missed)
+
+
+def one_clock_stream(
+    support: int, rate_hz: float, index: NDArray[np.int64], counts: NDArray[np.int64],
+    unit_m_s2: float, marks: Marks, shift: float, t: NDArray[np.float64], lost: int,
+    duplicates: int,
+) -> NodeStream:  # fmt: skip
+    """One support's stream when its samples and the mark's share one clock and one index:
+    a count is ``unit_m_s2``; the edges moved back by ``shift`` samples (the channels'
+    delay difference)."""
+    return NodeStream(
+        node=support, rate_hz=rate_hz, scale_um_s2=unit_m_s2 * 1e6, index=index,
+        counts=counts.astype(np.int16), segment_start=np.zeros(1, np.int64),
+        scale_start=np.zeros(1, np.int64), scale_m_s2=np.array([unit_m_s2]),
+        mark_position=marks.position - shift,
+        mark_segment=np.zeros(len(marks.position), np.int32), mark_rev=marks.rev,
+        frames=len(index), samples=len(index), invalid_samples=0, lost_frames=lost,
+        duplicate_frames=duplicates, status_frames=0, lost_marks=marks.missed, segments=1,
+        flags=(), first_t_s=float(t[0]) if len(t) else 0.0,
+        last_t_s=float(t[-1]) if len(t) else 0.0,
+    )  # fmt: skip
+
+
+class WholeBuilder:
+    """A live session's frames, kept as they come and decoded all at once on demand by
+    ``decode`` (a scan module's :func:`scan_streams`, or CANopen's): the face of
+    :class:`stand.drivers.v1.build.StreamBuilder` (``add``, ``streams``, ``tail``,
+    ``frames``, ``last_block``).  Vectorised, a full pass costs a few milliseconds for a
+    minute at 2 kHz."""
+
+    def __init__(self, decode: Callable[[Frames], RunStreams]) -> None:
+        self.decode = decode
+        self._blocks: list[Frames] = []
+        self.frames = 0
+        self.last_block = Frames.empty()
+        self.read_rows: int | None = None
+
+    def add(self, frames: Frames) -> None:
+        """Keep a block of frames (in arrival order, after those added before)."""
+        if len(frames):
+            self._blocks.append(frames)
+            self.frames += len(frames)
+            self.last_block = frames
+
+    def _all(self) -> Frames:
+        if len(self._blocks) > 1:
+            self._blocks = [Frames.concat(self._blocks)]
+        return self._blocks[0] if self._blocks else Frames.empty()
+
+    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
+        """The two supports' streams of every frame so far (``strict_status`` is v1's: these
+        modules send no STATUS)."""
+        out = self.decode(self._all())
+        if release:
+            self._blocks, self.frames, self.last_block = [], 0, Frames.empty()
+        return out
+
+    def tail(self, from_frame: int) -> RunStreams:
+        """The streams of the frames from ``from_frame`` on, a run of their own."""
+        every = self._all()
+        return self.decode(every.take(np.arange(max(int(from_frame), 0), len(every))))
+
+
+class OneClockFamily:
+    """A family whose devices sample on one clock and whose frames are decoded whole: its
+    layout read by ``load(table, base, source, stored)``, a run's frames decoded by
+    ``decode(frames, layout)``, live sessions fed through a :class:`WholeBuilder`; no
+    set-up on the bus (a family with one overrides :meth:`setup`).  Satisfies
+    :class:`stand.drivers.family.Acquisition`."""
+
+    def __init__(self, name: str, table: type[Any], load: Callable[..., Any],
+                 decode: Callable[[Frames, Any], RunStreams]) -> None:  # fmt: skip
+        self.name, self.table = name, table
+        self._load, self._decode = load, decode
+
+    def layout(self, table: Any, base: Path, source: str, stored: Kept | None = None) -> Any:
+        return self._load(table, base, source, stored)
+
+    def decode(self, layout: Any, frames: Frames) -> RunStreams:
+        return self._decode(frames, layout)
+
+    def builder(self, layout: Any) -> WholeBuilder:
+        decode = self._decode
+        return WholeBuilder(lambda frames: decode(frames, layout))
+
+    def setup(self, layout: Any) -> Any:
+        return None
