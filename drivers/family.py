@@ -76,8 +76,11 @@ class FrameBuilder(Protocol):
     last_block: Frames
     """The block added last."""
     read_rows: int | None
-    """The block size a file is best read in (None: whole, for a decoder that keeps every
-    frame anyway: no second copy where the blocks are joined)."""
+    """The block size a file is best read in (None: whole)."""
+    keeps_times: bool
+    """Whether it keeps the blocks' time arrays as they are (then a file's times are read
+    whole first, so that the blocks' are views of one array: no copy of the run's
+    length); a builder that keeps only some times says False."""
 
     def add(self, frames: Frames) -> None:
         """Take a block of frames, in arrival order after those added before."""

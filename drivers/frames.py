@@ -15,6 +15,9 @@ FRAME_DLC = 8
 """A classic CAN frame's data bytes."""
 MAX_PAYLOAD = 64
 """The most data bytes any CAN frame carries (CAN FD)."""
+READ_ROWS = 1 << 20
+"""Frames a block holds where a file is read block by block (about 22 MB as frames):
+memory bounded, few blocks."""
 FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
 """The payload lengths a CAN FD frame can have (ISO 11898-1: DLC 9..15 are 12..64 bytes)."""
 

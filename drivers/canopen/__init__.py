@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from stand.drivers.canopen.codec import pdo_streams
+from stand.drivers.canopen.codec import PdoBuilder
 from stand.drivers.canopen.layout import load_pdo_layout
 from stand.drivers.canopen.setup import CanopenSetup
 from stand.drivers.canopen.table import CanopenTable
@@ -26,4 +26,4 @@ class Canopen(OneClockFamily):
         return CanopenSetup(layout) if layout.configure else None
 
 
-FAMILY = Canopen("canopen", CanopenTable, load_pdo_layout, pdo_streams)
+FAMILY = Canopen("canopen", CanopenTable, load_pdo_layout, PdoBuilder)

@@ -17,11 +17,17 @@ node id: the module restarted, its TPDOs stop until it is started again) ``resta
 each also a warning with its time.  The decoder is chosen per bus (``[bus] protocol =
 "canopen"``), so TPDO ids that protocol v1 also uses (0x181, 0x182) are read as TPDOs,
 never as v1's MARKs.
+
+Frames are decoded block by block as they come (:class:`PdoBuilder`, a live session's and
+a file read's): a block's TPDOs leave only their SYNC index, receive time and the mapped
+inputs' raw values (about 30 bytes a TPDO); the streams are built from those on demand.
+A run is never held whole as frames.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,17 +42,21 @@ from stand.drivers.checks import (
     recorded_rate,
 )
 from stand.drivers.frames import FLAG_EXTENDED, Frames
-from stand.drivers.one_clock import mark_edges, one_clock_stream
-from stand.drivers.streams import RunStreams
+from stand.drivers.one_clock import BLOCK_ROWS, kept, mark_edges, one_clock_stream
+from stand.drivers.streams import NodeStream, RunStreams
+
+EMCY_BASE, BOOT_BASE = 0x80, 0x700
+"""CiA 301's EMCY and NMT error control (boot-up) COB-IDs: the base plus the node id."""
 
 
 def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_], int, int]:
     """Each TPDO's SYNC (``k``: SYNCs before it, less one), a TPDO that came after the next
     SYNC put back where its own SYNC has none; which are kept; how many were put back; how
     many dropped (a second TPDO on one SYNC)."""
-    k = k.copy()
+    twice = np.flatnonzero(np.diff(k) == 0)
+    k = k.copy() if len(twice) else k
     moved = 0
-    for j in np.flatnonzero(np.diff(k) == 0):  # two on one SYNC: the first came late?
+    for j in twice:  # two on one SYNC: the first came late?
         if k[j] - 1 >= 0 and (j == 0 or k[j - 1] < k[j] - 1):
             k[j] -= 1
             moved += 1
@@ -55,41 +65,63 @@ def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_]
     return k, keep, moved, int(np.count_nonzero(~keep))
 
 
-def _module_says(frames: Frames, std: NDArray[np.bool_], t0: float, n: PdoNode,
-                 warn: list[Diagnostic]) -> tuple[list[str], NDArray[np.bool_]]:  # fmt: skip
-    """The module's EMCY and boot-up frames: flags, warnings, which frames they are."""
-    flags: list[str] = []
-    emcy = std & (frames.can_id == 0x80 + n.node_id) & (frames.dlc >= 3)
-    boot = std & (frames.can_id == 0x700 + n.node_id) & (frames.dlc >= 1)
-    boot &= frames.data[:, 0] == 0
-    t = np.where(emcy | boot, frames.t_s - t0, 0.0) if emcy.any() or boot.any() else frames.t_s
-    if emcy.any():
-        codes = frames.data[emcy, 0].astype(np.int64) | (frames.data[emcy, 1].astype(np.int64) << 8)
-        said = ", ".join(
-            f"0x{c:04X} at {s:.3f} s" for c, s in zip(codes[:5], t[emcy][:5], strict=True)
-        )
-        more = f" and {len(codes) - 5} more" if len(codes) > 5 else ""
+@dataclass
+class _Parts:
+    """What one module's frames left, block by block: per TPDO its SYNC index (less one),
+    place in its block (``base`` + ``at``: its arrival number), receive time and the mapped
+    inputs' raw values, about 22 bytes; its EMCY and boot-up frames' times and codes."""
+
+    k: list[NDArray[Any]] = field(default_factory=list)
+    base: list[int] = field(default_factory=list)
+    at: list[NDArray[Any]] = field(default_factory=list)
+    t: list[NDArray[Any]] = field(default_factory=list)
+    accel: list[NDArray[Any]] = field(default_factory=list)
+    mark: list[NDArray[Any]] = field(default_factory=list)
+    status: tuple[list[NDArray[Any]], list[NDArray[Any]]] = field(default_factory=lambda: ([], []))
+    emcy: list[tuple[float, int]] = field(default_factory=list)
+    boot: list[float] = field(default_factory=list)
+
+    def joined(self, chunks: list[NDArray[Any]], first: int, consume: bool) -> NDArray[Any]:
+        """One list's blocks joined, from arrival ``first`` on (``consume``: the list is
+        emptied, its blocks let go as soon as they are joined)."""
+        whole = (chunks[0] if len(chunks) == 1 else np.concatenate(chunks) if chunks
+                 else np.zeros(0, np.int64))  # fmt: skip
+        if consume:
+            chunks.clear()
+        if first <= 0:
+            return whole
+        arrival = [a.astype(np.int64) + b for a, b in zip(self.at, self.base, strict=True)]
+        return whole[np.concatenate(arrival) >= first]
+
+
+def _said(n: PdoNode, parts: _Parts, t0: float, warn: list[Diagnostic]) -> list[str]:
+    """The module's EMCY and boot-up frames as flags and warnings (times from the run's
+    first frame)."""
+    flags = []
+    if parts.emcy:
+        said = ", ".join(f"0x{c:04X} at {t - t0:.3f} s" for t, c in parts.emcy[:5])
+        more = f" and {len(parts.emcy) - 5} more" if len(parts.emcy) > 5 else ""
         warn.append(Diagnostic("emcy", f"node {n.node_id}: EMCY {said}{more} (CiA 301 error "
-                               "codes; 0x0000: the error is gone)", float(len(codes))))  # fmt: skip
+                               "codes; 0x0000: the error is gone)",
+                               float(len(parts.emcy))))  # fmt: skip
         flags.append("emcy")
-    if boot.any():
+    if parts.boot:
         warn.append(Diagnostic("module_restart", f"node {n.node_id}: the module restarted "
-                               f"(boot-up at {t[boot][0]:.3f} s): no TPDO after it until it is "
-                               "started again", float(np.count_nonzero(boot))))  # fmt: skip
+                               f"(boot-up at {parts.boot[0] - t0:.3f} s): no TPDO after it "
+                               "until it is started again", float(len(parts.boot))))  # fmt: skip
         flags.append("restart")
-    return flags, emcy | boot
+    return flags
 
 
-def _status(n: PdoNode, data: NDArray[np.uint8]) -> tuple[NDArray[np.bool_], NDArray[np.bool_],
-                                                          list[str]]:  # fmt: skip
+def _status(n: PdoNode, status: list[NDArray[Any] | None], count: int
+            ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], list[str]]:  # fmt: skip
     """Per TPDO: the accelerometer's sample valid, the mark's sample valid; the flags (CiA
     404 AI status: bit 0 not valid, bit 1 positive and bit 2 negative overload)."""
-    ok = [np.ones(len(data), bool), np.ones(len(data), bool)]
+    ok = [np.ones(count, bool), np.ones(count, bool)]
     flags = []
-    for k, sig in enumerate(n.status):
-        if sig is None:
+    for k, st in enumerate(status):
+        if st is None:
             continue
-        st = sig.raw(data)
         ok[k] = (st & 1) == 0
         if not ok[k].all():
             flags.append("sensor_fault")
@@ -98,53 +130,136 @@ def _status(n: PdoNode, data: NDArray[np.uint8]) -> tuple[NDArray[np.bool_], NDA
     return ok[0], ok[1], flags
 
 
-def pdo_streams(frames: Frames, layout: PdoLayout) -> RunStreams:
-    """The two supports' streams of a CANopen recording (frames in arrival order)."""
-    std = (frames.flags & FLAG_EXTENDED) == 0
-    is_sync = std & (frames.can_id == layout.sync_id)
-    syncs_before = np.cumsum(is_sync, dtype=np.int32)  # SYNCs up to each frame (int32:
-    syncs_before -= is_sync  # 2^31 SYNCs are 12 days at 2 kHz): those before it
-    nodes, known = {}, is_sync.copy()
-    warn: list[Diagnostic] = []
-    t0 = float(frames.t_s[0]) if len(frames) else 0.0
-    for n in layout.nodes:
-        said, theirs = _module_says(frames, std, t0, n, warn)
-        known |= theirs
+class PdoBuilder:
+    """CANopen frames decoded as they come (:class:`stand.drivers.family.FrameBuilder`):
+    SYNCs counted across blocks, each module's TPDOs reduced to their index and inputs.
+    ``streams`` and ``tail`` build the supports' streams from what was kept."""
+
+    def __init__(self, layout: PdoLayout) -> None:
+        self.layout = layout
+        self.frames = 0
+        self.last_block = Frames.empty()
+        self.read_rows: int | None = BLOCK_ROWS
+        self.keeps_times = False
+        self._reset()
+
+    def _reset(self) -> None:
+        self._syncs, self._unknown = 0, 0
+        self._t0: float | None = None
+        self._t1 = 0.0
+        self._parts = {n.node_id: _Parts() for n in self.layout.nodes}
+
+    def add(self, frames: Frames) -> None:
+        """Decode a block of frames (in arrival order, after those added before)."""
+        if not len(frames):
+            return
+        std = (frames.flags & FLAG_EXTENDED) == 0
+        is_sync = std & (frames.can_id == self.layout.sync_id)
+        before = np.cumsum(is_sync, dtype=np.int32)  # SYNCs up to each frame, of the run
+        before += self._syncs - 1  # less one, less itself: the SYNC each TPDO answers
+        known = is_sync
+        for n in self.layout.nodes:
+            known = known | self._take(n, frames, std, before)
+        self._syncs += int(np.count_nonzero(is_sync))
+        self._unknown += int(np.count_nonzero(~known))
+        self._t0 = float(frames.t_s[0]) if self._t0 is None else self._t0
+        self._t1 = float(frames.t_s[-1])
+        self.frames += len(frames)
+        self.last_block = frames
+
+    def _take(self, n: PdoNode, frames: Frames, std: NDArray[np.bool_],
+              before: NDArray[np.int32]) -> NDArray[np.bool_]:  # fmt: skip
+        """One module's frames of a block kept; which frames were its."""
+        parts = self._parts[n.node_id]
+        emcy = std & (frames.can_id == EMCY_BASE + n.node_id) & (frames.dlc >= 3)
+        boot = std & (frames.can_id == BOOT_BASE + n.node_id) & (frames.dlc >= 1)
+        boot &= frames.data[:, 0] == 0
+        for j in np.flatnonzero(emcy):
+            parts.emcy.append((float(frames.t_s[j]),
+                               int(frames.data[j, 0]) | int(frames.data[j, 1]) << 8))  # fmt: skip
+        parts.boot.extend(float(x) for x in frames.t_s[boot])
         rows = std & (frames.can_id == n.cob_id) & (frames.dlc >= 1)
-        known |= rows
-        data, t = frames.data[rows], frames.t_s[rows]
-        k, keep, moved, dropped = _indices(syncs_before[rows].astype(np.int64) - 1)
-        data, t, index = data[keep], t[keep], k[keep]
+        at = np.flatnonzero(rows)
+        data = frames.data[at]
+        parts.k.append(before[at])  # int32: 2^31 SYNCs are 12 days at 2 kHz
+        parts.base.append(self.frames)
+        parts.at.append(at.astype(np.int32))
+        parts.t.append(frames.t_s[at])
+        parts.accel.append(n.accel.raw(data))
+        parts.mark.append(n.mark.raw(data))
+        for k, sig in enumerate(n.status):
+            if sig is not None:
+                parts.status[k].append(sig.raw(data))
+        theirs: NDArray[np.bool_] = rows | emcy | boot
+        return theirs
+
+    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
+        """The supports' streams of every frame so far (``strict_status`` is v1's: these
+        modules send no STATUS); ``release``: the builder is done and starts anew."""
+        out = self._build(0, consume=release)
+        if release:
+            self.frames, self.last_block = 0, Frames.empty()
+            self._reset()
+        return out
+
+    def tail(self, from_frame: int) -> RunStreams:
+        """The streams of the frames from ``from_frame`` on (their SYNC indices as in the
+        whole run: a tail's samples keep their place)."""
+        return self._build(max(int(from_frame), 0), consume=False)
+
+    def _build(self, first: int, consume: bool) -> RunStreams:
+        warn: list[Diagnostic] = []
+        t0 = self._t0 if self._t0 is not None else 0.0
+        nodes = {}
+        for n in self.layout.nodes:
+            built = self._node(n, self._parts[n.node_id], first, consume, t0, warn)
+            if built is not None:
+                nodes[n.support] = built
+        warn.extend(Diagnostic("description_stored", note) for note in self.layout.notes)
+        out = RunStreams(nodes, self.frames, self._unknown, 0, (), self._t1 - t0, tuple(warn))
+        check_distinct(out, self.layout.source)
+        return out
+
+    def _node(self, n: PdoNode, parts: _Parts, first: int, consume: bool, t0: float,
+              warn: list[Diagnostic]) -> NodeStream | None:  # fmt: skip
+        """One support's stream from its module's kept TPDOs (``consume``: let go as
+        used)."""
+        said = _said(n, parts, t0, warn)
+        k, keep, moved, dropped = _indices(parts.joined(parts.k, first, consume).astype(np.int64))
         if moved or dropped:
             warn.append(Diagnostic("tpdo_late", f"node {n.node_id}: {moved} TPDO(s) came after "
                                    f"the next SYNC (put back on their own), {dropped} a second "
                                    "on one SYNC (dropped)", float(moved + dropped)))  # fmt: skip
+        index, t = kept(k, keep), kept(parts.joined(parts.t, first, consume), keep)
         if not len(index):
-            continue  # nothing from this module: the measuring path says so
+            return None  # nothing from this module: the measuring path says so
+        layout, name = self.layout, f"node {n.node_id}"
         check_clock(layout.rate_hz, recorded_rate(index, t), layout.source,
                     "bus.canopen.rate_hz")  # fmt: skip
-        accel_ok, mark_ok, flags = _status(n, data)
-        v = (n.mark.raw(data[mark_ok]) * n.mark_scale).astype(np.float64)
-        check_mark(v, f"node {n.node_id} {n.mark.name.split(':', 1)[1]}", layout.source)
-        check_accel(n.accel.raw(data[accel_ok]), f"node {n.node_id} "
-                    f"{n.accel.name.split(':', 1)[1]}", n.support, layout.source)  # fmt: skip
+        status = [kept(parts.joined(st, first, consume), keep) if st else None
+                  for st in parts.status]  # fmt: skip
+        accel_ok, mark_ok, flags = _status(n, status, len(index))
+        accel = kept(kept(parts.joined(parts.accel, first, consume), keep), accel_ok)
+        v = kept(kept(parts.joined(parts.mark, first, consume), keep), mark_ok) * n.mark_scale
+        check_mark(v, f"{name} {n.mark.name.split(':', 1)[1]}", layout.source)
+        check_accel(accel, f"{name} {n.accel.name.split(':', 1)[1]}", n.support, layout.source)
         shift = (n.mark_delay_s - n.accel_delay_s) * layout.rate_hz
         lost = int(index[-1] - index[0] + 1) - len(index)
         stream = one_clock_stream(
-            n.support, layout.rate_hz, index[accel_ok], n.accel.raw(data[accel_ok]),
-            n.accel_scale, mark_edges(v, index[mark_ok], layout.mark_threshold), shift,
-            t, lost, dropped,
+            n.support, layout.rate_hz, kept(index, accel_ok), accel, n.accel_scale,
+            mark_edges(v, kept(index, mark_ok), layout.mark_threshold), shift, t, lost, dropped,
         )  # fmt: skip
         invalid = len(index) - int(np.count_nonzero(accel_ok))
         if invalid:
-            warn.append(Diagnostic("ai_status", f"node {n.node_id}: {invalid} sample(s) the "
-                                   "module marked not valid (AI status), left out",
+            warn.append(Diagnostic("ai_status", f"{name}: {invalid} sample(s) the module "
+                                   "marked not valid (AI status), left out",
                                    float(invalid)))  # fmt: skip
-        nodes[n.support] = replace(stream, samples=len(index), invalid_samples=invalid,
-                                   flags=tuple(dict.fromkeys([*flags, *said])))  # fmt: skip
-    span_s = float(frames.t_s[-1] - frames.t_s[0]) if len(frames) else 0.0
-    warn.extend(Diagnostic("description_stored", note) for note in layout.notes)
-    out = RunStreams(nodes, len(frames), int(np.count_nonzero(~known)), 0, (), span_s,
-                     tuple(warn))  # fmt: skip
-    check_distinct(out, layout.source)
-    return out
+        return replace(stream, samples=len(index), invalid_samples=invalid,
+                       flags=tuple(dict.fromkeys([*flags, *said])))  # fmt: skip
+
+
+def pdo_streams(frames: Frames, layout: PdoLayout) -> RunStreams:
+    """The two supports' streams of a CANopen recording (frames in arrival order)."""
+    builder = PdoBuilder(layout)
+    builder.add(frames)
+    return builder.streams(release=True)

@@ -222,13 +222,15 @@ def _read_run_blocks(
     *,
     guard: bool = True,
     start: Callable[[dict[str, Any]], None] | None = None,
-    rows_of: Callable[[], int | None] | None = None,
+    rows_of: Callable[[], tuple[int | None, bool]] | None = None,
 ) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:
     """Hand a run file's committed frames to ``take``, ``rows`` at a time (None: all at once);
     return its attributes and warnings.  A file without an intact seal is read by a child
     process with a time limit first (``guard``; :mod:`stand.drivers.runs.seal`).  ``start``
     is handed the attributes before the first block (a decoder chosen by the run's config),
-    and ``rows_of`` then says the block size (it overrides ``rows``).
+    and ``rows_of`` then says the block size (it overrides ``rows``) and whether the times
+    are read whole first (so that the blocks' times are views of one array, for a builder
+    that keeps them as they are).
 
     Raises
     ------
@@ -257,7 +259,7 @@ def _read_run_blocks(
 def _read_checked(
     p: Path, take: Callable[[Frames], None], rows: int | None,
     start: Callable[[dict[str, Any]], None] | None = None,
-    rows_of: Callable[[], int | None] | None = None,
+    rows_of: Callable[[], tuple[int | None, bool]] | None = None,
 ) -> tuple[dict[str, Any], tuple[Diagnostic, ...]]:  # fmt: skip
     try:
         # without HDF5's lock, so that reading a run being recorded never blocks its writer
@@ -265,13 +267,16 @@ def _read_checked(
             n, meta, warnings = _open_run(f, p)
             if start is not None:
                 start(meta)
+            whole = True
             if rows_of is not None:
-                rows = rows_of()
+                rows, whole = rows_of()
             frames_budget(n, str(p))
             step = max(n, 1) if rows is None else rows
             # in blocks: the times read whole, once, so that the blocks' times are views of
             # one array, which the streams then take as it is (no copy of the run's length)
-            t_s = f["frames"]["t_s"][:n].astype(np.float64, copy=False) if n > step else None
+            t_s = None
+            if n > step and whole:
+                t_s = f["frames"]["t_s"][:n].astype(np.float64, copy=False)
             for lo in range(0, n, step):
                 block = _frame_rows(f, lo, min(lo + step, n), t_s)
                 check_timestamps(block.t_s, p, lo)
@@ -320,7 +325,7 @@ def read_streams(
     if is_run_file(path):
         meta, warnings = _read_run_blocks(
             path, lambda b: chosen[0].add(b), None, start=start,
-            rows_of=lambda: chosen[0].read_rows,
+            rows_of=lambda: (chosen[0].read_rows, chosen[0].keeps_times),
         )  # fmt: skip
         rec = Recording(str(path), Frames.empty(), meta, warnings)
     else:

@@ -6,9 +6,9 @@ accelerometers and the reference sensor, laid out by a DBC.  Its ``[bus.scan]`` 
 (:mod:`~stand.drivers.scan.codec`)."""
 
 from stand.drivers.one_clock import OneClockFamily
-from stand.drivers.scan.codec import scan_streams
+from stand.drivers.scan.codec import ScanBuilder
 from stand.drivers.scan.layout import load_layout
 from stand.drivers.scan.table import ScanTable
 
-FAMILY = OneClockFamily("scan", ScanTable, load_layout, scan_streams)
+FAMILY = OneClockFamily("scan", ScanTable, load_layout, ScanBuilder)
 """The scan-stream module as an :class:`~stand.drivers.family.Acquisition`."""

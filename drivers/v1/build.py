@@ -38,14 +38,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.drivers.frames import Frames
+from stand.drivers.frames import READ_ROWS, Frames
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.drivers.v1.codec import concat_decoded, decode
 from stand.drivers.v1.node_build import rebuild_node
 from stand.drivers.v1.protocol import Decoded, node_records, shift_decoded
-
-READ_ROWS = 1 << 20
-"""Frames a file's block holds (about 40 MB decoded): memory bounded, few blocks."""
 
 
 def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
@@ -155,6 +152,7 @@ class StreamBuilder:
         """The block added last (for a display of what just came)."""
         self.read_rows: int | None = READ_ROWS
         """A file is read in blocks of this many frames (decoded one by one)."""
+        self.keeps_times = True
 
     def add(self, frames: Frames) -> None:
         """Decode a block of frames (in arrival order, after those added before)."""

@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import math
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from stand.drivers.frames import FLAG_FD, Frames
+from stand.drivers.frames import Frames
 from stand.drivers.scan.codec import mark_wave, scan_frames
+from stand.drivers.scan.layout import load_layout
+from stand.drivers.scan.table import ScanTable
 
 VOLTS_PER_COUNT = 10.0 / 32768
 """The module's inputs: +-10 V on 16 bits."""
@@ -81,17 +84,12 @@ def input_counts(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate
 
 def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
                   counter: bool, per_frame: int = 1) -> Frames:  # fmt: skip
-    """The module's frames: each scan at its sample time ``t`` (host time = sample time);
-    with ``per_frame`` > 1, CAN FD frames of that many scans, each sent at its last scan's
-    time (a partial frame at the end is not sent)."""
+    """The module's frames, encoded by the layout its own DBC and ``[bus.scan]`` table give
+    (:func:`stand.drivers.scan.codec.scan_frames`, the decoder's twin): each scan at its
+    sample time ``t`` (host time = sample time); without a counter its bits stay 0; with
+    ``per_frame`` > 1, CAN FD frames of that many scans, each sent at its last scan's
+    time."""
     counts, mark = input_counts(t, accel, edges, rate_hz)
-    frames = scan_frames(t - t[0] if len(t) else t, (counts[0], counts[1]), mark,
-                         frame_id=SCAN_ID)  # fmt: skip
-    if not counter:
-        frames.data[:, :2] = 0
-    if per_frame == 1:
-        return frames
-    n = len(frames) // per_frame * per_frame
-    data = frames.data[:n].reshape(-1, 8 * per_frame)
-    return Frames.build(frames.t_s[per_frame - 1 : n : per_frame], SCAN_ID, data,
-                        dlc=8 * per_frame, flags=FLAG_FD)  # fmt: skip
+    table = ScanTable.model_validate(bus_table(rate_hz, counter, per_frame)["scan"])
+    layout = load_layout(table, Path("."), "the simulated scan module")
+    return scan_frames(layout, t - t[0] if len(t) else t, (counts[0], counts[1]), mark)
