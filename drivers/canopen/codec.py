@@ -263,3 +263,21 @@ def pdo_streams(frames: Frames, layout: PdoLayout) -> RunStreams:
     builder = PdoBuilder(layout)
     builder.add(frames)
     return builder.streams(release=True)
+
+
+def sync_frames(layout: PdoLayout, t_s: NDArray[np.float64]) -> Frames:
+    """The SYNC frames at times ``t_s`` (no data: CiA 301's SYNC without a counter)."""
+    return Frames.build(t_s, layout.sync_id, np.zeros((len(t_s), 8), np.uint8), dlc=0)
+
+
+def tpdo_frames(node: PdoNode, t_s: NDArray[np.float64], accel: NDArray[Any],
+                mark: NDArray[Any], status: tuple[NDArray[Any] | None, NDArray[Any] | None]
+                = (None, None)) -> Frames:  # fmt: skip
+    """A module's TPDO1 frames by its layout (the encoder :class:`PdoBuilder` decodes):
+    the inputs' raw counts and, where mapped and given, their AI status, at ``t_s``."""
+    words = node.accel.encode(accel) | node.mark.encode(mark)
+    for sig, st in zip(node.status, status, strict=True):
+        if sig is not None and st is not None:
+            words |= sig.encode(st)
+    data = words.view(np.uint8).reshape(-1, 8)
+    return Frames.build(t_s, node.cob_id, data, dlc=sum(e & 0xFF for e in node.mapping) // 8)

@@ -12,11 +12,16 @@ and mapping faults are the SDO side's (:mod:`stand.sim.canopen_node`)."""
 from __future__ import annotations
 
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from stand.drivers.canopen.codec import sync_frames, tpdo_frames
+from stand.drivers.canopen.layout import PdoLayout, load_pdo_layout
+from stand.drivers.canopen.table import CanopenTable
 from stand.drivers.frames import Frames
+from stand.sim.bus_side import lost, noisy, rng_of
 from stand.sim.scan_emit import (
     MARK_HIGH_V,
     SENSITIVITY_M_S2_PER_V,
@@ -52,16 +57,22 @@ def bus_table(rate_hz: float) -> dict[str, Any]:
     return {"protocol": "canopen", "canopen": table}
 
 
-def _faulty(node: int, tpdo: Frames, status: np.ndarray, t_rel: np.ndarray, period_s: float,
-            faults: Any, rng: np.random.Generator) -> tuple[Frames, list[Frames]]:  # fmt: skip
+def _invalid(node: int, t_rel: np.ndarray, faults: Any) -> np.ndarray:
+    """The accelerometer input's AI status per sample: bit 0 (not valid) while the scene's
+    EMCY lasts on this module."""
+    status = np.zeros(len(t_rel), np.uint8)
+    if faults is not None and faults.node == node and faults.emcy_at_s is not None:
+        status[(t_rel >= faults.emcy_at_s) & (t_rel < faults.emcy_at_s + faults.invalid_s)] |= 1
+    return status
+
+
+def _faulty(node: int, tpdo: Frames, t_rel: np.ndarray, period_s: float, faults: Any,
+            rng: np.random.Generator) -> tuple[Frames, list[Frames]]:  # fmt: skip
     """One module's TPDOs with the scene's faults, and the EMCY and boot-up frames it sends."""
     if faults is None or faults.node != node:
         return tpdo, []
     said = []
     if faults.emcy_at_s is not None:
-        bad = (t_rel >= faults.emcy_at_s) & (t_rel < faults.emcy_at_s + faults.invalid_s)
-        status[bad] |= 1  # the accelerometer input: not valid
-        tpdo.data[:, 4] = status
         data = np.zeros((1, 8), np.uint8)
         data[0, :3] = (EMCY_HARDWARE & 0xFF, EMCY_HARDWARE >> 8, 0x01)
         said.append(Frames.build(np.array([faults.emcy_at_s]), 0x80 + node, data, dlc=8))
@@ -75,20 +86,41 @@ def _faulty(node: int, tpdo: Frames, status: np.ndarray, t_rel: np.ndarray, peri
     return tpdo, said
 
 
+def layout_of(rate_hz: float) -> PdoLayout:
+    """The simulated modules' layout, read from their own EDS and ``[bus.canopen]`` table."""
+    table = CanopenTable.model_validate(bus_table(rate_hz)["canopen"])
+    return load_pdo_layout(table, Path("."), "the simulated CANopen modules")
+
+
 def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rate_hz: float,
-                  lost: Any, faults: Any = None, rng: Any = None) -> Frames:  # fmt: skip
-    """The SYNCs at the sample times ``t`` and each module's TPDO after each; ``lost(node,
+                  lose: Any, faults: Any = None, rng: Any = None) -> Frames:  # fmt: skip
+    """The SYNCs at the sample times ``t`` and each module's TPDO after each, encoded by
+    the modules' layout (:func:`stand.drivers.canopen.codec.tpdo_frames`); ``lose(node,
     frames)`` takes out the frames the bus loses; ``faults`` (``[effects.canopen]``, with
     its random generator ``rng``) what one module does wrong."""
+    layout = layout_of(rate_hz)
     t0 = t[0] if len(t) else 0.0
     inputs, mark = input_counts(t, accel, edges, rate_hz)
-    blocks = [Frames.build(t - t0, SYNC_ID, np.zeros((len(t), 8), np.uint8), dlc=0)]
-    for k, (node, counts) in enumerate(zip(NODE_IDS, inputs, strict=True)):
-        data = np.zeros((len(t), 8), np.uint8)
-        word = (counts.astype(np.int64) & 0xFFFF) | ((mark.astype(np.int64) & 0xFFFF) << 16)
-        data[:, :4] = word.astype("<u4").view(np.uint8).reshape(-1, 4)
-        tpdo = Frames.build(t - t0 + ANSWER_S * (k + 1), 0x180 + node, data, dlc=6)
-        tpdo, said = _faulty(node, tpdo, data[:, 4].copy(), t - t0, 1.0 / rate_hz, faults, rng)
-        blocks += [lost(k + 1, tpdo), *said]
+    blocks = [sync_frames(layout, t - t0)]
+    for k, (node, counts) in enumerate(zip(layout.nodes, inputs, strict=True)):
+        status = (_invalid(node.node_id, t - t0, faults), None)
+        tpdo = tpdo_frames(node, t - t0 + ANSWER_S * (k + 1), counts, mark, status)
+        tpdo, said = _faulty(node.node_id, tpdo, t - t0, 1.0 / rate_hz, faults, rng)
+        blocks += [lose(k + 1, tpdo), *said]
     every = Frames.concat(blocks)
     return every.take(np.argsort(every.t_s, kind="stable"))
+
+
+def emit(scene: Any, accel: list[Any], times: list[Any], edges: Any, clocks: Any
+         ) -> list[Frames]:  # fmt: skip
+    """:class:`stand.sim.hardware.SimHardware`'s ``emit``: one SYNC for both modules, at
+    the first module's sample times."""
+    heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
+    lose = lambda node, frames: lost(scene, node, frames)  # noqa: E731
+    return [module_frames(times[0], heard, edges, scene.nodes.rate_hz, lose,
+                          scene.effects.canopen, rng_of(scene, "canopen", 0))]  # fmt: skip
+
+
+def bus_keys(nodes: Any) -> dict[str, Any]:
+    """The ``[bus]`` keys that decode the simulated modules (``[nodes]``: their rate)."""
+    return bus_table(nodes.rate_hz)

@@ -89,9 +89,3 @@ class SimulatedModules:
         network, self.network = self.network, None
         if network is not None and network.notifier is not None:
             network.notifier.stop(1.0)
-
-
-def scene_modules(scene: Any) -> SimulatedModules | None:
-    """The modules that answer a scene's set-up: its CANopen modules with their faults, or
-    None for a scene of another protocol."""
-    return SimulatedModules(scene.effects.canopen) if scene.nodes.protocol == "canopen" else None

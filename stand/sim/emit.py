@@ -1,4 +1,5 @@
-"""A scene, simulated: node samples and edges, then protocol-v1 frames.
+"""A scene, simulated: the sensors' samples and the mark's edges, then the frames of the
+scene's hardware (:mod:`stand.sim.hardware`).
 
 :func:`simulate` runs the scene's physics (:mod:`stand.sim.physics`), then
 the sensor side of each node (gain and delay, 2x/3x and a neighbour's
@@ -17,17 +18,17 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
 from stand.drivers import Frames
 from stand.drivers.runs.budget import frames_budget
-from stand.drivers.v1.nodes import STATUS_PERIOD_S, merge, node_frames
+from stand.drivers.v1.nodes import merge
 from stand.errors import ConfigError
 from stand.sim.balls import free_balls
-from stand.sim.canopen_emit import module_frames as canopen_frames
+from stand.sim.bus_side import rng_of
+from stand.sim.hardware import simulated
 from stand.sim.physics import (
     SceneSpeed,
     closed_form,
@@ -36,23 +37,7 @@ from stand.sim.physics import (
     steady_forward,
     support_force,
 )
-from stand.sim.scan_emit import module_frames
 from stand.sim.scene import Scene, node_unbalance, per_node, scene_beam, unbalance_kg_m
-
-FULL_SCALE = 32767
-"""Largest count a node sends; -32768 is reserved for invalid samples."""
-NO_REFERENCE_S = 2.0
-"""STATUS flags "no reference edge" after this long without one [s]."""
-_STREAM = {
-    name: i
-    for i, name in enumerate(
-        ("noise", "edge_jitter", "lost_frames", "invalid", "bursts", "sync_jitter", "canopen")
-    )
-}
-
-
-def _rng(scene: Scene, effect: str, node: int = 0) -> np.random.Generator:
-    return np.random.default_rng([scene.run.seed, _STREAM[effect], node])
 
 
 @dataclass(frozen=True)
@@ -203,62 +188,6 @@ def _physics(
     return [closed_form(p, speed, U, s, beam, spread)[:, i] for i, s in enumerate(seen)], 0
 
 
-def noisy(scene: Scene, node: int, a: Any) -> Any:
-    """The sensor's white noise added to the acceleration ``a`` node ``node`` reads [m/s^2]
-    (the scene's ``[effects.noise]``; the same draw whatever carries the samples)."""
-    e = scene.effects
-    if not e.noise:
-        return a
-    rms = (
-        e.noise.rms_m_s2
-        if e.noise.rms_m_s2 is not None
-        else e.noise.density_m_s2_rthz * math.sqrt(scene.nodes.rate_hz / 2)  # type: ignore[operator]
-    )
-    return a + _rng(scene, "noise", node).normal(0.0, rms, len(a))
-
-
-def _node_frames(
-    scene: Scene,
-    i: int,
-    a: Any,
-    times: Any,
-    edges: Any,
-    clock: tuple[float, float],
-) -> Frames:
-    """What node ``i + 1`` sends for the acceleration ``a`` its sensor reads [m/s^2]: noise,
-    clipping, counts, invalid samples, its STATUS flags, its frames and the frames lost."""
-    e, rate, node = scene.effects, scene.nodes.rate_hz, i + 1
-    ppm, offset = clock
-    a = noisy(scene, node, a)
-    clipped = np.zeros(len(a), bool)
-    if e.clipping:
-        r = e.clipping.range_m_s2
-        clipped = np.abs(a) > r
-        a = np.clip(a, -r, r)
-    counts = np.rint(a / (scene.nodes.scale_um_s2 * 1e-6))
-    clipped |= np.abs(counts) > FULL_SCALE
-    counts = np.clip(counts, -FULL_SCALE, FULL_SCALE).astype(np.int16)
-    invalid = np.zeros(len(a), bool)
-    if e.invalid:
-        invalid = _rng(scene, "invalid", node).random(len(a)) < e.invalid.probability
-        counts[invalid] = -32768
-    true_rate = rate * (1 + ppm * 1e-6)
-    positions = (edges - times[0]) * true_rate if len(times) else edges[:0]
-    flags = _status_flags(len(a), rate, clipped, invalid, positions)
-    frames = node_frames(
-        node,
-        counts,
-        rate_hz=rate,
-        scale_um_s2=scene.nodes.scale_um_s2,
-        edges=positions,
-        first_seq=scene.nodes.first_seq,
-        t0_s=offset,
-        status_flags=flags,
-        clock_ppm=ppm,
-    )
-    return _lost(scene, node, frames)
-
-
 def _on_the_bus(scene: Scene, blocks: list[Frames]) -> Frames:
     """The nodes' frames merged as the bus carries them, host time from the first frame
     (the start-up STATUS), a dropout taken out."""
@@ -289,10 +218,11 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
             "run-up from standstill, nonlinear supports or integrated physics",
             key="rotor.shaft",
         )
-    if scene.nodes.protocol != "v1" and e.clock:
-        raise ConfigError(f"{scene.nodes.protocol}: the modules sample on one clock: no "
+    hw = simulated(scene.nodes.protocol)
+    if hw.one_clock and e.clock:
+        raise ConfigError(f"{hw.name}: the modules sample on one clock: no "
                           "[effects.clock] per node", key="effects.clock")  # fmt: skip
-    if scene.nodes.protocol != "canopen" and e.canopen:
+    if e.canopen and hw.faults != "canopen":
         raise ConfigError("[effects.canopen] needs [nodes] protocol = \"canopen\"",
                           key="effects.canopen")  # fmt: skip
     ppm = per_node(e.clock.ppm) if e.clock else [0.0, 0.0]
@@ -308,7 +238,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:
-        edges = edges + _rng(scene, "edge_jitter").normal(0.0, e.edge_jitter.rms_s, len(edges))
+        edges = edges + rng_of(scene, "edge_jitter").normal(0.0, e.edge_jitter.rms_s, len(edges))
     truth.update({"edges_s": edges, "t_start_s": t_start})
     w0 = speed.omega0_rad_s
     truth["A_m_s2"] = steady_forward(p, beam, w0, U, node_unbalance(scene, beam)) * np.array(
@@ -321,7 +251,7 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
         accel.append(a)
     return Simulation(
         frames=_on_the_bus(
-            scene, _frames(scene, accel, times, edges, [*zip(ppm, offset, strict=True)])
+            scene, hw.emit(scene, accel, times, edges, [*zip(ppm, offset, strict=True)])
         ),
         physics="integrate" if scene.needs_integration else "closed_form",
         nfev=nfev,
@@ -340,65 +270,7 @@ def _sample_times(scene: Scene, t_start: float, ppm: list[float],
         true_rate = rate * (1 + ppm[i] * 1e-6)
         n = math.floor((scene.run.seconds - offset[i]) * true_rate)
         times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
-    if scene.nodes.protocol == "canopen" and scene.nodes.sync_jitter_s > 0:  # on each SYNC
-        late = _rng(scene, "sync_jitter", 0).normal(0.0, scene.nodes.sync_jitter_s, len(times[0]))
+    if simulated(scene.nodes.protocol).clocked_by_sync and scene.nodes.sync_jitter_s > 0:
+        late = rng_of(scene, "sync_jitter", 0).normal(0.0, scene.nodes.sync_jitter_s, len(times[0]))
         times = [t + late[: len(t)] for t in times]
     return times
-
-
-def _frames(scene: Scene, accel: list[Any], times: list[FloatArray], edges: FloatArray,
-            clocks: list[tuple[float, float]]) -> list[Frames]:  # fmt: skip
-    """What the bus carries of the accelerations the sensors read, by the scene's
-    protocol: two v1 nodes, one scan module, or a SYNC and two CANopen modules."""
-    protocol, rate = scene.nodes.protocol, scene.nodes.rate_hz
-    if protocol == "v1":
-        return [_node_frames(scene, i, accel[i], times[i], edges, clocks[i]) for i in range(2)]
-    heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
-    if protocol == "scan":  # one module, one clock: node 1's sample times
-        module = module_frames(times[0], heard, edges, rate, scene.nodes.counter,
-                               scene.nodes.scans_per_frame)  # fmt: skip
-        return [_lost(scene, 1, module)]
-    lost = lambda node, frames: _lost(scene, node, frames)  # noqa: E731
-    faults = scene.effects.canopen
-    return [canopen_frames(times[0], heard, edges, rate, lost, faults,
-                           _rng(scene, "canopen", 0))]  # one SYNC for both  # fmt: skip
-
-
-def _status_flags(
-    n: int,
-    rate: int,
-    clipped: NDArray[np.bool_],
-    invalid: NDArray[np.bool_],
-    edges: FloatArray,
-) -> NDArray[np.uint8]:
-    """Flags of each STATUS (start-up, then each second): what happened in the second before."""
-    per_status = round(STATUS_PERIOD_S * rate)  # samples between two STATUS frames
-    n_status = n // per_status + 1
-    reported_by = np.arange(n) // per_status + 1  # STATUS k reports the second before it
-    flags = np.zeros(n_status, np.uint8)
-    for bit, happened in ((1, clipped), (2, invalid)):
-        k_hit = np.unique(reported_by[happened])
-        flags[k_hit[k_hit < n_status]] |= bit
-    k = np.arange(n_status)
-    t_status = k * per_status  # sample position of STATUS k
-    last_edge = np.searchsorted(edges, t_status, side="right") - 1
-    since = np.where(last_edge >= 0, t_status - edges[np.maximum(last_edge, 0)], t_status)
-    flags[(k > 0) & (since > NO_REFERENCE_S * rate)] |= 4
-    return flags
-
-
-def _lost(scene: Scene, node: int, frames: Frames) -> Frames:
-    """Frames lost on the bus: single ones and bursts."""
-    lf = scene.effects.lost_frames
-    if lf is None:
-        return frames
-    keep = np.ones(len(frames), bool)
-    if lf.probability > 0:
-        keep &= _rng(scene, "lost_frames", node).random(len(frames)) >= lf.probability
-    if lf.bursts_per_s > 0 and len(frames):
-        rng = _rng(scene, "bursts", node)
-        duration = float(frames.t_s[-1] - frames.t_s[0])
-        n = rng.poisson(lf.bursts_per_s * duration)
-        for s in rng.integers(0, len(frames), n).tolist():
-            keep[s : s + lf.burst_frames] = False
-    return frames.take(keep)

@@ -18,6 +18,7 @@ from stand.drivers.frames import Frames
 from stand.drivers.scan.codec import mark_wave, scan_frames
 from stand.drivers.scan.layout import load_layout
 from stand.drivers.scan.table import ScanTable
+from stand.sim.bus_side import lost, noisy
 
 VOLTS_PER_COUNT = 10.0 / 32768
 """The module's inputs: +-10 V on 16 bits."""
@@ -93,3 +94,19 @@ def module_frames(t: np.ndarray, accel: list[np.ndarray], edges: np.ndarray, rat
     table = ScanTable.model_validate(bus_table(rate_hz, counter, per_frame)["scan"])
     layout = load_layout(table, Path("."), "the simulated scan module")
     return scan_frames(layout, t - t[0] if len(t) else t, (counts[0], counts[1]), mark)
+
+
+def emit(scene: Any, accel: list[Any], times: list[Any], edges: Any, clocks: Any
+         ) -> list[Frames]:  # fmt: skip
+    """:class:`stand.sim.hardware.SimHardware`'s ``emit``: one module, one clock (the first
+    node's sample times)."""
+    heard = [noisy(scene, i + 1, a) for i, a in enumerate(accel)]
+    n = scene.nodes
+    return [lost(scene, 1, module_frames(times[0], heard, edges, n.rate_hz, n.counter,
+                                         n.scans_per_frame))]  # fmt: skip
+
+
+def bus_keys(nodes: Any) -> dict[str, Any]:
+    """The ``[bus]`` keys that decode the simulated module (``[nodes]``: its rate, counter
+    and scans a frame)."""
+    return bus_table(nodes.rate_hz, nodes.counter, nodes.scans_per_frame)

@@ -44,8 +44,7 @@ from stand.config.schema import (
 from stand.core import StandParameters
 from stand.core.beam import beam_rotor, distributed_unbalance, node_at
 from stand.errors import ConfigError
-from stand.sim.canopen_emit import bus_table as canopen_bus_table
-from stand.sim.scan_emit import bus_table
+from stand.sim.hardware import simulated
 from stand.sim.tables import (
     NODES as NODES,  # re-exported: the simulator's modules read it here
 )
@@ -78,12 +77,9 @@ class Scene(BaseModel):
 
     def config(self) -> Config:
         """The configuration part (what solves the recording)."""
-        bus = self.bus
-        if self.nodes.protocol == "scan":
-            bus = {**(bus or {}), **bus_table(self.nodes.rate_hz, self.nodes.counter,
-                                              self.nodes.scans_per_frame)}  # fmt: skip
-        elif self.nodes.protocol == "canopen":
-            bus = {**(bus or {}), **canopen_bus_table(self.nodes.rate_hz)}
+        bus, keys = self.bus, simulated(self.nodes.protocol).bus_keys(self.nodes)
+        if keys:  # the keys that decode the scene's hardware
+            bus = {**(bus or {}), **keys}
         return Config(
             stand=self.stand,
             rotor=self.rotor,

@@ -14,6 +14,7 @@ from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config import STRICT
 from stand.config.autobalancer import AutobalancerTable
+from stand.drivers.frames import FD_LENGTHS
 
 NODES = 2
 
@@ -108,10 +109,20 @@ class NodesTable(_Table):
     ``canopen``: a SYNC producer and two analog input modules (:mod:`stand.sim.canopen_emit`)."""
     counter: bool = True
     """``scan`` only: whether the module sends its scan counter."""
-    scans_per_frame: Literal[1, 2, 3, 4, 6, 8] = 1
-    """``scan`` only: CAN FD frames of this many 8-byte scans (1: a classic frame a scan)."""
+    scans_per_frame: Annotated[int, Field(ge=1, le=8)] = 1
+    """``scan`` only: CAN FD frames of this many 8-byte scans (1: a classic frame a scan),
+    by the same rule as ``[bus.scan]``: k x 8 bytes a CAN FD payload length (1, 2, 3, 4, 6
+    or 8)."""
     sync_jitter_s: Annotated[float, Field(ge=0.0, le=1e-3)] = 0.0
     """``canopen`` only: the SYNC's timing jitter (rms): the modules sample when it comes."""
+
+    @model_validator(mode="after")
+    def _fd_frame(self) -> NodesTable:
+        if self.scans_per_frame > 1 and 8 * self.scans_per_frame not in FD_LENGTHS:
+            lengths = ", ".join(map(str, FD_LENGTHS[8:]))
+            raise ValueError(f"scans_per_frame: {self.scans_per_frame} x 8 bytes is not a CAN "
+                             f"FD payload length ({lengths})")  # fmt: skip
+        return self
 
 
 class Noise(_Table):
