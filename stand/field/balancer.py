@@ -34,12 +34,11 @@ import numpy as np
 from stand.core import rad_s_to_rpm
 from stand.core.autobalance import balanced, driving_point, receptance, windows
 from stand.core.model import StandParameters, natural_frequencies
-from stand.drivers import read_recording
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import MeasurementError, RecordingError
 from stand.measuring.track import track_1x
-from stand.solve import solve_recording, stored_streams
 from stand.solve.autobalance import balls_stand
+from stand.solve.recordings import read_run, solve_read
 
 STUCK_SHARE = 0.5
 """``stuck``: between starts the race plane's residual moves, beyond what the prediction
@@ -131,9 +130,9 @@ def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
               first: Sequence[complex] | None, moved_deg: float) -> Start:  # fmt: skip
     """Start ``k`` (0 first) of the test, from its run file."""
     table = cfg.autobalancer
-    rec = read_recording(path)
-    test = _test_unbalance(rec.meta, path, first, k, moved_deg)  # bad input before the work
-    result = solve_recording(path, config)
+    run = read_run(path, config)  # read once: its attributes, streams and result
+    test = _test_unbalance(run.rec.meta, path, first, k, moved_deg)
+    result = solve_read(run)
     q = balls_stand(params, table)
     w = result.measurement.omega_rad_s
     predicted = None
@@ -143,7 +142,7 @@ def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
     found = None
     if test is not None:
         gamma = math.radians(cfg.stand.reference_angle_deg)
-        ws, motion = race_motion(stored_streams(rec), params, table.plane, gamma)
+        ws, motion = race_motion(run.streams, params, table.plane, gamma)
         ref = np.array([x * x * (receptance(q, x)[table.plane - 1] @ np.array(test)) for x in ws])
         found = onset(ws, motion, ref)
     U, r95 = result.U_kg_m, result.measurement.radius95_kg_m

@@ -95,7 +95,18 @@ def solve_recording(
         Bad input, naming the file and what is wrong.
     """
 
-    run = read_run(path, config)
+    return solve_read(read_run(path, config), options, adjust=adjust)
+
+
+def solve_read(
+    run: RunRead,
+    options: SolveOptions = SolveOptions(),
+    *,
+    adjust: Callable[[Measurement], Measurement] | None = None,
+) -> Result:
+    """:func:`solve_recording` of a run already read (:func:`read_run`): a command that
+    needs the run's streams too reads it once."""
+    path = run.rec.path
     rec, cfg, params, text, source, streams = (run.rec, run.cfg, run.params, run.text,
                                                run.source, run.streams)  # fmt: skip
     stored = rec.meta.get(MATRIX_ATTR)

@@ -1,5 +1,9 @@
 """Every command that takes a run file, on a run of every family of the registry recorded
 from the same scene: the same answer as protocol v1's within the two answers' intervals.
+``solve``, ``report``, ``inspect``, ``convert`` (to a candump log and back), ``tooling
+measure`` (the index runs), ``influence`` (trial runs), ``autobalance test``,
+``calibrate``, ``reprocess``; the live commands and the station read each family through
+the same builders (``tests/live/test_source.py``, the realtime tests of each family).
 
 A family's runs are the shipped scenes (the demo, the tooling's index runs, trial runs)
 played through that family's simulated hardware (``[nodes] protocol``); each command
@@ -161,3 +165,97 @@ def test_influence_from_trial_runs(fam: str, runs: dict[str, Path], tmp_path: Pa
     for a, b in zip(got["planes"], v1["planes"], strict=True):  # the demo's 55.5 g / 37.5 g
         assert a["mass_g"] == pytest.approx(b["mass_g"], rel=0.05)
         assert abs((a["angle_deg"] - b["angle_deg"] + 180) % 360 - 180) < 3.0
+
+
+def _balls(folder: Path, fam: str) -> tuple[list[Path], Path]:
+    """Two starts of the demo-balls scene, 20 s each, through family ``fam``; their config."""
+    scene = scene_of(folder, "demo-balls", fam, seconds=20.0)
+    assert main(["simulate", str(scene), "--starts", "2", "--out-dir", str(folder / fam)]) == 0
+    starts = [folder / fam / f"start-0{k}.h5" for k in (1, 2)]
+    cfg = folder / f"balls-{fam}.toml"
+    assert main(["inspect", str(starts[0]), "--config-out", str(cfg)]) == 0
+    return starts, cfg
+
+
+@pytest.mark.parametrize("fam", [f for f in FAMILIES if f != "v1"])
+def test_autobalance_test(fam: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The balls' acceptance test (its starts 20 s: unsettled, both ways) gives each start's
+    residual of v1's run of the same starts, and the same verdict."""
+    out = {}
+    for f in ("v1", fam):
+        starts, cfg = _balls(tmp_path, f)
+        capsys.readouterr()
+        argv = ["autobalance", "test", *map(str, starts), "--config", str(cfg), "--json",
+                "--no-archive"]  # fmt: skip
+        assert main(argv) == 0
+        out[f] = json.loads(capsys.readouterr().out)
+    assert out[fam]["verdict"] == out["v1"]["verdict"]
+    for a, b in zip(out[fam]["starts"], out["v1"]["starts"], strict=True):
+        same_within(a["residual"], b["residual"])
+
+
+def _proving(folder: Path, fam: str) -> Path:
+    """The new-stand scene's proving rotor bare and with 20 g in each plane, at 700 and 1100
+    rpm, through ``fam``; the runs file for stand calibrate."""
+    lines = []
+    for rpm in (700, 1100):
+        for name, add in (
+            ("bare", []),
+            ("t1", ["--add", "1:20@90"]),
+            ("t2", ["--add", "2:20@300"]),
+        ):
+            scene = tomllib.loads(scene_of(folder, "new-stand", fam, seconds=4.0).read_text())
+            scene["run"]["rpm"] = float(rpm)
+            path = folder / f"{name}{rpm}.toml"
+            path.write_text(tomlkit.dumps(scene))
+            run = folder / f"{name}{rpm}.h5"
+            assert main(["simulate", str(path), *add, "--out", str(run)]) == 0
+            masses = "[]" if not add else (
+                f"[{{ plane = {add[1][0]}, mass_g = 20.0, angle_deg = {add[1].split('@')[1]}.0 }}]"
+            )  # fmt: skip
+            lines.append(f'[[runs]]\nfile = "{run.name}"\nmasses = {masses}\n')
+    (folder / "calib.toml").write_text("\n".join(lines))
+    return folder / "calib.toml"
+
+
+@pytest.mark.parametrize("fam", [f for f in FAMILIES if f != "v1"])
+def test_calibrate(fam: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The stand identified from each family's proving runs: every parameter within the two
+    identifications' combined 4 standard errors of v1's."""
+    got = {}
+    for f in ("v1", fam):
+        d = tmp_path / f
+        d.mkdir()
+        runs = _proving(d, f)
+        own = d / "own.toml"
+        assert main(["inspect", str(d / "bare700.h5"), "--config-out", str(own)]) == 0
+        start = tomllib.loads(own.read_text())
+        start["stand"].update({"M1": 5.0, "C2": 7e4, "reference_angle_deg": 0.0})
+        own.write_text(tomlkit.dumps(start))
+        capsys.readouterr()
+        argv = ["calibrate", str(runs), "--config", str(own), "--out", str(d / "cal.toml"),
+                "--json"]  # fmt: skip
+        assert main(argv) == 0
+        got[f] = json.loads(capsys.readouterr().out)
+    a, b = got[fam], got["v1"]
+    for name, value in b["values"].items():
+        bound = 4 * math.hypot(a["std_errors"][name], b["std_errors"][name])
+        assert abs(a["values"][name] - value) <= bound, (name, a["values"][name], value, bound)
+
+
+@pytest.mark.parametrize("fam", list(FAMILIES))
+def test_reprocess(fam: str, runs: dict[str, Path], tmp_path: Path,
+                   capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    """A run archived, then re-judged into a revision: the revision's answer is v1's."""
+
+    def revised(f: str, tag: str) -> list[dict[str, Any]]:
+        url = f"sqlite:///{tmp_path / tag}.db"
+        assert main(["archive", "import", str(runs[f"{f}/demo"]), "--archive", url]) == 0
+        capsys.readouterr()
+        assert main(["reprocess", "--archive", url, "--revision", "r1", "--json"]) == 0
+        done = json.loads(capsys.readouterr().out)["runs"]
+        assert [r["status"] for r in done] == ["ok"]
+        planes: list[dict[str, Any]] = done[0]["after"]["planes"]
+        return planes
+
+    same_within(revised(fam, "got"), revised("v1", "v1"))
