@@ -284,8 +284,8 @@ class BusReader(FrameSource):
                 what = (
                     f"no frames at all for {self.silence_timeout_s:g} s: python-can's "
                     "virtual interface joins buses inside one process only; from another "
-                    "process (stand simulate --bus) use udp_multicast, e.g. "
-                    "-i udp_multicast -c 239.74.163.2"
+                    "process (stand simulate --bus) use stand_loopback, e.g. "
+                    "-i stand_loopback -c 47001"
                 )
         else:
             what = f"no more frames for {self.silence_timeout_s:g} s (after {self.frames_received})"
@@ -329,6 +329,8 @@ def play(
         Frames sent.
     """
 
+    import can
+
     if len(frames) == 0:
         return 0
     t_rel = frames.t_s - frames.t_s[0]
@@ -342,6 +344,11 @@ def play(
             if late > tick_s:
                 time.sleep(late)
         m.timestamp = 0.0  # the receiving interface stamps it
-        bus.send(m)
+        try:
+            bus.send(m)
+        except can.CanError as exc:  # bus-off, unplugged, the other side of a loopback gone
+            raise BusError(f"the bus refused a frame after {sent} were sent ({exc})",
+                           channel=str(getattr(bus, "channel_info", "bus")),
+                           frames_received=0) from exc  # fmt: skip
         sent += 1
     return sent

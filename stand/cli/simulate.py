@@ -27,7 +27,7 @@ from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
 from stand.files import check_output
-from stand.sim import load_scene, shipped_scenes, simulate, turned, with_masses
+from stand.sim import load_scene, scene_modules, shipped_scenes, simulate, turned, with_masses
 from stand.sim.scene import unbalance_kg_m
 from stand.solve import load_config_text
 from stand.solve.acquisition import acquisition_of
@@ -166,14 +166,23 @@ def _write(
 
 
 def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
-    """The run played on a python-can bus in real time."""
+    """The run played on a python-can bus in real time; hardware that a host sets up over
+    the bus (CANopen modules) answers that set-up and then each of the host's SYNCs."""
 
     table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
     kwargs = bus_kwargs(args, table)
     bus = open_bus(kwargs)
     try:
-        print(f"playing on {describe_bus(kwargs)} in real time (Ctrl-C stops)", file=sys.stderr)
-        sent = play(bus, sim.frames)
+        modules = scene_modules(scene)
+        if modules is None:
+            print(f"playing on {describe_bus(kwargs)} in real time (Ctrl-C stops)",
+                  file=sys.stderr)  # fmt: skip
+            sent = play(bus, sim.frames)
+        else:
+            print(f"the scene's modules answer on {describe_bus(kwargs)}: set them up and "
+                  "send SYNC (stand record --config CFG with the same bus options); Ctrl-C "
+                  "stops", file=sys.stderr)  # fmt: skip
+            sent = modules.serve(bus, sim.frames)
     finally:
         bus.shutdown()
     print(f"sent {sent} frames", file=sys.stderr)

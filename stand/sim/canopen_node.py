@@ -9,15 +9,25 @@ to the PDO").  On the simulated stand the run's SYNC and TPDO frames are the sce
 (:mod:`stand.sim.canopen_emit`), played in real time as the bus would carry them: a Python
 thread cannot answer a 2 kHz SYNC within its 0.5 ms window, and a TPDO past the window
 would be decoded one SYNC late.  :meth:`SimulatedModules.answer_syncs` answers the host's
-own SYNC producer frame by frame, at rates a thread can follow (the tests use it).
+own SYNC producer frame by frame; :meth:`SimulatedModules.serve` does so on a bus shared
+with another process (``stand simulate SCENE --bus``), the scene's TPDOs in turn.
 """
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
-from stand.sim.canopen_emit import NODE_IDS, eds_path
+import numpy as np
 
+from stand.sim.canopen_emit import NODE_IDS, SYNC_ID, eds_path
+
+TPDO_BASE = 0x180
+"""CiA 301's TPDO1 COB-ID, less the node id (the simulated modules' EDS gives it)."""
+HOST_WAIT_S = 60.0
+"""``serve`` waits this long for a host to set the modules up and start its SYNC [s]."""
+HOST_GONE_S = 3.0
+"""``serve`` stops when the host's SYNCs stop for this long [s]."""
 ABORT_NOT_MAPPABLE = 0x06040041
 """CiA 301's SDO abort code "object cannot be mapped to the PDO"."""
 
@@ -79,10 +89,46 @@ class SimulatedModules:
             for node_id, queue in payloads.items():
                 k = self.answered[node_id]
                 if self.nodes[node_id].nmt.state == "OPERATIONAL" and k < len(queue):
-                    self.network.send_message(0x180 + node_id, queue[k])
+                    self.network.send_message(TPDO_BASE + node_id, queue[k])
                     self.answered[node_id] = k + 1
 
         self.network.subscribe(sync_id, on_sync)
+
+    def serve(self, bus: Any, frames: Any) -> int:
+        """On ``bus`` (another process's host, as a real stand's): answer the host's set-up
+        over SDO; once every module is started (NMT operational), answer each SYNC with
+        each module's next TPDO of the scene's ``frames`` in a loop of its own (no
+        dispatch: a 2 kHz SYNC leaves 0.5 ms), until they run out and the host's SYNCs
+        stop for :data:`HOST_GONE_S`, or none set the modules up within
+        :data:`HOST_WAIT_S`.  Returns the TPDOs sent."""
+        import can
+
+        payloads = [
+            (TPDO_BASE + n, [bytes(frames.data[j, : frames.dlc[j]])
+                             for j in np.flatnonzero(frames.can_id == TPDO_BASE + n)])
+            for n in self.node_ids
+        ]  # fmt: skip
+        self.attach(bus)
+        start = time.monotonic()
+        while not all(n.nmt.state == "OPERATIONAL" for n in self.nodes.values()):
+            if time.monotonic() - start > HOST_WAIT_S:
+                self.detach()
+                return 0
+            time.sleep(0.005)
+        self.detach()  # the set-up is done: the SYNCs are answered below, straight
+        sent, k, last = 0, 0, time.monotonic()
+        total = min(len(p) for _, p in payloads)
+        while time.monotonic() - last < HOST_GONE_S:
+            msg = bus.recv(0.1)
+            if msg is None or msg.arbitration_id != SYNC_ID or msg.is_extended_id:
+                continue
+            last = time.monotonic()
+            if k < total:
+                for cob, queue in payloads:
+                    bus.send(can.Message(arbitration_id=cob, data=queue[k], is_extended_id=False))
+                    sent += 1
+                k += 1
+        return sent
 
     def detach(self) -> None:
         """Stop answering (idempotent); the bus stays its owner's."""

@@ -75,7 +75,7 @@ def main() -> None:
                 best[fam] = (min(w0, wall), min(m0, mib))
         v1 = best["v1"]
         print(f"stand solve of a {args.seconds:g} s demo run, best of {args.repeat}")
-        print("| family | frames | wall [s] | peak [MiB] | wall / v1 | peak / v1 |")
+        print("| family | run file | wall [s] | peak [MiB] | wall / v1 | peak / v1 |")
         print("|---|---|---|---|---|---|")
         for fam, (wall, mib) in best.items():
             size = runs[fam].stat().st_size
