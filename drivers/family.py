@@ -132,18 +132,18 @@ class Acquisition(Protocol):
     - read its layout (:meth:`layout`) from that table and its description files, each
       file bounded by :data:`MAX_DESCRIPTION_BYTES` (:func:`read_description`) and every
       fault in it one :class:`~stand.errors.ConfigError` naming the file and the section
-      or signal; given the descriptions a run stored (``stored``), decode with those and
-      say so where the file on disk differs;
+      or signal; given the descriptions a run kept (``stored``), decode a run solved
+      with its own config with those, and say which copy was used where they differ;
     - refuse what the layout itself shows wrong (two supports on one frame, the clock's
       id on a device's data);
     - turn a run's frames (arrival order) into the two supports' streams
       (:meth:`decode`), on the recording's own clock: a configured rate the recording
       contradicts by more than :data:`stand.drivers.checks.CLOCK_TOLERANCE` is refused
       (:func:`stand.drivers.checks.check_clock`), and so are a mark channel that is no
-      pulse train and an accelerometer channel that is one
-      (:func:`stand.drivers.checks.check_channels`);
+      pulse train, an accelerometer channel that is one, and two supports fed one
+      device's samples (``check_mark``, ``check_accel``, ``check_distinct``);
     - give a builder a live session or a block reader feeds (:meth:`builder`), whose
-      streams equal :meth:`decode` of the same frames;
+      streams equal :meth:`decode` of the same frames however they are cut in blocks;
     - give its set-up over the bus, or None (:meth:`setup`).
 
     Decoding loads neither python-can nor h5py; a description library (cantools,

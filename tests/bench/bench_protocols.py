@@ -21,11 +21,10 @@ import math
 
 import numpy as np
 
-from stand.drivers.v1.build import rebuild
 from stand.sim import load_scene, simulate
 from stand.sim.scan_emit import SENSITIVITY_M_S2_PER_V, VOLTS_PER_COUNT
 from stand.solve import SolveOptions, measure_streams
-from stand.solve.protocols import decoder, layout_of
+from stand.solve.acquisition import acquisition_of
 
 STUFFING = 1.17
 """Bit stuffing, typical: an 8-byte classic frame's 111 bits become about 130."""
@@ -42,12 +41,12 @@ def run(protocol: str, rate: int, trials: int, seconds: float, jitter_s: float =
     sc = sc.model_copy(update={"nodes": sc.nodes.model_copy(
         update={"protocol": protocol, "rate_hz": rate, "sync_jitter_s": jitter_s})})  # fmt: skip
     cfg = sc.config()
-    layout = layout_of(cfg, None)
+    acq = acquisition_of(cfg, None)
     z, bits_per_s, truth = [], 0.0, 0j
     for seed in range(trials):
         run_t = sc.run.model_copy(update={"seconds": seconds, "seed": seed})
         sim = simulate(sc.model_copy(update={"run": run_t}), p)
-        streams = rebuild(sim.frames) if layout is None else decoder(layout)(sim.frames)
+        streams = acq.decode(sim.frames)
         z.append(measure_streams(streams, cfg, p, SolveOptions()).supports[0].A_m_s2)
         bits_per_s = bits(sim.frames.dlc) / seconds
         truth = complex(sim.truth["A_m_s2"][0])  # type: ignore[index]
