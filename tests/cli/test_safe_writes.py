@@ -106,7 +106,8 @@ def test_two_writers_of_one_name_one_wins_the_other_is_told(tmp_path: Path) -> N
     out = tmp_path / "same.h5"
     argv = [sys.executable, "-m", "stand.cli", "simulate", "demo", "--out", str(out)]
     procs = [subprocess.Popen(argv, stderr=subprocess.PIPE, text=True) for _ in range(2)]
-    results = [(p.wait(60), p.stderr.read()) for p in procs if p.stderr is not None]
+    errs = [p.communicate(timeout=60)[1] for p in procs]  # waits, reads, closes the pipe
+    results = [(p.returncode, err) for p, err in zip(procs, errs, strict=True)]
     assert sorted(code for code, _ in results) == [0, 2]
     loser = next(err for code, err in results if code == 2)
     assert "exists already" in loser and "Traceback" not in loser

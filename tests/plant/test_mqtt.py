@@ -45,7 +45,7 @@ def broker(tmp_path: Path) -> Iterator[str]:
         yield f"mqtt://127.0.0.1:{port}"
     finally:
         proc.terminate()
-        proc.wait(10)
+        proc.communicate(timeout=10)  # and its stderr pipe closed: never left to the GC
 
 
 def _subscribe(url: str, topic: str, got: list[dict], ready: threading.Event) -> object:

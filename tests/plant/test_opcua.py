@@ -323,7 +323,7 @@ def test_the_station_serves_opcua_beside_its_screens(tmp_path: Path) -> None:
         assert asyncio.run(state()) == "NotExecuting"
     finally:
         proc.terminate()
-        proc.wait(15)
+        proc.communicate(timeout=15)  # and its stderr pipe closed: never left to the GC
 
 
 def test_a_guarded_method_answers_each_bad_call_with_its_status_code(
