@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.drivers.family import FAMILIES
 from stand.drivers.frames import (
     FLAG_ERROR,
     FLAG_EXTENDED,
@@ -49,8 +50,9 @@ def describe_bus(kwargs: dict[str, Any]) -> str:
     return f"{merged.get('interface', '?')}:{merged.get('channel', '?')}"
 
 
-PRODUCT_KEYS = ("protocol", "scan", "canopen")
-"""``[bus]`` keys the product reads itself (:mod:`stand.drivers.scan.table`); never python-can's."""
+PRODUCT_KEYS = ("protocol", *FAMILIES)
+"""``[bus]`` keys the product reads itself (the family and its own table:
+:mod:`stand.config.bus`); never python-can's."""
 
 URL_CHANNEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9+.-]*://")
 """A channel like ``spy://``, ``loop://``, ``rfc2217://``, ``socket://``: serial interfaces
