@@ -9,7 +9,7 @@ are such families."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +29,28 @@ BLOCK_ROWS = 1 << 18
 def kept(a: NDArray[Any], mask: NDArray[np.bool_]) -> NDArray[Any]:
     """``a[mask]``, without the copy when every element is kept (the common case)."""
     return a if mask.all() else a[mask]
+
+
+@dataclass
+class Blocks:
+    """What a block builder keeps, block by block: each block's first arrival number
+    (``base``) and its kept frames' places in it (``at``), so that its lists of arrays
+    (the subclass's fields) can be joined whole or from an arrival on."""
+
+    base: list[int] = field(default_factory=list)
+    at: list[NDArray[Any]] = field(default_factory=list)
+
+    def joined(self, chunks: list[NDArray[Any]], first: int, consume: bool) -> NDArray[Any]:
+        """One list's blocks joined, from arrival ``first`` on (``consume``: the list is
+        emptied, its blocks let go as soon as they are joined)."""
+        whole = (chunks[0] if len(chunks) == 1 else np.concatenate(chunks) if chunks
+                 else np.zeros(0, np.int64))  # fmt: skip
+        if consume:
+            chunks.clear()
+        if first <= 0:
+            return whole
+        arrival = [a.astype(np.int64) + b for a, b in zip(self.at, self.base, strict=True)]
+        return whole[np.concatenate(arrival) >= first]
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ from stand.drivers.checks import (
     recorded_rate,
 )
 from stand.drivers.frames import FLAG_EXTENDED, Frames
-from stand.drivers.one_clock import BLOCK_ROWS, kept, mark_edges, one_clock_stream
+from stand.drivers.one_clock import BLOCK_ROWS, Blocks, kept, mark_edges, one_clock_stream
 from stand.drivers.streams import NodeStream, RunStreams
 
 EMCY_BASE, BOOT_BASE = 0x80, 0x700
@@ -66,32 +66,18 @@ def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_]
 
 
 @dataclass
-class _Parts:
+class _Parts(Blocks):
     """What one module's frames left, block by block: per TPDO its SYNC index (less one),
     place in its block (``base`` + ``at``: its arrival number), receive time and the mapped
     inputs' raw values, about 22 bytes; its EMCY and boot-up frames' times and codes."""
 
     k: list[NDArray[Any]] = field(default_factory=list)
-    base: list[int] = field(default_factory=list)
-    at: list[NDArray[Any]] = field(default_factory=list)
     t: list[NDArray[Any]] = field(default_factory=list)
     accel: list[NDArray[Any]] = field(default_factory=list)
     mark: list[NDArray[Any]] = field(default_factory=list)
     status: tuple[list[NDArray[Any]], list[NDArray[Any]]] = field(default_factory=lambda: ([], []))
     emcy: list[tuple[float, int]] = field(default_factory=list)
     boot: list[float] = field(default_factory=list)
-
-    def joined(self, chunks: list[NDArray[Any]], first: int, consume: bool) -> NDArray[Any]:
-        """One list's blocks joined, from arrival ``first`` on (``consume``: the list is
-        emptied, its blocks let go as soon as they are joined)."""
-        whole = (chunks[0] if len(chunks) == 1 else np.concatenate(chunks) if chunks
-                 else np.zeros(0, np.int64))  # fmt: skip
-        if consume:
-            chunks.clear()
-        if first <= 0:
-            return whole
-        arrival = [a.astype(np.int64) + b for a, b in zip(self.at, self.base, strict=True)]
-        return whole[np.concatenate(arrival) >= first]
 
 
 def _said(n: PdoNode, parts: _Parts, t0: float, warn: list[Diagnostic]) -> list[str]:

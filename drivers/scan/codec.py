@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from stand.core import Diagnostic
 from stand.drivers.checks import check_accel, check_clock, check_mark, recorded_rate
 from stand.drivers.frames import FLAG_EXTENDED, FLAG_FD, Frames
-from stand.drivers.one_clock import BLOCK_ROWS, kept, mark_edges, one_clock_stream
+from stand.drivers.one_clock import BLOCK_ROWS, Blocks, kept, mark_edges, one_clock_stream
 from stand.drivers.scan.layout import ScanLayout
 from stand.drivers.streams import RunStreams
 from stand.errors import ConfigError
@@ -76,29 +76,15 @@ def _scans(data: NDArray[np.uint8], t: NDArray[np.float64], layout: ScanLayout
 
 
 @dataclass
-class _Parts:
+class _Parts(Blocks):
     """What the module's frames left, block by block: per scan its counter's raw value
     (if mapped), its frame's place in its block (``base`` + ``at``: its arrival number),
     receive time, and the three inputs' raw values, about 20 bytes."""
 
     counter: list[NDArray[Any]] = field(default_factory=list)
-    base: list[int] = field(default_factory=list)
-    at: list[NDArray[Any]] = field(default_factory=list)
     t: list[NDArray[Any]] = field(default_factory=list)
     accel: tuple[list[NDArray[Any]], list[NDArray[Any]]] = field(default_factory=lambda: ([], []))
     mark: list[NDArray[Any]] = field(default_factory=list)
-
-    def joined(self, chunks: list[NDArray[Any]], first: int, consume: bool) -> NDArray[Any]:
-        """One list's blocks joined, from arrival ``first`` on (``consume``: the list is
-        emptied, its blocks let go as soon as they are joined)."""
-        whole = (chunks[0] if len(chunks) == 1 else np.concatenate(chunks) if chunks
-                 else np.zeros(0, np.int64))  # fmt: skip
-        if consume:
-            chunks.clear()
-        if first <= 0:
-            return whole
-        arrival = [a.astype(np.int64) + b for a, b in zip(self.at, self.base, strict=True)]
-        return whole[np.concatenate(arrival) >= first]
 
 
 class ScanBuilder:
