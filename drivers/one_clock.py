@@ -154,6 +154,41 @@ def one_clock_stream(
     )  # fmt: skip
 
 
+class BlockBuilder:
+    """What a one-clock family's builder shares (:class:`stand.drivers.family.
+    FrameBuilder`): its counters, the block size a file is read in, ``streams`` and
+    ``tail`` from what it kept.  A subclass keeps a block's values in :meth:`add`, starts
+    anew in :meth:`_reset` and builds the streams in :meth:`_build`."""
+
+    def __init__(self, layout: Any) -> None:
+        self.layout = layout
+        self.frames = 0
+        self.last_block = Frames.empty()
+        self.read_rows: int | None = BLOCK_ROWS
+        self.keeps_times = False
+        self._reset()
+
+    def _reset(self) -> None:
+        raise NotImplementedError
+
+    def _build(self, first: int, consume: bool) -> RunStreams:
+        raise NotImplementedError
+
+    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
+        """The supports' streams of every frame so far (``strict_status`` is v1's: these
+        devices send no STATUS); ``release``: the builder is done and starts anew."""
+        out = self._build(0, consume=release)
+        if release:
+            self.frames, self.last_block = 0, Frames.empty()
+            self._reset()
+        return out
+
+    def tail(self, from_frame: int) -> RunStreams:
+        """The streams of the frames from ``from_frame`` on (their samples keep the run's
+        indices: a tail's samples keep their place)."""
+        return self._build(max(int(from_frame), 0), consume=False)
+
+
 class OneClockFamily:
     """A family whose devices sample on one clock: its layout read by ``load(table, base,
     source, stored)``, its frames decoded block by block by the builder ``build(layout)``

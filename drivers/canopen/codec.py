@@ -42,7 +42,7 @@ from stand.drivers.checks import (
     recorded_rate,
 )
 from stand.drivers.frames import FLAG_EXTENDED, Frames
-from stand.drivers.one_clock import BLOCK_ROWS, Blocks, kept, mark_edges, one_clock_stream
+from stand.drivers.one_clock import BlockBuilder, Blocks, kept, mark_edges, one_clock_stream
 from stand.drivers.streams import NodeStream, RunStreams
 
 EMCY_BASE, BOOT_BASE = 0x80, 0x700
@@ -116,18 +116,12 @@ def _status(n: PdoNode, status: list[NDArray[Any] | None], count: int
     return ok[0], ok[1], flags
 
 
-class PdoBuilder:
+class PdoBuilder(BlockBuilder):
     """CANopen frames decoded as they come (:class:`stand.drivers.family.FrameBuilder`):
     SYNCs counted across blocks, each module's TPDOs reduced to their index and inputs.
     ``streams`` and ``tail`` build the supports' streams from what was kept."""
 
-    def __init__(self, layout: PdoLayout) -> None:
-        self.layout = layout
-        self.frames = 0
-        self.last_block = Frames.empty()
-        self.read_rows: int | None = BLOCK_ROWS
-        self.keeps_times = False
-        self._reset()
+    layout: PdoLayout
 
     def _reset(self) -> None:
         self._syncs, self._unknown = 0, 0
@@ -178,20 +172,6 @@ class PdoBuilder:
                 parts.status[k].append(sig.raw(data))
         theirs: NDArray[np.bool_] = rows | emcy | boot
         return theirs
-
-    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
-        """The supports' streams of every frame so far (``strict_status`` is v1's: these
-        modules send no STATUS); ``release``: the builder is done and starts anew."""
-        out = self._build(0, consume=release)
-        if release:
-            self.frames, self.last_block = 0, Frames.empty()
-            self._reset()
-        return out
-
-    def tail(self, from_frame: int) -> RunStreams:
-        """The streams of the frames from ``from_frame`` on (their SYNC indices as in the
-        whole run: a tail's samples keep their place)."""
-        return self._build(max(int(from_frame), 0), consume=False)
 
     def _build(self, first: int, consume: bool) -> RunStreams:
         warn: list[Diagnostic] = []

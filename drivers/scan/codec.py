@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 from stand.core import Diagnostic
 from stand.drivers.checks import check_accel, check_clock, check_mark, recorded_rate
 from stand.drivers.frames import FLAG_EXTENDED, FLAG_FD, Frames
-from stand.drivers.one_clock import BLOCK_ROWS, Blocks, kept, mark_edges, one_clock_stream
+from stand.drivers.one_clock import BlockBuilder, Blocks, kept, mark_edges, one_clock_stream
 from stand.drivers.scan.layout import ScanLayout
 from stand.drivers.streams import RunStreams
 from stand.errors import ConfigError
@@ -87,18 +87,12 @@ class _Parts(Blocks):
     mark: list[NDArray[Any]] = field(default_factory=list)
 
 
-class ScanBuilder:
+class ScanBuilder(BlockBuilder):
     """A scan module's frames decoded as they come (:class:`stand.drivers.family.
     FrameBuilder`): each block's scans reduced to their counter, time and inputs (about
     30 bytes a scan); ``streams`` and ``tail`` build the supports' streams from them."""
 
-    def __init__(self, layout: ScanLayout) -> None:
-        self.layout = layout
-        self.frames = 0
-        self.last_block = Frames.empty()
-        self.read_rows: int | None = BLOCK_ROWS
-        self.keeps_times = False
-        self._reset()
+    layout: ScanLayout
 
     def _reset(self) -> None:
         self._unknown = 0
@@ -136,19 +130,6 @@ class ScanBuilder:
         self._t1 = float(frames.t_s[-1])
         self.frames += len(frames)
         self.last_block = frames
-
-    def streams(self, *, strict_status: bool = True, release: bool = False) -> RunStreams:
-        """The supports' streams of every frame so far (``strict_status`` is v1's: a module
-        sends no STATUS); ``release``: the builder is done and starts anew."""
-        out = self._build(0, consume=release)
-        if release:
-            self.frames, self.last_block = 0, Frames.empty()
-            self._reset()
-        return out
-
-    def tail(self, from_frame: int) -> RunStreams:
-        """The streams of the frames from ``from_frame`` on, a run of their own."""
-        return self._build(max(int(from_frame), 0), consume=False)
 
     def _build(self, first: int, consume: bool) -> RunStreams:
         layout, parts = self.layout, self._parts

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from stand.config import Config
 from stand.config.bus import bus_choice
 from stand.drivers.family import (
     DEFAULT,
@@ -63,7 +64,7 @@ class Acquired:
         return {DESCRIPTIONS_ATTR: json.dumps(texts)} if texts else {}
 
 
-def acquisition_of(cfg: Any, config: str | None, *, scene_bus: dict[str, Any] | None = None,
+def acquisition_of(cfg: Config, config: str | None, *, scene_bus: dict[str, Any] | None = None,
                    scene: str | None = None, stored: Kept | None = None
                    ) -> Acquired:  # fmt: skip
     """The family the config reads, with its layout (description files relative to the

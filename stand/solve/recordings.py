@@ -22,7 +22,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
-from stand.config import parse_matrix
+from stand.config import Config, parse_matrix
 from stand.core import StandParameters
 from stand.drivers.family import FrameBuilder
 from stand.drivers.runs.recording import (
@@ -145,7 +145,7 @@ class RunRead:
     them."""
 
     rec: Recording
-    cfg: Any
+    cfg: Config
     params: StandParameters
     text: str
     source: str
@@ -158,7 +158,7 @@ def read_run(path: str, config: str | ConfigText | None, *, strict_status: bool 
     run's own, else ``fallback``) chooses the family
     (:func:`stand.solve.acquisition.acquisition_of`, with the description files the run
     kept), whose builder decodes the frames block by block."""
-    chosen: list[tuple[Any, StandParameters, str, str]] = []
+    chosen: list[tuple[Config, StandParameters, str, str]] = []
 
     def choose(meta: dict[str, Any]) -> FrameBuilder:
         if config is None and fallback is not None and not meta.get("config_toml"):
