@@ -57,12 +57,10 @@ def file_digest(path: str | Path) -> str:
 
 
 def verdict(out: dict[str, Any]) -> str:
-    """A run's overall verdict from its JSON form: ``pass`` (every plane within tolerance),
-    ``fail``, or ``none`` (no tolerance given): the archive's and the plant's."""
-    t = out.get("tolerance")
-    if t is None:
-        return "none"
-    return "pass" if all(p["pass"] for p in t["planes"]) else "fail"
+    """A run's one verdict from its JSON form (:mod:`stand.solve.verdict`): ``pass``,
+    ``fail``, ``undecided`` or ``none`` (no tolerance given): the archive's and the
+    plant's."""
+    return str(out["verdict"])
 
 
 def rows(
@@ -95,7 +93,7 @@ def rows(
         "stand_id": p.stand_id or None,
     }
     urr = result.check.urr if result.check is not None else (None, None)
-    per = None if result.tolerance is None else result.tolerance.per_plane_kg_m
+    own = {j.plane: j for j in result.judgements if j.plane is not None}
     planes = []
     for i in range(2):
         U = complex(result.U_kg_m[i])
@@ -105,13 +103,18 @@ def rows(
                 "U_re_kg_m": U.real,
                 "U_im_kg_m": U.imag,
                 "radius95_kg_m": float(result.measurement.radius95_kg_m[i]),
-                "permissible_kg_m": None if per is None else per[i],
-                "passed": None if per is None else bool(abs(U) <= per[i]),
+                "permissible_kg_m": own[i + 1].limit if i + 1 in own else None,
+                "passed": _passed(own[i + 1].state) if i + 1 in own else None,
                 "leftover_kg_m": abs(result.corrections[i].residual_kg_m),
                 "urr": urr[i],
             }
         )
     return run, planes
+
+
+def _passed(state: str) -> bool | None:
+    """A plane's state as the archive's ``passed`` column (None: undecided)."""
+    return {"pass": True, "fail": False}.get(state)
 
 
 def archive_result(result: Result, url: str, *, config: str | None = None) -> int:

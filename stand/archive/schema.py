@@ -51,7 +51,7 @@ runs = Table(
     Column("config_sha256", String(64), nullable=False),
     Column("matrix", Text),
     Column("correction_mode", String(8), nullable=False),
-    Column("verdict", String(8), nullable=False),  # pass, fail, none (no tolerance)
+    Column("verdict", String(12), nullable=False),  # pass, fail, undecided, none
     Column("checks_run_id", Integer, ForeignKey("runs.id")),
     Column("static_re_kg_m", Float, nullable=False),
     Column("static_im_kg_m", Float, nullable=False),
@@ -129,7 +129,7 @@ revised = Table(
     Column("run_id", Integer, ForeignKey("runs.id", ondelete="CASCADE"), primary_key=True),
     Column("status", String(12), nullable=False),  # ok, missing, altered, unreadable, refused
     Column("reason", Text),  # why not ok, in one line
-    Column("verdict", String(8)),  # pass, fail, none; None unless ok
+    Column("verdict", String(12)),  # pass, fail, undecided, none; None unless ok
     Column("result_json", Text),  # the re-solved result's JSON form; None unless ok
     Column("solved_at", String(40), nullable=False),
 )  # fmt: skip

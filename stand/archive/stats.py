@@ -154,7 +154,7 @@ def _first_pass(rows: list[Any], rotors: list[Any]) -> tuple[int, int, int]:
     for r in rotors:
         if r.verdict == "pass":
             passed += 1
-        elif r.verdict == "fail":
+        elif r.verdict in ("fail", "undecided"):  # a check must decide
             after = checks.get(r.id)
             if not after:
                 open_ += 1
@@ -163,6 +163,19 @@ def _first_pass(rows: list[Any], rotors: list[Any]) -> tuple[int, int, int]:
             else:
                 failed += 1
     return passed, failed, open_
+
+
+def verdict_counts(rows: list[Any], rotors: list[Any]) -> dict[str, dict[str, int]]:
+    """How many rotors' first run, and how many rotors' last run, ended in each verdict
+    state (``pass``, ``fail``, ``undecided``, ``none``)."""
+    last: dict[str, Any] = {}
+    for r in rows:  # oldest first: a rotor's last run wins
+        last[r.serial if r.serial is not None else f"#{r.id}"] = r
+    states = ("pass", "fail", "undecided", "none")
+    return {
+        "first_run": {k: sum(r.verdict == k for r in rotors) for k in states},
+        "last_run": {k: sum(r.verdict == k for r in last.values()) for k in states},
+    }
 
 
 def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]:
@@ -191,6 +204,7 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
         "passed_first_time": passed,
         "failed_first_check": failed,
         "not_checked_yet": open_,
+        "verdicts": verdict_counts(rows, rotors),
         "permissible_g_mm": [  # the tolerance in force (the latest runs')
             round(v[-1] * 1e6, 3) if v else None for v in per
         ],

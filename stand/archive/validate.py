@@ -23,7 +23,7 @@ from stand.core.model import MAX_SPEED_RPM
 from stand.errors import ArchiveRowError
 from stand.files import strict_json
 
-VERDICTS = frozenset({"pass", "fail", "none"})
+VERDICTS = frozenset({"pass", "fail", "undecided", "none"})
 MODES = frozenset({"remove", "add", "drill", "mill"})
 STATUSES = frozenset({"ok", "missing", "altered", "unreadable", "refused"})
 KINDS = frozenset({"production", "tooling"})

@@ -171,6 +171,12 @@ def add_measure_arguments(p: argparse.ArgumentParser) -> None:
         help="use the whole run, not only its steady, settled part",
     )
     p.add_argument(
+        "--later-check",
+        action="store_true",
+        help="judge as a later check by the user of a rotor balanced elsewhere (ISO 21940-14: "
+        "pass if U <= limit + combined error), not as directly after balancing",
+    )
+    p.add_argument(
         "--matrix",
         metavar="MATRIX.json",
         help="influence mode: use a stored influence matrix (stand influence --save) in place "
@@ -231,6 +237,7 @@ def solve_options(args: argparse.Namespace, *, traces: bool = False) -> Any:
         tolerances=tolerances,
         draws=getattr(args, "draws", 1000),
         traces=traces,
+        acceptance="later_check" if getattr(args, "later_check", False) else None,
     )
 
 

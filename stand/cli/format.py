@@ -12,6 +12,7 @@ from typing import Any, TextIO
 
 from stand.report import Display
 from stand.solve import json_text
+from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 from stand.solve.recordings import recording_summary
 
 ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
@@ -141,30 +142,61 @@ def print_corrections(out: dict[str, Any]) -> None:
         f"part +-{u.unbalance(cp['unbalance_g_mm'])} at {cp['angle_deg']:.1f} deg "
         "(plane 1 / plane 2)"
     )
+    for k in out.get("keys") or []:
+        print(
+            f"key at {k['angle_deg']:g} deg ({u.mass(k['mass_g'])}): balanced with "
+            f"{CONVENTION_WORDS[k['convention']]}, {FITTED_WORDS[k['fitted']]} fitted "
+            "(ISO 21940-32); "
+            f"mark the part {k['marking']}"
+        )
     t = out.get("tolerance")
     if t is None:
-        print("tolerance: none set (add a [tolerance] table: grade_mm_s, max_speed_rpm)")
+        print("tolerance: none set (add a [tolerance] table: docs/tolerance.md)")
         return
-    print(
-        f"tolerance {t['standard']} G {t['grade_mm_s']:g} at {t['max_speed_rpm']:g} rpm: "
-        f"U_per {u.unbalance(t['permissible_g_mm'])}"
+    per = f": U_per {u.unbalance(t['permissible_g_mm'])}" if "permissible_g_mm" in t else ""
+    print(f"tolerance: {t['source']} ({FORM_WORDS[t['form']]} form){per}")
+    print(f"  judged in {t['judged_in']}")
+    print(f"  rule: {t['rule']}")
+    for c in t["criteria"]:
+        print("  " + criterion_text(c, u, out))
+    print(f"verdict: {VERDICT_WORDS[t['verdict']]}")
+    stuck = [c for c in t["criteria"] if c["verdict"] == "undecided"]
+    if stuck and all(c.get("limited_by") == "calibration" for c in stuck):
+        print("  a longer run will not decide it: the calibration's own interval limits it")
+
+
+FORM_WORDS = {"grade": "grade", "per_plane": "per plane", "static_couple": "resultant and moment",
+              "api": "API"}  # fmt: skip
+VERDICT_WORDS = {
+    "pass": "PASS",
+    "fail": "FAIL",
+    "undecided": "UNDECIDED: the interval straddles the limit; measure longer to decide",
+    "none": "none (no tolerance)",
+}
+"""The one verdict in the operator's words."""
+
+
+def criterion_text(c: dict[str, Any], u: Display, out: dict[str, Any]) -> str:
+    """One judged criterion: value +- its combined error against the limit, and its state."""
+    if "value_g_mm2" in c:
+        val = f"{u.number(c['value_g_mm2'])} +- {u.number(c['error_g_mm2'])} g mm^2"
+        lim, margin = f"{u.number(c['permissible_g_mm2'])} g mm^2", c["margin_g_mm2"]
+        gap = f"{u.number(abs(margin))} g mm^2"
+    else:
+        val = f"{u.unbalance(c['value_g_mm'])} +- {u.number(c['error_g_mm'])}"
+        lim, margin = u.unbalance(c["permissible_g_mm"]), c["margin_g_mm"]
+        gap = u.unbalance(abs(margin))
+    how = "margin" if margin >= 0 else "over by"
+    note = ""
+    cal = (
+        None
+        if c["plane"] is None
+        else out["planes"][c["plane"] - 1].get("calibration_interval_g_mm")
     )
-    for p in t["planes"]:
-        verdict = "pass" if p["pass"] else "FAIL"
-        how = "margin" if p["pass"] else "over by"
-        cal = out["planes"][p["plane"] - 1].get("calibration_interval_g_mm")
-        limit = ""
-        if (
-            p.get("limited_by") == "calibration"
-            and cal is not None
-            and abs(p["margin_g_mm"]) <= cal
-        ):
-            limit = f"; the calibration's own +-{u.number(cal)} could turn it"
-        print(
-            f"  plane {p['plane']}: {u.unbalance(p['residual_g_mm'])} against "
-            f"{u.number(p['permissible_g_mm'])} permissible: {verdict} "
-            f"({how} {u.unbalance(abs(p['margin_g_mm']))}){limit}"
-        )
+    if c.get("limited_by") == "calibration" and cal is not None and c["verdict"] == "undecided":
+        note = f"; the calibration's own +-{u.number(cal)} limits it"
+    state = c["verdict"].upper() if c["verdict"] != "pass" else "pass"
+    return f"{c['name']}: {val} against {lim}: {state} ({how} {gap}){note}"
 
 
 def print_uncertainty(out: dict[str, Any]) -> None:

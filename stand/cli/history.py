@@ -33,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--operator", metavar="NAME")
     add_date_arguments(p)
     add_revision_argument(p)
-    p.add_argument("--verdict", choices=("pass", "fail", "none"))
+    p.add_argument("--verdict", choices=("pass", "fail", "undecided", "none"))
     p.add_argument("--stand", metavar="ID", help="runs of this stand ([stand] id)")
     p.add_argument("--limit", type=int, metavar="N", help="the newest N runs (listed oldest first)")
     add_archive_argument(p)

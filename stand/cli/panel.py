@@ -26,8 +26,8 @@ from stand.live import live_source, measure_live
 from stand.plant import publish_archived
 from stand.report import Display
 from stand.sim import Mass
-from stand.solve.pipeline import tolerance_of
 from stand.solve.recordings import correction_masses
+from stand.solve.verdict import tolerance_of
 
 ANGLE_HELP = "angles from the reference mark, against the direction of rotation"
 

@@ -173,7 +173,7 @@ def _text(out: dict[str, Any], config: str | None) -> None:
             print(f"  run {r['run_id']:>6}  {r['serial'] or '-':<12} {r['kind']:<10} {planes}  "
                   f"{r['before']['verdict']} -> {r['after']['verdict']}")  # fmt: skip
     if out["recall"]:
-        print(f"RECALL: {len(out['recall'])} rotors passed and are out of tolerance now:")
+        print(f"RECALL: {len(out['recall'])} rotors passed and fail or are undecided now:")
         print("  " + ", ".join(out["recall"]))
     else:
         print("recall: none (no rotor that passed is out of tolerance now)")

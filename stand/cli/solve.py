@@ -83,11 +83,12 @@ COLUMNS = [
     "plane1_g_mm",
     "plane1_deg",
     "plane1_uncertainty_g_mm",
-    "plane1_pass",
+    "plane1_verdict",
     "plane2_g_mm",
     "plane2_deg",
     "plane2_uncertainty_g_mm",
-    "plane2_pass",
+    "plane2_verdict",
+    "verdict",
     "warnings",
     "error",
 ]
@@ -100,13 +101,15 @@ def _row(path: str, res: dict[str, Any]) -> dict[str, Any]:
         row["error"] = res["error"]
         return row
     row["rpm"] = res["rpm"]
-    verdict = {p["plane"]: p["pass"] for p in res.get("tolerance", {}).get("planes", [])}
+    crit = res.get("tolerance", {}).get("criteria", [])
+    verdict = {c["plane"]: c["verdict"] for c in crit if c["plane"] is not None}
+    row["verdict"] = res["verdict"]
     for p in res["planes"]:
         i = p["plane"]
         row[f"plane{i}_g_mm"] = p["unbalance_g_mm"]
         row[f"plane{i}_deg"] = p["angle_deg"]
         row[f"plane{i}_uncertainty_g_mm"] = p["uncertainty_g_mm"]
-        row[f"plane{i}_pass"] = verdict.get(i, "")
+        row[f"plane{i}_verdict"] = verdict.get(i, "")
     row["warnings"] = len(res["warnings"])
     return row
 

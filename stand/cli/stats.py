@@ -16,6 +16,7 @@ from stand.cli.common import (
 )
 from stand.cli.format import dump_json
 from stand.report import render_production
+from stand.solve.verdict import verdicts_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -80,6 +81,7 @@ def _text(out: dict[str, Any]) -> None:
         f"({out['passed_first_time']} within tolerance first time, {out['failed_first_check']} "
         f"failed their first check, {out['not_checked_yet']} not checked yet)"
     )
+    print("verdicts (ISO 21940-14): " + verdicts_text(out["verdicts"]))
     print("initial unbalance (each rotor's first run); angles from the reference mark, against")
     print("the direction of rotation:")
     print(

@@ -14,6 +14,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config.tables import STRICT, Inertia, Length, Mass, Name
+from stand.config.tolerance import KeyTable
 from stand.core.beam import beam_rotor
 from stand.core.shaft import PointMass, Section
 
@@ -110,6 +111,8 @@ class RotorTable(BaseModel):
     planes: Annotated[list[CorrectionPlane], Field(max_length=16)] = []
     """The correction planes for balancing across speeds (``stand solve --across-speeds``);
     they need the shaft."""
+    keys: Annotated[list[KeyTable], Field(max_length=16)] = []
+    """Keys and keyways, and the convention the part is balanced by (ISO 21940-32)."""
 
     @model_validator(mode="after")
     def _planes_on_the_shaft(self) -> RotorTable:

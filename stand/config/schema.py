@@ -9,7 +9,8 @@ Tables (SI units, the seed's symbols)::
                   (the rotor's tables: :mod:`stand.config.rotor`)
     [bus]     (optional) passed as is to ``can.Bus(**bus)``: interface,
               channel, bitrate and any option of the python-can interface
-    [tolerance]   (optional) grade_mm_s, max_speed_rpm (ISO 21940-11)
+    [tolerance]   (optional) one form: grade, per plane, static + couple, API; the
+                  acceptance moment (ISO 21940-11/-14, :mod:`stand.config.tolerance`)
     [correction]  (optional) mode, positions, position0_deg, weights_g, weight_step_g;
                   drilling and milling (:mod:`stand.config.correction`)
     [sensors]     (optional) gain, delay_s per node (from stand calibrate)
@@ -44,6 +45,8 @@ from stand.config.rotor import SHAFT_AGREE
 from stand.config.rotor import RotorTable as RotorTable  # re-exported
 from stand.config.tables import STRICT as STRICT  # re-exported: every table's model config
 from stand.config.tables import Angle, Mass, Name, Stiffness
+from stand.config.tolerance import ToleranceTable as ToleranceTable  # re-exported
+from stand.config.tolerance import check_keys, check_tolerance
 from stand.config.validation import BUS_VALUE, shown
 from stand.config.validation import validate as validate  # re-exported
 from stand.core.model import STAND_KEYS, StandParameters
@@ -84,17 +87,6 @@ class StandTable(BaseModel):
 
     calibrated: Annotated[str, Field(pattern=r"^\d{4}-\d{2}-\d{2}$")] | None = None
     """The date of its last calibration (YYYY-MM-DD; stand calibrate writes it)."""
-
-
-class ToleranceTable(BaseModel):
-    """``[tolerance]``: ISO 21940-11 balance quality grade and the maximum service speed."""
-
-    model_config = STRICT
-
-    grade_mm_s: PositiveFloat
-    """G, e.g. 6.3 for G 6.3 [mm/s]."""
-    max_speed_rpm: Annotated[FiniteFloat, Field(ge=1.0)]
-    """The rotor's maximum service speed [rpm]: at least 1 (U_per grows as its inverse)."""
 
 
 class DisplayTable(BaseModel):
@@ -204,7 +196,7 @@ class Config(BaseModel):
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
-                    "id", "bending_hz", "shaft", "planes"):  # fmt: skip
+                    "id", "bending_hz", "shaft", "planes", "keys"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 
@@ -234,7 +226,10 @@ def config_from_dict(
     check_correction(cfg.correction, cfg.rotor, source)
     if cfg.bus is not None:  # the family and its table, checked now
         bus_choice(cfg.bus, source)
-    return cfg, parameters_of(cfg, source)
+    params = parameters_of(cfg, source)
+    check_tolerance(cfg.tolerance, params, source)
+    check_keys(cfg.rotor.keys, params, source)
+    return cfg, params
 
 
 def with_shaft(cfg: Config, source: str) -> Config:

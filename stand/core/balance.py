@@ -1,20 +1,8 @@
-"""Tolerances (ISO 21940-11) and corrections: from unbalances to what the operator does.
+"""Corrections: from unbalances to what the operator does.
 
 Pure numerics: arrays in, arrays out, SI units (kg m, m, rad/s), no I/O.
 
-**Tolerance.**  The permissible residual unbalance of a rigid rotor of mass
-``m`` with balance quality grade ``G`` at the maximum service speed
-``Omega`` is ``U_per = G m / Omega`` (G in m/s: ISO writes
-``1000 G m / Omega`` in g mm with G in mm/s).  ISO 21940-11 sets it in the
-bearing planes (here the supports), split by the lever rule about the
-centre of mass, each share held between 30 % and 70 % of ``U_per``.  The
-correction planes are not the bearing planes, so each correction plane's
-share is converted: an unbalance ``U_i`` at ``x_i`` (from support 1, span
-``L``) loads support 1 with ``U_i (L - x_i) / L`` and support 2 with
-``U_i x_i / L``.  The correction-plane tolerances keep the bearing-plane
-split and are the largest for which, whatever the phases, both bearing-plane
-loads stay within theirs.  A plane outside its support (``a < 0``) loads
-that support by more than itself, so its tolerance comes out stricter.
+Tolerances and acceptance live in :mod:`stand.core.tolerance`.
 
 **Corrections.**  Removing ``q_i`` at the angle ``phi_i`` (the seed's angle,
 from the reference mark against the direction of rotation), or adding it at
@@ -34,49 +22,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.core.model import StandParameters
-
-SHARE_MIN, SHARE_MAX = 0.3, 0.7
-"""ISO 21940-11's limits on a bearing plane's share of ``U_per``."""
-
-
-def permissible_unbalance(mass_kg: float, grade_m_s: float, omega_rad_s: float) -> float:
-    """``U_per = G m / Omega`` [kg m] (G in m/s: G 6.3 is 6.3e-3 m/s).
-
-    >>> round(permissible_unbalance(60.0, 6.3e-3, 1500 * 2 * math.pi / 60) * 1e6, 1)  # g mm
-    2406.4
-    """
-    return grade_m_s * mass_kg / omega_rad_s
-
-
-def bearing_shares(p: StandParameters, U_per_kg_m: float) -> tuple[float, float]:
-    """``U_per`` split onto supports 1 and 2 by the lever rule, held within 30 .. 70 % [kg m]."""
-    L = p.L
-    share1 = min(max((p.c + p.d) / L, SHARE_MIN), SHARE_MAX)
-    return share1 * U_per_kg_m, (1.0 - share1) * U_per_kg_m
-
-
-def plane_tolerances(p: StandParameters, U_per_kg_m: float) -> tuple[float, float]:
-    """Permissible residual unbalance in correction planes 1 and 2 [kg m].
-
-    The bearing-plane shares, carried to the correction planes: the largest
-    ``k`` with tolerances ``k (s1, s2)`` such that ``|T| k s <= s``
-    (``T`` the static transfer from correction to bearing planes,
-    worst-case phases).  Planes at the supports get the bearing shares.
-
-    >>> import dataclasses
-    >>> from stand.core.model import StandParameters
-    >>> at_supports = StandParameters(M1=1, M2=1, C1=1e4, C2=1e4, M3=10, J3=1, a=0.0, b=0.5,
-    ...                               c=0.5, d=0.0, R1=0.1, R2=0.1)
-    >>> [round(u, 6) for u in plane_tolerances(at_supports, 1.0)]
-    [0.5, 0.5]
-    """
-    s = np.array(bearing_shares(p, U_per_kg_m))
-    L = p.L
-    x = np.array([p.a, p.a + p.b + p.c])  # correction planes, from support 1
-    T = np.array([(L - x) / L, x / L])  # rows: support 1, 2; columns: plane 1, 2
-    load = np.abs(T) @ s  # worst-case bearing loads for tolerances equal to the shares
-    k = float(np.min(s / load))
-    return float(k * s[0]), float(k * s[1])
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from stand.solve import Result, json_text, to_json
 
 TIMEOUT_S = 5.0
 """How long to wait for the broker to take a result [s]."""
-SCHEMA = "urn:rotor-stand:mqtt-result:1"
+SCHEMA = "urn:rotor-stand:mqtt-result:2"
 """The payload's ``schema`` field: its JSON Schema's ``$id``."""
 SCHEMA_FILE = Path(__file__).resolve().parent / "mqtt-result.schema.json"
 """The payload's JSON Schema (draft 2020-12), shipped with the package."""

@@ -18,8 +18,10 @@ from stand.plant.ua_model import EVALUATIONS
 RESULT_STATE_COMPLETED = 1
 """ResultMetaDataType.ResultState: processing was carried out completely."""
 EVALUATION = {"pass": EVALUATIONS.index("OK"), "fail": EVALUATIONS.index("NotOK"),
+              "undecided": EVALUATIONS.index("NotDecidable"),
               "none": EVALUATIONS.index("Undefined")}  # fmt: skip
-"""The archive's verdict as ResultEvaluationEnum (``none``: no tolerance to judge by)."""
+"""The archive's verdict as ResultEvaluationEnum (``undecided``: ISO 21940-14's interval
+straddles the limit; ``none``: no tolerance to judge by)."""
 
 
 def _time(iso: str | None) -> dt.datetime | None:

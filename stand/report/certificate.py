@@ -20,6 +20,7 @@ from typing import Any
 from stand.report.plots import polar, spectrum_and_speed
 from stand.report.units import Display
 from stand.solve import Result, to_json
+from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 
 CSS = """
 body { font-family: "DejaVu Sans", system-ui, sans-serif; margin: 2em auto; max-width: 960px;
@@ -66,13 +67,17 @@ def local_time(iso_utc: str) -> str:
     return t.astimezone().strftime("%Y-%m-%d %H:%M %Z")
 
 
+BADGES = {
+    "pass": '<span class="badge pass">IN TOLERANCE</span>',
+    "fail": '<span class="badge fail">OUT OF TOLERANCE</span>',
+    "undecided": '<span class="badge fail">UNDECIDED: measure longer</span>',
+    "none": '<span class="badge muted">no tolerance set</span>',
+}
+"""The one verdict (:mod:`stand.solve.verdict`) as the certificate's badge."""
+
+
 def _badge(out: dict[str, Any]) -> str:
-    t = out.get("tolerance")
-    if t is None:
-        return '<span class="badge muted">no tolerance set</span>'
-    if all(p["pass"] for p in t["planes"]):
-        return '<span class="badge pass">IN TOLERANCE</span>'
-    return '<span class="badge fail">OUT OF TOLERANCE</span>'
+    return BADGES[out.get("verdict", "none")]
 
 
 def _job(out: dict[str, Any], result: Result) -> str:
@@ -90,21 +95,63 @@ def _job(out: dict[str, Any], result: Result) -> str:
 
 
 def _basis(out: dict[str, Any]) -> str:
-    t, d = out.get("tolerance"), Display.of(out)
+    t, d, e = out.get("tolerance"), Display.of(out), html.escape
     if t is None:
         return "<p><b>Tolerance:</b> none set (the configuration has no [tolerance] table).</p>"
-    per = " and ".join(d.unbalance(p["permissible_g_mm"]) for p in t["planes"])
-    return (
-        f"<p><b>Tolerance basis:</b> {t['standard']}, balance quality grade "
-        f"G {t['grade_mm_s']:g}, maximum service speed {t['max_speed_rpm']:g} rpm: "
-        f"U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}, "
-        f"shared as {per} in planes 1 and 2. Balancing speed {out['rpm']:.0f} rpm.</p>"
+    per = ""
+    if "permissible_g_mm" in t:
+        per = f": U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}"
+    rows = "".join(
+        f"<tr><td>{e(c['name'])}</td><td>{e(_value(c, d))}</td><td>{e(_limit(c, d))}</td>"
+        f"<td><span class={'pass' if c['verdict'] == 'pass' else 'fail'}>"
+        f"{c['verdict'].upper()}</span></td></tr>"
+        for c in t["criteria"]
     )
+    return (
+        f"<p><b>Tolerance:</b> {e(t['source'])}{per}; judged in {e(t['judged_in'])}. "
+        f"Balancing speed {out['rpm']:.0f} rpm.<br><b>Rule:</b> {e(t['rule'])}.</p>"
+        + (  # planes judged alone show in the table of planes below
+            f"<table><tr><th>criterion</th><th>value &plusmn; combined error</th>"
+            f"<th>permissible</th><th>verdict</th></tr>{rows}</table>"
+            if any(c["plane"] is None for c in t["criteria"])
+            else ""
+        )
+        + _keys(out)
+    )
+
+
+def _keys(out: dict[str, Any]) -> str:
+    """The keys' convention and the part's marking (ISO 21940-32)."""
+    keys = out.get("keys") or []
+    if not keys:
+        return ""
+    d, e = Display.of(out), html.escape
+    items = "".join(
+        f"<li>keyway at {k['angle_deg']:g}°, key {d.mass(k['mass_g'])} at radius "
+        f"{d.length(k['radius_mm'])}: balanced with {CONVENTION_WORDS[k['convention']]} "
+        f"({FITTED_WORDS[k['fitted']]} fitted on the stand, the difference counted); "
+        f"<b>mark the part {e(k['marking'])}</b></li>"
+        for k in keys
+    )
+    return f"<p><b>Keys (ISO 21940-32):</b></p><ul>{items}</ul>"
+
+
+def _value(c: dict[str, Any], d: Display) -> str:
+    if "value_g_mm2" in c:
+        return f"{d.number(c['value_g_mm2'])} ± {d.number(c['error_g_mm2'])} g mm²"
+    return f"{d.unbalance(c['value_g_mm'])} ± {d.number(c['error_g_mm'])}"
+
+
+def _limit(c: dict[str, Any], d: Display) -> str:
+    if "permissible_g_mm2" in c:
+        return f"{d.number(c['permissible_g_mm2'])} g mm²"
+    return d.unbalance(c["permissible_g_mm"])
 
 
 def _results(out: dict[str, Any]) -> str:
     d, e = Display.of(out), html.escape
-    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    crit = out.get("tolerance", {}).get("criteria", [])
+    tol = {c["plane"]: c for c in crit if c["plane"] is not None}
     check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}
     u = d.unbalance_unit
     head = (
@@ -123,15 +170,11 @@ def _results(out: dict[str, Any]) -> str:
             else f"<td>{now}</td>"
         )
         angle = f"{plane['angle_deg']:.1f}°"
+        state = tol[i]["verdict"] if i in tol else None
         verdict = (
-            (
-                '<span class="pass">PASS</span>'
-                if tol[i]["pass"]
-                else '<span class="fail">FAIL</span>'
-            )
-            if i in tol
-            else "–"
-        )
+            "–" if state is None
+            else f'<span class="{"pass" if state == "pass" else "fail"}">{state.upper()}</span>'
+        )  # fmt: skip
         per = d.number(tol[i]["permissible_g_mm"]) if i in tol else "–"
         rows.append(f"<tr><td>{i}</td>{cells}<td>{angle}</td><td>{per}</td><td>{verdict}</td></tr>")
     prev = (

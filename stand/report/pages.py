@@ -11,6 +11,7 @@ from typing import Any
 
 from stand.report.certificate import CSS
 from stand.report.plots import production, speed_bars
+from stand.solve.verdict import verdicts_text
 
 
 def _p(p: float) -> str:
@@ -48,7 +49,8 @@ def render_production(out: dict[str, Any]) -> str:
 <p>{out["rotors"]} rotors ({out["runs"]} runs). First-pass yield
 <b>{"–" if fpy is None else f"{100 * fpy:.1f} %"}</b>: {out["passed_first_time"]} within
 tolerance at their first run or first check, {out["failed_first_check"]} failed their
-first check, {out["not_checked_yet"]} not checked yet.</p>
+first check, {out["not_checked_yet"]} not checked yet. Verdicts (ISO 21940-14):
+{e(verdicts_text(out["verdicts"]))}.</p>
 <h2>Initial unbalance (each rotor's first run)</h2>
 <table><tr><th class=l>part</th><th>mean [g mm]</th><th>at</th>
 <th>95 % region of the mean [g mm]</th><th>spread rms [g mm]</th>

@@ -73,13 +73,19 @@ def _rotation(ax: Any, rmax: float) -> None:
     ax.plot([0], [rmax * 1.16], marker="v", color="black", ms=8, clip_on=False)
 
 
+def _plane_limits(out: dict[str, Any]) -> dict[int, dict[str, float]]:
+    """Each correction plane's limit (the tolerance circle), by plane number."""
+    limits = (out.get("tolerance") or {}).get("plane_limits_g_mm") or []
+    return {k + 1: {"permissible_g_mm": v} for k, v in enumerate(limits)}
+
+
 def polar(out: dict[str, Any]) -> str:
     """Each plane: tolerance, unbalance (before and after a check), correction, holes."""
     import matplotlib.pyplot as plt
 
     d = Display.of(out)
     fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9.5, 5.0))
-    tol = {p["plane"]: p for p in out.get("tolerance", {}).get("planes", [])}
+    tol = _plane_limits(out)
     check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}
     ring = np.linspace(0, 2 * math.pi, 200)
     for ax, plane, corr in zip(axes, out["planes"], out["corrections"], strict=True):

@@ -6,7 +6,7 @@ engine solve the rest (:mod:`stand.reprocess.engine`) and writes each task's out
 they come, one transaction per task (an interrupted run keeps what it wrote; the same
 command goes on from there).  Then :func:`summary` compares the revision with the archive:
 per run before and after, per rotor its final verdict before and after, and the recall
-list: the serials that passed and now fail.
+list: the serials that passed and now fail or are undecided.
 """
 
 from __future__ import annotations
@@ -152,7 +152,9 @@ def summary(found: list[Archived], after: dict[int, dict[str, Any]]) -> dict[str
          "after": r["after"]["verdict"] if "after" in r else None}
         for s, r in sorted(last.items())
     ]  # fmt: skip
-    recall = [x["serial"] for x in rotors if x["after"] == "fail" and x["before"] != "fail"]
+    recall = [  # shipped, and not known to pass now (ISO 21940-14's undecided too)
+        x["serial"] for x in rotors if x["before"] == "pass" and x["after"] in ("fail", "undecided")
+    ]
     cleared = [x["serial"] for x in rotors if x["before"] == "fail" and x["after"] == "pass"]
     status = Counter(r["status"] for r in runs)
     changed = sum(

@@ -27,8 +27,8 @@ import numpy as np
 from stand import __version__
 from stand.calib.tolerance import Tolerances, parameter_uncertainty
 from stand.config import config_from_dict, read_toml
-from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_to_rpm, rpm_to_rad_s
-from stand.core.balance import permissible_unbalance, plane_tolerances, static_couple
+from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_to_rpm
+from stand.core.balance import static_couple
 from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
 from stand.core.inverse import RESONANCE_BAND
 from stand.errors import ConfigError
@@ -37,16 +37,17 @@ from stand.measuring.live_fit import remeasure
 from stand.measuring.measure import measure
 from stand.solve.autobalance import balls_note, balls_stand
 from stand.solve.correct import corrections as plane_corrections
+from stand.solve.keys import key_effects, with_keys
 from stand.solve.result import (
     Check,
     LiveInfo,
     Provenance,
     Result,
-    Tolerance,
     Traces,
     Uncertainty,
 )
 from stand.solve.tooling import compensate, folder, load_tooling, tooling_file
+from stand.solve.verdict import combined_error, judged, plane_passes, tolerance_of
 
 SOFTWARE = f"stand {__version__}"
 SPECTRUM_MAX_SAMPLES = 1 << 18
@@ -74,6 +75,8 @@ class SolveOptions:
     compensate : bool
         Subtract the config's ``[tooling]`` unbalance (:mod:`stand.solve.tooling`); off for
         the tooling's own index runs.
+    acceptance : str or None
+        ISO 21940-14's moment, ``after_balancing`` or ``later_check`` (None: the config's).
     """
 
     taper: bool = False
@@ -83,6 +86,7 @@ class SolveOptions:
     traces: bool = False
     matrix: Any = None
     compensate: bool = True
+    acceptance: str | None = None
 
 
 def stored_config(meta: dict[str, Any], path: str) -> tuple[Any, StandParameters, str]:
@@ -125,17 +129,6 @@ class ConfigText:
             raise ConfigError(f"not TOML ({exc})", source=self.source) from exc
         cfg, params = config_from_dict(data, source=self.source)
         return cfg, params, self.text
-
-
-def tolerance_of(cfg: Any, params: StandParameters) -> Tolerance | None:
-    """The ISO 21940-11 tolerance of the config's ``[tolerance]`` table, if any."""
-    t = cfg.tolerance
-    if t is None:
-        return None
-    omega = float(rpm_to_rad_s(t.max_speed_rpm))
-    U_per = permissible_unbalance(params.M3, t.grade_mm_s * 1e-3, omega)
-    per = plane_tolerances(params, U_per)
-    return Tolerance(t.grade_mm_s * 1e-3, omega, U_per, (per[0], per[1]))
 
 
 def precision_targets(
@@ -232,33 +225,9 @@ def traces_of(streams: Any, omega_rad_s: float) -> Traces:
     return Traces(spectra, speeds)
 
 
-def build_result(
-    m: Measurement,
-    cfg: Any,
-    params: StandParameters,
-    *,
-    stream_warnings: Sequence[Any] = (),
-    provenance: Provenance,
-    options: SolveOptions = SolveOptions(),
-    streams: Any = None,
-    check: Check | None = None,
-    live: LiveInfo | None = None,
-) -> Result:
-    """Corrections, static and couple parts, tolerance and spread for a measurement."""
-    c = cfg.correction
-    noise = [abs(U) <= m.radius95_kg_m[i] for i, U in enumerate(m.solution.U_kg_m)]
-    tolerance = tolerance_of(cfg, params)
-    fine = [  # within its permissible share: nothing to do in this plane
-        tolerance is not None and abs(U) <= tolerance.per_plane_kg_m[i]
-        for i, U in enumerate(m.solution.U_kg_m)
-    ]
-    corrections = plane_corrections(
-        m.solution.U_kg_m,
-        m.radius_m,
-        c,
-        skip=[a or b for a, b in zip(noise, fine, strict=True)],
-        permissible_kg_m=None if tolerance is None else tolerance.per_plane_kg_m,
-    )
+def _floor_notes(m: Measurement, noise: Sequence[bool], provenance: Provenance) -> list[Diagnostic]:
+    """Planes inside their own interval (no correction prescribed), and a tooling measured
+    with another configuration."""
     floor = [
         Diagnostic(
             "within_noise",
@@ -279,6 +248,40 @@ def build_result(
                 "the tooling again (stand tooling measure)",
             )
         )
+    return floor
+
+
+def build_result(
+    m: Measurement,
+    cfg: Any,
+    params: StandParameters,
+    *,
+    stream_warnings: Sequence[Any] = (),
+    provenance: Provenance,
+    options: SolveOptions = SolveOptions(),
+    streams: Any = None,
+    check: Check | None = None,
+    live: LiveInfo | None = None,
+) -> Result:
+    """Corrections, static and couple parts, tolerance and spread for a measurement."""
+    c = cfg.correction
+    noise = [abs(U) <= m.radius95_kg_m[i] for i, U in enumerate(m.solution.U_kg_m)]
+    tolerance = tolerance_of(cfg, params, options.acceptance)
+    cal = calibration_radius(m, cfg, params, options)
+    judgements, verdict = (
+        ((), "none")
+        if tolerance is None
+        else judged(tolerance, m.solution.U_kg_m, combined_error(m.radius95_kg_m, cal))
+    )
+    fine = plane_passes(tolerance, judgements, verdict)  # nothing to do in this plane
+    corrections = plane_corrections(
+        m.solution.U_kg_m,
+        m.radius_m,
+        c,
+        skip=[a or b for a, b in zip(noise, fine, strict=True)],
+        permissible_kg_m=None if tolerance is None else tolerance.per_plane_kg_m,
+    )
+    floor = _floor_notes(m, noise, provenance)
     static, couple = static_couple(params, m.solution.U_kg_m)
     return Result(
         measurement=m,
@@ -289,7 +292,9 @@ def build_result(
         tolerance=tolerance,
         warnings=(*stream_warnings, *m.warnings, *floor),
         within_noise=(bool(noise[0]), bool(noise[1])),
-        within_tolerance=(bool(fine[0]), bool(fine[1])),
+        within_tolerance=fine,
+        judgements=judgements,
+        verdict=verdict,
         provenance=provenance,
         uncertainty=_uncertainty(m, params, options) if options.tolerances is not None else None,
         check=check,
@@ -299,7 +304,8 @@ def build_result(
         positions=(c.positions, c.position0_deg),
         stand_name=cfg.stand.name,
         calibrated=cfg.stand.calibrated,
-        calibration_radius_kg_m=calibration_radius(m, cfg, params, options),
+        calibration_radius_kg_m=cal,
+        keys=key_effects(cfg.rotor.keys, params),
     )
 
 
@@ -350,6 +356,8 @@ def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) ->
                 "subtracted from this answer (measure it: stand tooling measure RUN_0 RUN_180)",
             )
             m = replace(m, warnings=[*m.warnings, note])
+    if options.compensate:  # the tooling's own index runs measure the tooling, not the part
+        m = with_keys(m, key_effects(cfg.rotor.keys, params))
     return m
 
 

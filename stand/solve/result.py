@@ -20,10 +20,12 @@ import numpy as np
 
 from stand.core import Diagnostic
 from stand.core.balance import Correction
+from stand.core.tolerance import Criterion
 from stand.errors import ModelError
 from stand.measuring import Measurement
+from stand.solve.keys import KeyEffect
 
-RESULT_VERSION = 1
+RESULT_VERSION = 2
 """Version of the JSON form; bumped when a key changes meaning."""
 
 
@@ -111,12 +113,53 @@ class Provenance:
 
 @dataclass(frozen=True)
 class Tolerance:
-    """ISO 21940-11 tolerance: ``U_per`` and its share per correction plane [kg m]."""
+    """What a rotor may carry, in the form its customer wrote (:mod:`stand.config.tolerance`).
 
-    grade_m_s: float
-    max_speed_rad_s: float
-    U_per_kg_m: float
+    Attributes
+    ----------
+    form : str
+        ``grade`` (ISO 21940-11), ``per_plane`` (a drawing), ``static_couple`` (ISO
+        21940-11's separate limits) or ``api`` (API 610/617/687).
+    source : str
+        Where the limit comes from, as the certificate says it.
+    judged_in : str
+        The planes or quantities judged, in words.
+    moment : str
+        ISO 21940-14's moment: ``after_balancing`` or ``later_check``.
+    criteria : tuple of stand.core.tolerance.Criterion
+        What is judged, each against its limit [kg m; kg m^2 for a moment].
+    per_plane_kg_m : tuple of float
+        Correction-plane limits: the form's own, or, for the others, limits that keep every
+        criterion at any phase (the live panel's goal and the correction's skip).
+    grade_m_s, max_speed_rad_s, U_per_kg_m : float or None
+        The grade form's G [m/s], the maximum speed [rad/s] (grade, API), ``U_per`` [kg m].
+    bearing_planes_m : tuple of float or None
+        The bearing planes judged in [m from support 1], where not the supports.
+    """
+
+    form: str
+    source: str
+    judged_in: str
+    moment: str
+    criteria: tuple[Criterion, ...]
     per_plane_kg_m: tuple[float, float]
+    grade_m_s: float | None = None
+    max_speed_rad_s: float | None = None
+    U_per_kg_m: float | None = None
+    bearing_planes_m: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """One criterion judged by ISO 21940-14: its value, combined error and limit [kg m;
+    kg m^2 for a moment] and the state (``pass``, ``fail``, ``undecided``)."""
+
+    name: str
+    plane: int | None
+    value: float
+    error: float
+    limit: float
+    state: str
 
 
 @dataclass(frozen=True)
@@ -188,7 +231,14 @@ class Result:
     within_noise: tuple[bool, bool] = (False, False)
     """Per plane: the unbalance is inside its own 95 % interval (no correction prescribed)."""
     within_tolerance: tuple[bool, bool] = (False, False)
-    """Per plane: the unbalance is within its permissible share (no correction needed)."""
+    """Per plane: no correction needed, the verdict passes this plane (or, for forms not
+    judged plane by plane, the whole rotor)."""
+    judgements: tuple[Judgement, ...] = ()
+    """Each criterion of the tolerance, judged (:mod:`stand.solve.verdict`)."""
+    keys: tuple[KeyEffect, ...] = ()
+    """The rotor's keys and what their convention counts (:mod:`stand.solve.keys`)."""
+    verdict: str = "none"
+    """The one verdict: ``pass``, ``fail``, ``undecided`` or ``none`` (no tolerance)."""
     traces: Traces | None = field(default=None, compare=False)
     display: tuple[str, str] = ("g", "mm")
     """The units the operator sees: mass (g or oz) and length (mm or in)."""

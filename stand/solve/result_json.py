@@ -16,7 +16,9 @@ from stand.core import phasor_to_polar, rad_s_to_rpm, unbalance_to_polar
 from stand.core.balance import Correction
 from stand.core.dsp import radius95
 from stand.measuring import Measurement
+from stand.solve.keys import KeyEffect
 from stand.solve.result import RESULT_VERSION, Check, Result
+from stand.solve.verdict import RULES
 
 
 def _g_mm(kg_m: float) -> float:
@@ -115,7 +117,6 @@ def _corrections(r: Result) -> list[dict[str, Any]]:
             for w in corr.weights
         ]
         left = abs(corr.residual_kg_m)
-        per = None if r.tolerance is None else r.tolerance.per_plane_kg_m[i]
         out.append(
             {
                 "plane": i + 1,
@@ -123,12 +124,20 @@ def _corrections(r: Result) -> list[dict[str, Any]]:
                 "needed": not (r.within_noise[i] or r.within_tolerance[i]),
                 "weights": weights,
                 "residual_g_mm": _g_mm(left),
-                "residual_within_tolerance": None if per is None else bool(left <= per),
+                "residual_within_tolerance": _leftover_fits(r, i),
                 "within_noise": r.within_noise[i],
                 "within_tolerance": r.within_tolerance[i],
             }
         )
     return out
+
+
+def _leftover_fits(r: Result, i: int) -> bool | None:
+    """Whether what the correction leaves (rounding to holes and steps) is within the
+    correction plane's limit (None without a tolerance)."""
+    if r.tolerance is None:
+        return None
+    return bool(abs(r.corrections[i].residual_kg_m) <= r.tolerance.per_plane_kg_m[i])
 
 
 def _limited_by(r: Result, i: int) -> str:
@@ -140,31 +149,46 @@ def _limited_by(r: Result, i: int) -> str:
     return "calibration"
 
 
+def _judged(r: Result) -> list[dict[str, Any]]:
+    out = []
+    for j in r.judgements:
+        scale = 1e9 if j.name == "moment" else 1e6  # g mm^2 for the moment, else g mm
+        unit = "g_mm2" if j.name == "moment" else "g_mm"
+        item: dict[str, Any] = {"name": j.name, "plane": j.plane}
+        item[f"value_{unit}"] = round(j.value * scale, 3)
+        item[f"error_{unit}"] = round(j.error * scale, 3)
+        item[f"permissible_{unit}"] = round(j.limit * scale, 3)
+        item[f"margin_{unit}"] = round((j.limit - j.value) * scale, 3)
+        item["verdict"] = j.state
+        if j.plane is not None:
+            item["limited_by"] = _limited_by(r, j.plane - 1)
+        out.append(item)
+    return out
+
+
 def _tolerance(r: Result) -> dict[str, Any]:
+    """The tolerance, its criteria judged, and the one verdict with its rule."""
     t = r.tolerance
     assert t is not None
-    planes = []
-    for i in range(2):
-        u, rad = abs(r.U_kg_m[i]), float(r.measurement.radius95_kg_m[i])
-        per = t.per_plane_kg_m[i]
-        planes.append(
-            {
-                "plane": i + 1,
-                "permissible_g_mm": _g_mm(per),
-                "residual_g_mm": _g_mm(u),
-                "pass": bool(u <= per),
-                "margin_g_mm": _g_mm(per - u),
-                "pass_with_uncertainty": bool(u + rad <= per),
-                "limited_by": _limited_by(r, i),
-            }
-        )
-    return {
-        "standard": "ISO 21940-11",
-        "grade_mm_s": round(t.grade_m_s * 1e3, 6),
-        "max_speed_rpm": round(float(rad_s_to_rpm(t.max_speed_rad_s)), 6),
-        "permissible_g_mm": _g_mm(t.U_per_kg_m),
-        "planes": planes,
+    out: dict[str, Any] = {
+        "form": t.form,
+        "source": t.source,
+        "judged_in": t.judged_in,
+        "acceptance": t.moment,
+        "rule": RULES[t.moment],
+        "verdict": r.verdict,
+        "criteria": _judged(r),
+        "plane_limits_g_mm": [_g_mm(u) for u in t.per_plane_kg_m],
     }
+    if t.grade_m_s is not None:
+        out["grade_mm_s"] = round(t.grade_m_s * 1e3, 6)
+    if t.max_speed_rad_s is not None:
+        out["max_speed_rpm"] = round(float(rad_s_to_rpm(t.max_speed_rad_s)), 6)
+    if t.U_per_kg_m is not None:
+        out["permissible_g_mm"] = _g_mm(t.U_per_kg_m)
+    if t.bearing_planes_m is not None:
+        out["bearing_planes_m"] = list(t.bearing_planes_m)
+    return out
 
 
 def _uncertainty(r: Result) -> dict[str, Any]:
@@ -211,6 +235,19 @@ def _tooling(t: Any) -> dict[str, Any]:
         "config_sha256": t.config_sha256,
         "file": t.path,
         "subtracted": planes,
+    }
+
+
+def _key(k: KeyEffect) -> dict[str, Any]:
+    return {
+        "convention": k.convention,
+        "fitted": k.fitted,
+        "marking": k.marking,
+        "mass_g": round(k.mass_kg * 1e3, 4),
+        "radius_mm": round(k.radius_m * 1e3, 3),
+        "angle_deg": round(k.angle_deg, 3),
+        "position_mm": round(k.position_m * 1e3, 3),
+        "counted": [{**_polar(U), "plane": i + 1} for i, U in enumerate(k.counted_kg_m)],
     }
 
 
@@ -264,6 +301,7 @@ def to_json(r: Result) -> dict[str, Any]:
             "id": r.provenance.stand_id or None,
         },
     }
+    out["verdict"] = r.verdict
     if r.tolerance is not None:
         out["tolerance"] = _tolerance(r)
     if r.uncertainty is not None:
@@ -272,6 +310,8 @@ def to_json(r: Result) -> dict[str, Any]:
         out["check"] = _check(r.check)
     if m.tooling is not None:
         out["tooling"] = _tooling(m.tooling)
+    if r.keys:
+        out["keys"] = [_key(k) for k in r.keys]
     if r.live is not None:
         out["stopped_by"] = r.live.stopped_by
         out["elapsed_s"] = round(r.live.elapsed_s, 3)

@@ -280,14 +280,22 @@ def check_screen(station: Station) -> None:
         return
     out = to_json(s.result)
     verdict = check_verdict(out)
-    word = {"pass": "WITHIN TOLERANCE", "fail": "NOT WITHIN TOLERANCE"}.get(
+    word = {"pass": "WITHIN TOLERANCE", "fail": "NOT WITHIN TOLERANCE",
+            "undecided": "UNDECIDED: MEASURE LONGER"}.get(
         str(verdict), "CHECKED (no tolerance set)"
-    )
+    )  # fmt: skip
     ui.label(f"{s.job.serial or 'rotor'}: {word}").classes(
-        "huge " + ("fail" if verdict == "fail" else "pass")
+        "huge " + ("fail" if verdict in ("fail", "undecided") else "pass")
     ).mark("verdict")
     if verdict == "fail":
         ui.label("Correct again (Correct shows what is left), then check again.").classes("text-h5")
+    elif verdict == "undecided":
+        ui.label(
+            "The residual's interval straddles the limit: check again with a longer run."
+        ).classes("text-h5")
+    if out.get("tolerance"):
+        t = out["tolerance"]
+        ui.label(f"Tolerance: {t['source']}; judged in {t['judged_in']}. Rule: {t['rule']}.")
     names = {
         "plane": "plane",
         "before": "before",

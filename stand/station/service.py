@@ -33,8 +33,9 @@ from stand.plant import publish_archived
 from stand.report import render
 from stand.sim import Mass, shipped_scenes
 from stand.solve import Job, with_check
-from stand.solve.pipeline import SolveOptions, load_config_text, tolerance_of
+from stand.solve.pipeline import SolveOptions, load_config_text
 from stand.solve.recordings import correction_masses
+from stand.solve.verdict import tolerance_of
 from stand.station.archive_side import ArchiveSide
 from stand.station.snapshot import BUS, Snapshot
 

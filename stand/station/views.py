@@ -213,7 +213,8 @@ def instructions(out: dict[str, Any]) -> list[Instruction]:
 def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
     """Per plane: before, after, URR [%] and the verdict of a check run's JSON form."""
     u = Display.of(out)
-    tol = {p["plane"]: p for p in (out.get("tolerance") or {}).get("planes", [])}
+    crit = (out.get("tolerance") or {}).get("criteria", [])
+    tol = {c["plane"]: c for c in crit if c["plane"] is not None}
     rows = []
     for p in (out.get("check") or {}).get("planes", []):
         t = tol.get(p["plane"])
@@ -223,15 +224,12 @@ def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
             "after": u.unbalance(p["after_g_mm"]),
             "urr": f"{100 * p['urr']:.1f} %" if p.get("urr") is not None else "-",
             "permissible": "-" if t is None else u.unbalance(t["permissible_g_mm"]),
-            "verdict": "-" if t is None else ("PASS" if t["pass"] else "FAIL"),
+            "verdict": "-" if t is None else t["verdict"].upper(),
         })  # fmt: skip
     return rows
 
 
 def check_verdict(out: dict[str, Any]) -> str | None:
-    """``pass`` when every plane's residual is within its tolerance, ``fail`` when one is
-    not, None without a tolerance."""
-    planes = (out.get("tolerance") or {}).get("planes") or []
-    if not planes:
-        return None
-    return "pass" if all(p["pass"] for p in planes) else "fail"
+    """The run's one verdict (``pass``, ``fail``, ``undecided``), None without a tolerance."""
+    v = out.get("verdict", "none")
+    return None if v == "none" else str(v)

@@ -159,7 +159,7 @@ def test_a_batch_solves_in_parallel_and_writes_its_summary(
     assert [r["run"] for r in rows] == [*runs, str(tmp_path / "bad.log")]
     for r in rows[:3]:
         assert float(r["plane1_g_mm"]) == pytest.approx(5000, abs=15) and r["error"] == ""
-        assert r["plane1_pass"] == "False"
+        assert r["plane1_verdict"] == "fail" and r["verdict"] == "fail"
     assert "not a candump frame line" in rows[3]["error"]
     err = capsys.readouterr().err
     assert "1 of 4 runs could not be solved" in err

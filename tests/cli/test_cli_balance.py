@@ -36,9 +36,9 @@ def test_balance_demo_gives_the_correction_and_the_verdict(
     assert t["permissible_g_mm"] == pytest.approx(
         1000 * 6.3 * 60 / (1500 * 3.14159265 / 30), rel=1e-6
     )
-    assert [p["pass"] for p in t["planes"]] == [False, False]
+    assert [c["verdict"] == "pass" for c in t["criteria"]] == [False, False]
     # precision target: 10 % of each plane's tolerance
-    want = [0.1 * p["permissible_g_mm"] for p in t["planes"]]
+    want = [0.1 * p for p in t["plane_limits_g_mm"]]
     assert out["targets_g_mm"] == pytest.approx(want, abs=1e-3)  # both rounded to 1e-3
     assert out["stopped_by"] == "precision"
 
@@ -74,7 +74,7 @@ def test_check_after_a_correction_gives_the_reduction_ratio(
     assert p1["after_g_mm"] == pytest.approx(200, abs=15)
     assert p1["urr"] == pytest.approx(1 - 200 / 5000, abs=0.004)
     assert p2["urr"] == pytest.approx(1 - 150 / 3000, abs=0.005)
-    assert [p["pass"] for p in out["tolerance"]["planes"]] == [True, True]
+    assert [c["verdict"] == "pass" for c in out["tolerance"]["criteria"]] == [True, True]
 
 
 @pytest.mark.realtime

@@ -12,13 +12,8 @@ from hypothesis import strategies as st
 from strategies import DEMO, stands
 
 from stand.core import StandParameters
-from stand.core.balance import (
-    bearing_shares,
-    correction,
-    permissible_unbalance,
-    plane_tolerances,
-    static_couple,
-)
+from stand.core.balance import correction, static_couple
+from stand.core.tolerance import bearing_shares, permissible_unbalance, plane_tolerances
 
 
 def test_permissible_unbalance_is_iso_s_formula() -> None:

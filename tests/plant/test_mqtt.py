@@ -141,7 +141,7 @@ def test_a_payload_that_breaks_the_schema_is_caught() -> None:
     """The validation can fail: a payload without its run id, or with a relative path."""
     import jsonschema
 
-    good = {"schema": "urn:rotor-stand:mqtt-result:1", "run_id": 3, "result_id": "3",
+    good = {"schema": "urn:rotor-stand:mqtt-result:2", "run_id": 3, "result_id": "3",
             "stand": "s", "verdict": "pass", "run_file": "/r.h5", "file_sha256": "0" * 64,
             "result": {"rpm": 900.0, "planes": [], "supports": [], "warnings": [],
                        "job": {"serial": None, "order": None, "operator": None,

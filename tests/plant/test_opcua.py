@@ -166,7 +166,8 @@ async def _calls(ns: dict[str, int], rm: Any, run_id: str, event: Any, url: str)
     content = variant.Value  # BaseDataType: a Variant holding the stand's structure
     (row,) = [r for r in history(url, Filters()) if str(r["id"]) == run_id]
     assert content.Verdict == row["verdict"] and content.RunFileSha256 == row["file_sha256"]
-    assert int(meta.ResultEvaluation) == {"pass": 1, "fail": 2, "none": 0}[row["verdict"]]
+    codes = {"pass": 1, "fail": 2, "undecided": 3, "none": 0}  # ResultEvaluationEnum
+    assert int(meta.ResultEvaluation) == codes[row["verdict"]]
     for got, want in zip(content.Planes, row["planes"], strict=True):
         assert got.ResidualUnbalance_g_mm == pytest.approx(want["unbalance_g_mm"], abs=1e-9)
         assert got.ResidualAngle_deg == pytest.approx(want["angle_deg"], abs=1e-9)

@@ -83,8 +83,9 @@ def test_the_certificate_carries_job_basis_before_after_calibration_and_signatur
     assert main(["report", str(after), "--check", str(before), "-o", str(out)]) == 0
     html = out.read_text()
     expected = ("auger-A", "A-9", "O-3", "kim", "stand 2", "calibrated on 2026-11-02",
-                "Tolerance basis:", "G 6.3", "before [g mm]", "URR", "balanced by kim",
-                "inspected by", "IN TOLERANCE", "no correction needed")  # fmt: skip
+                "Tolerance:", "G 6.3", "Rule:", "ISO 21940-14", "before [g mm]", "URR",
+                "balanced by kim", "inspected by", "IN TOLERANCE",
+                "no correction needed")  # fmt: skip
     for text in expected:
         assert text in html, text
     urr = [float(x) for x in re.findall(r"<td>(\d+\.\d) %</td>", html)]

@@ -89,12 +89,12 @@ def test_verdicts_equal_solving_each_file_alone(
     last: dict[str, tuple[str, str]] = {}
     for r in out["runs"]:
         alone = run_json(["solve", r["run_file"], "--config", str(new)], capsys)
-        verdict = "pass" if all(p["pass"] for p in alone["tolerance"]["planes"]) else "fail"
+        verdict = alone["verdict"]
         assert r["after"]["verdict"] == verdict, r
         for mine, theirs in zip(r["after"]["planes"], alone["planes"], strict=True):
             assert mine["unbalance_g_mm"] == pytest.approx(theirs["unbalance_g_mm"], abs=1e-3)
         last[r["serial"]] = (r["before"]["verdict"], verdict)
-    recall = sorted(s for s, (b, a) in last.items() if b == "pass" and a == "fail")
+    recall = sorted(s for s, (b, a) in last.items() if b == "pass" and a in ("fail", "undecided"))
     assert out["recall"] == recall and len(recall) >= 1, out["counts"]
     assert out["counts"]["verdicts_changed"] >= len(recall)
 

@@ -364,9 +364,9 @@ def test_what_the_screens_say() -> None:
                           "removes 30.47 g"),)  # fmt: skip
     assert one.marks == ((20.0, "1"),) and not two.needed
     assert check_verdict({}) is None
-    planes = [{"pass": True}, {"pass": False}]
-    assert check_verdict({"tolerance": {"planes": planes}}) == "fail"
-    assert check_verdict({"tolerance": {"planes": planes[:1]}}) == "pass"
+    for state in ("pass", "fail", "undecided"):
+        assert check_verdict({"verdict": state}) == state
+    assert check_verdict({"verdict": "none"}) is None
 
 
 def test_the_rotor_face_numbers_the_holes_and_marks_the_masses() -> None:

@@ -1,0 +1,141 @@
+"""The tolerance of a config and the one verdict of a run (ISO 21940-11, -14; API).
+
+:func:`tolerance_of` turns ``[tolerance]`` into a :class:`Tolerance` (its criteria and
+their limits); :func:`judged` judges a run's unbalances with their combined error
+(:func:`combined_error`) by ISO 21940-14.  Every output (the operator's text, the
+station, the certificate, the archive, ``stats``, Q-DAS, OPC UA, MQTT) shows the verdict
+this module gives and nothing else.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from stand.config import Config
+from stand.core import StandParameters, rpm_to_rad_s
+from stand.core.tolerance import (
+    api_permissible,
+    bearing_criteria,
+    carried_limits,
+    judge,
+    lever_shares,
+    overall,
+    permissible_unbalance,
+    plane_criteria,
+    plane_tolerances,
+    static_couple_criteria,
+    static_couple_limits,
+)
+from stand.solve.result import Judgement, Tolerance
+
+RULES = {
+    "after_balancing": "ISO 21940-14, directly after balancing: pass if U + dU <= limit, "
+    "fail if U - dU > limit, else undecided (dU: combined error)",
+    "later_check": "ISO 21940-14, later check by the user: pass if U <= limit + dU "
+    "(dU: combined error)",
+}
+"""The rule of each moment, as the outputs quote it."""
+
+
+def _planes_x(p: StandParameters) -> tuple[float, float]:
+    return p.a, p.a + p.b + p.c
+
+
+def tolerance_of(
+    cfg: Config, params: StandParameters, moment: str | None = None
+) -> Tolerance | None:
+    """The tolerance of ``[tolerance]`` (None without one); ``moment`` overrides the
+    table's ``acceptance``."""
+    t = cfg.tolerance
+    if t is None:
+        return None
+    moment = moment or t.acceptance
+    x = _planes_x(params)
+    x_cm = params.a + params.b
+    z = (0.0, params.L) if t.bearing_planes_m is None else tuple(t.bearing_planes_m)
+    where = "the supports" if t.bearing_planes_m is None else f"{z[0]:g} m and {z[1]:g} m"
+    if t.form == "per_plane":
+        per = tuple(u * 1e-6 for u in t.per_plane_g_mm or ())
+        src = t.source or "drawing"
+        return Tolerance("per_plane", src, "correction planes", moment, plane_criteria(per),
+                         (per[0], per[1]))  # fmt: skip
+    if t.form == "static_couple":
+        S, P = (t.static_g_mm or 0) * 1e-6, (t.couple_g_mm2 or 0) * 1e-9
+        src = t.source or "ISO 21940-11, resultant and moment limits"
+        return Tolerance("static_couple", src, "resultant and moment about the centre of mass",
+                         moment, static_couple_criteria(x, x_cm, S, P),
+                         static_couple_limits(x, x_cm, S, P))  # fmt: skip
+    omega = float(rpm_to_rad_s(t.max_speed_rpm or 1.0))  # grade and API forms give it
+    if t.form == "api":
+        W = t.api_journal_kg or ()
+        limits = tuple(api_permissible(w, float(t.max_speed_rpm or 1)) for w in W)
+        U_per, G = sum(limits), None
+        src = t.source or (
+            f"API 610/617/687: 6350 W / N at {t.max_speed_rpm:g} rpm, journals "
+            + " and ".join(f"{w:g} kg" for w in W)
+        )
+    else:
+        G = (t.grade_mm_s or 0) * 1e-3
+        U_per = permissible_unbalance(params.M3, G, omega)
+        s = lever_shares(x_cm, z)
+        limits = (s[0] * U_per, s[1] * U_per)
+        src = t.source or f"ISO 21940-11, G {t.grade_mm_s:g} at {t.max_speed_rpm:g} rpm"
+    if t.bearing_planes_m is None and t.form == "grade":  # today's: the supports, worst phase
+        per = plane_tolerances(params, U_per)
+        crit = plane_criteria(per)
+        judged_in = "correction planes (bearing-plane shares at the supports, any phase)"
+    else:
+        per = carried_limits(x, z, limits)
+        crit = bearing_criteria(x, z, limits)
+        judged_in = f"bearing planes at {where}"
+    bearing = None if t.bearing_planes_m is None else (z[0], z[1])
+    return Tolerance(t.form, src, judged_in, moment, crit, per, G, omega, U_per, bearing)
+
+
+def combined_error(
+    radius95_kg_m: ArrayLike, calibration_kg_m: Sequence[float] | None
+) -> tuple[float, float]:
+    """Each plane's combined error [kg m]: the measurement's 95 % radius and the
+    calibration's own 95 % interval, root-sum-square (independent sources)."""
+    cal = calibration_kg_m or (0.0, 0.0)
+    r = np.asarray(radius95_kg_m, dtype=float)
+    return math.hypot(float(r[0]), float(cal[0])), math.hypot(float(r[1]), float(cal[1]))
+
+
+def judged(
+    tol: Tolerance, U_kg_m: ArrayLike, errors_kg_m: Sequence[float]
+) -> tuple[tuple[Judgement, ...], str]:
+    """Each criterion judged by ISO 21940-14 at the tolerance's moment, and the rotor's
+    verdict."""
+    U = np.asarray(U_kg_m, dtype=complex)
+    out = []
+    for c in tol.criteria:
+        v, e = c.value(U), c.error(errors_kg_m)
+        out.append(Judgement(c.name, c.plane, v, e, c.limit, judge(v, e, c.limit, tol.moment)))  # type: ignore[arg-type]
+    return tuple(out), overall([j.state for j in out])
+
+
+def plane_passes(
+    tol: Tolerance | None, judgements: Sequence[Judgement], verdict: str
+) -> tuple[bool, bool]:
+    """Per correction plane: nothing to correct there.  A plane judged alone passes by its
+    own judgement; under a form judged otherwise, both pass only when the rotor does."""
+    if tol is None:
+        return False, False
+    own = {j.plane: j.state == "pass" for j in judgements if j.plane is not None}
+    if own:
+        return own.get(1, False), own.get(2, False)
+    return verdict == "pass", verdict == "pass"
+
+
+def verdicts_text(v: dict[str, dict[str, int]]) -> str:
+    """Rotors per verdict state at their first and at their last run, in one line."""
+
+    def part(counts: dict[str, int]) -> str:
+        return ", ".join(f"{n} {k}" for k, n in counts.items() if n) or "none"
+
+    return f"first run {part(v['first_run'])}; last run {part(v['last_run'])}"
