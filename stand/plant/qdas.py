@@ -29,7 +29,7 @@ from typing import Any
 
 from stand.errors import UsageError
 from stand.files import output
-from stand.plant.qdas_parts import Measured, Part, per_rotor, per_run, read
+from stand.plant.qdas_parts import Measured, Part, basis, per_rotor, per_run, read
 
 VALUE_SEP, FIELD_SEP = "\x0f", "\x14"
 """Between the value sets of one line, and between the fields of one value set."""
@@ -46,8 +46,9 @@ AMOUNT_DECIMALS, ANGLE_DECIMALS = 2, 1
 KFIELDS: dict[str, str] = {
     "K0100": "number of characteristics in the file",
     "K1001": "part number: the rotor type",
-    "K1002": "part description",
-    "K1900": "remark: the time zone of K0004, what initial and residual hold",
+    "K1002": "part description (and the key convention, ISO 21940-32)",
+    "K1900": "remark: the time zone of K0004, what initial and residual hold, the tolerance "
+    "and the verdict's rule",
     "K2001": "characteristic number",
     "K2002": "characteristic description",
     "K2004": "characteristic type (0: variable)",
@@ -146,12 +147,15 @@ def _offsets(parts: list[Part], zone: Zone) -> list[str]:
     return [f"UTC{o[:3]}:{o[3:]}" for o in sorted(seen)]
 
 
-def description(rotor_type: str, chars: list[Characteristic], remark: str) -> list[str]:
-    """The description part's lines."""
+def description(
+    rotor_type: str, chars: list[Characteristic], remark: str, keyed: str = ""
+) -> list[str]:
+    """The description part's lines (``keyed``: the key convention and marking, if any)."""
+    what = keyed or "unbalance per correction plane"
     lines = [
         f"K0100 {len(chars)}",
         f"K1001/1 {_text(rotor_type)}",
-        f"K1002/1 rotor type {_text(rotor_type)}: unbalance per correction plane",
+        f"K1002/1 rotor type {_text(rotor_type)}: {_text(what)}"[:80],
         f"K1900/1 {_text(remark)[:255]}",
     ]
     for k, c in enumerate(chars, 1):
@@ -224,14 +228,18 @@ def _one_ident_per_serial(parts: list[Part]) -> None:
             )
 
 
-def dfq_text(rotor_type: str, parts: list[Part], per_g_mm: list[Any], zone: Zone) -> str:
-    """The whole ``.dfq`` file (CR LF line ends, as the Windows tools write it)."""
+def dfq_text(
+    rotor_type: str, parts: list[Part], per_g_mm: list[Any], zone: Zone,
+    judged: tuple[str, str] = ("", ""),
+) -> str:  # fmt: skip
+    """The whole ``.dfq`` file (CR LF line ends, as the Windows tools write it); ``judged``:
+    the tolerance and rule, and the key convention (:func:`stand.plant.qdas_parts.basis`)."""
     remark = (
-        f"K0004 is local time, {zone.name} ({', '.join(_offsets(parts, zone)) or 'no dates'}). "
-        "Initial: a rotor's first run; residual: its last check, or its first run if that "
-        "passed; K0002 255: no value yet."
-    )
-    lines = description(rotor_type, characteristics(per_g_mm), remark)
+        f"K0004: local time, {zone.name} ({', '.join(_offsets(parts, zone)) or 'no dates'}). "
+        "Initial: first run; residual: last check, or the first run if it passed; K0002 "
+        f"255: no value yet. {judged[0]}"
+    ).strip()
+    lines = description(rotor_type, characteristics(per_g_mm), remark, judged[1])
     for part in parts:
         lines += value_line(part, zone)
     return "\r\n".join(lines) + "\r\n"
@@ -259,7 +267,8 @@ def export_qdas(
         )
     _one_ident_per_serial(parts)
     per_g_mm = [None if v is None else v * 1e6 for v in per]
-    data = dfq_text(rotor_type, parts, per_g_mm, zone).encode("cp1252", errors="replace")
+    judged = basis(url, rows)
+    data = dfq_text(rotor_type, parts, per_g_mm, zone, judged).encode("cp1252", errors="replace")
     if path is not None:
         with output(path, force=force, need_bytes=len(data)) as tmp:
             tmp.write_bytes(data)

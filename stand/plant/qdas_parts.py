@@ -16,7 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from stand.archive.query import Filters, plane_rows, runs_by_id, select_runs
+from stand.archive.query import Filters, latest, plane_rows, runs_by_id, select_runs
 from stand.archive.store import Archive
 
 
@@ -73,6 +73,24 @@ def read(url: str, rotor_type: str, filters: Any) -> tuple[list[Any], dict[int, 
                 per[p.plane - 1] = p.permissible_kg_m
     measured = {r.id: _measured(r, planes[r.id]) for r in every if len(planes[r.id]) == 2}
     return [r for r in rows if r.id in measured], measured, per
+
+
+def basis(url: str, rows: list[Any]) -> tuple[str, str]:
+    """What the rotor type is judged by and how it is keyed, from its newest run's result:
+    (the tolerance and rule, for the remark; the key convention and marking, for the part
+    description), each "" where the run does not say."""
+    if not rows:
+        return "", ""
+    with Archive(url) as archive:
+        run = latest(archive, run_id=rows[-1].id)
+    out = {} if run is None else run["result"]
+    t = out.get("tolerance") or {}
+    rule = ""
+    if t.get("source") and t.get("acceptance"):
+        rule = f"Tolerance: {t['source']}; verdict by ISO 21940-14, {t['acceptance']}."
+    keys = out.get("keys") or []
+    marks = sorted({f"{k.get('convention')}-key, marked {k.get('marking')}" for k in keys})
+    return rule, ("; ".join(marks) + " (ISO 21940-32)") if marks else ""
 
 
 def _rotor_key(r: Any, by_id: dict[int, Any]) -> str:

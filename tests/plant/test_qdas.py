@@ -135,6 +135,8 @@ def test_one_value_line_per_rotor_initial_first_residual_last_check(
     head = dfq["head"]
     assert head["K0100"][0] == "8" and head["K1001"][1] == "auger"
     assert "Europe/Berlin (UTC+01:00, UTC+02:00)" in head["K1900"][1]
+    rule = "Tolerance: ISO 21940-11, G 6.3 at 1500 rpm; verdict by ISO 21940-14, after_balancing."
+    assert head["K1900"][1].endswith(rule) and len(head["K1900"][1]) <= 255  # not cut
     names = [head["K2002"][k] for k in range(1, 9)]
     kinds = ("initial unbalance", "initial unbalance angle", "residual unbalance",
              "residual unbalance angle")  # fmt: skip

@@ -149,3 +149,19 @@ def test_a_half_key_balanced_shaft_is_balanced_in_its_assembly(
     if assembled == "fail":
         worst = max(c["value_g_mm"] for c in assembly["tolerance"]["criteria"])
         assert worst > 0.5 * HALF_KEY_G_MM
+
+
+def test_the_qdas_part_states_the_key_convention(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The Q-DAS part description of a keyed rotor type says its convention and marking."""
+    cfg = config(tmp_path, "keyed", None, KEY.format(convention="half"))
+    run = simulate(tmp_path / "r.h5", "--config", str(cfg))
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    assert main(["archive", "import", str(run), "--archive", url]) == 0
+    out = tmp_path / "k.dfq"
+    argv = ["export", "qdas", "--rotor-type", "demo-auger", "--archive", url, "-o", str(out)]
+    assert main(argv) == 0
+    lines = out.read_bytes().decode("cp1252").split("\r\n")
+    (k1002,) = [x for x in lines if x.startswith("K1002/1 ")]
+    assert k1002 == "K1002/1 rotor type demo-auger: half-key, marked H (ISO 21940-32)"
