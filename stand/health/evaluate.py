@@ -1,123 +1,175 @@
-"""The machine's own evaluation (ISO 21940-21), on the simulated stand.
+"""The balancing machine's evaluation (ISO 21940-21): the U_mar test, the URR test and the
+cross-effect, from a proving rotor's runs (recorded on the stand, or simulated on a
+scene: :mod:`stand.health.proving`).
 
-Two tests of the balancing machine (here: stand + this software), run on a
-scene instead of a proving rotor:
+The procedure (as Bloch & Geitner reproduce ISO 21940-21; ``docs/health.md``):
 
-* **Unbalance reduction ratio (URR).**  Measure the scene's unbalance,
-  correct exactly what was measured (the scene's unbalance minus the
-  reading), measure again.  ``URR = (U_before - U_after) / U_before`` per
-  plane, from the readings (as ISO 21940-21 takes it) and from the truth.
-  Commercial machines promise 90 .. 95 %.
-* **Minimum achievable residual unbalance (U_mar).**  On the corrected
-  rotor, a test unbalance of 10 U_mar is indexed through 12 positions 30 deg
-  apart, in each plane in turn; every reading of its amount must lie within
-  +-12 % of their mean.  The claimed U_mar is five times the 95 % radius of
-  one measurement, or the residual the correction left if that is larger,
-  rounded up to a 1-2-5 step.
+* the proving rotor is balanced first (the reference run reads what is left);
+* **U_mar**: test masses of 10 U_mar in *both* test planes at once, at 12 positions 30 deg
+  apart, both planes read at each; every amount reading within +-12 % of the mean of the
+  12.  The claim is ``e_mar = 2 U_mar / m`` (per test plane for half the rotor's mass);
+* **URR**: each run's one indication against its known applied test unbalance,
+  ``1 - |indication - applied| / |applied|`` per loaded plane, every one at or above the
+  URR claimed;
+* **cross-effect**: in a run loaded in one plane only, what the other plane's reading
+  changed from the reference, in % of what its own changed.
 
-Every run goes through the pipeline (:func:`stand.solve.pipeline.measure_streams`, the same
-path as ``stand solve`` and ``stand balance``).
+A run whose declared test unbalance contradicts what it read (the change from the
+reference further from the declared than half of it plus the 95 % radius) is named and
+left out; a test short of its runs is *not judged*, never judged on fewer.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
-from stand.measuring import Measurement
-from stand.sim import Scene, simulate
-from stand.sim.tables import PlaneUnbalance, UnbalanceTable
-from stand.solve import SolveOptions, measure_streams
-from stand.solve.acquisition import acquisition_of
+from stand.core.machine_tests import (
+    UMAR_POSITIONS,
+    UMAR_TEST_FACTOR,
+    UmarResult,
+    cross_effect,
+    e_mar,
+    umar_test,
+    urr,
+)
+from stand.health.proving import ProvingRun
 
-POSITIONS = 12
-SPREAD_LIMIT = 0.12
+CONTRADICTION_SHARE = 0.5
+"""A run contradicts its declared test unbalance when what it read departs from it by more
+than this share of it (plus the reading's 95 % radius)."""
+DEFAULT_URR_CLAIM = 0.95
+"""The URR this product claims for a calibrated stand, when the stand engineer names none."""
+
+
+@dataclass(frozen=True)
+class UrrRun:
+    """One URR run: its name, the applied and indicated unbalance per plane [kg m], the URR
+    of each loaded plane (None where nothing was applied)."""
+
+    name: str
+    applied_kg_m: tuple[complex, complex]
+    indicated_kg_m: tuple[complex, complex]
+    urr: tuple[float | None, float | None]
 
 
 @dataclass(frozen=True)
 class Evaluation:
-    urr_measured: tuple[float, float]
-    urr_true: tuple[float, float]
-    u_mar_g_mm: float
-    e_mar_g_mm_per_kg: float
-    spread: tuple[float, float]  # largest deviation from the mean, per plane (fraction)
-    passed: bool
-    readings_g_mm: tuple[tuple[float, ...], tuple[float, ...]]
+    """The tests' figures and verdicts (``pass``, ``fail``, ``not judged``)."""
+
+    u_mar_kg_m: float | None
+    e_mar_m: float | None
+    umar: tuple[UmarResult, ...]
+    umar_verdict: str
+    urr_runs: tuple[UrrRun, ...]
+    urr_claim: float
+    urr_verdict: str
+    cross_effect: tuple[float | None, float | None]
+    """The largest cross-effect of a mass in plane 1 on plane 2, and of plane 2 on 1."""
+    refused: tuple[tuple[str, str], ...]
+    why_not_judged: tuple[str, ...]
+
+    @property
+    def verdict(self) -> str:
+        """``fail`` if a test failed, else ``not judged`` if one was not, else ``pass``."""
+        states = (self.umar_verdict, self.urr_verdict)
+        if "fail" in states:
+            return "fail"
+        return "not judged" if "not judged" in states else "pass"
 
 
-def _with_unbalance(scene: Scene, U_kg_m: np.ndarray, seed: int) -> Scene:
-    q, phi = unbalance_to_polar(U_kg_m)
-    table = UnbalanceTable(
-        plane1=PlaneUnbalance(g_mm=float(q[0]) * 1e6, angle_deg=float(phi[0])),
-        plane2=PlaneUnbalance(g_mm=float(q[1]) * 1e6, angle_deg=float(phi[1])),
+def _contradiction(r: ProvingRun, base: np.ndarray) -> str | None:
+    """Why ``r``'s reading contradicts its declared test unbalance, or None."""
+    change = np.asarray(r.U_kg_m) - base
+    applied = np.asarray(r.applied_kg_m)
+    off = np.abs(change - applied)
+    # an unloaded plane is held to the run's largest mass: a cross-effect is no contradiction
+    scale = np.where(np.abs(applied) > 0, np.abs(applied), np.max(np.abs(applied)))
+    limit = CONTRADICTION_SHARE * scale + np.asarray(r.radius95_kg_m)
+    bad = [i for i in range(2) if off[i] > limit[i]]
+    if not bad:
+        return None
+    i = bad[0]
+    return (
+        f"plane {i + 1} changed by {abs(change[i]) * 1e6:.1f} g mm, {off[i] * 1e6:.1f} g mm "
+        f"from the {abs(applied[i]) * 1e6:.1f} g mm declared"
     )
-    run = scene.run.model_copy(update={"seed": seed})
-    return scene.model_copy(update={"unbalance": table, "run": run})
 
 
-def _measure(scene: Scene, p: StandParameters) -> Measurement:
-    """One simulated run measured as every run is (:func:`stand.solve.pipeline.measure_streams`,
-    with the scene's own configuration: its sensors, a bending shaft's beam model)."""
-    m: Measurement = measure_streams(
-        acquisition_of(scene.config(), None).streams(simulate(scene, p).frames),
-        scene.config(),
-        p,
-        SolveOptions(),
-    )
-    return m
-
-
-def _step_up(x: float) -> float:
-    """The smallest 1-2-5 step >= x."""
-    decade = 10.0 ** math.floor(math.log10(x))
-    for m in (1, 2, 5, 10):
-        if m * decade >= x * (1 - 1e-12):
-            return m * decade
-    return 10 * decade  # pragma: no cover
-
-
-def evaluate(scene: Scene, p: StandParameters) -> Evaluation:
-    """Both tests on a scene (the scene's unbalance is the initial state)."""
-    q, phi = (
-        [scene.unbalance.plane1.g_mm * 1e-6, scene.unbalance.plane2.g_mm * 1e-6],
-        [scene.unbalance.plane1.angle_deg, scene.unbalance.plane2.angle_deg],
-    )
-    U0 = unbalance_from_polar(q, phi)
-    m0 = _measure(_with_unbalance(scene, U0, scene.run.seed), p)
-    U1 = U0 - m0.solution.U_kg_m  # the correction, made exactly as measured
-    m1 = _measure(_with_unbalance(scene, U1, scene.run.seed + 1), p)
-    urr_meas = tuple(
-        float(1 - abs(m1.solution.U_kg_m[i]) / abs(m0.solution.U_kg_m[i])) for i in range(2)
-    )
-    urr_true = tuple(float(1 - abs(U1[i]) / abs(U0[i])) for i in range(2))
-    # the claim: above five times the noise of one reading, and above what the correction left
-    # (a residual larger than the test mass would swamp it)
-    u_mar = _step_up(
-        max(5 * float(np.max(m1.radius95_kg_m)), float(np.max(np.abs(m1.solution.U_kg_m))))
-    )
-    readings: list[tuple[float, ...]] = []
-    spreads = []
-    seed = scene.run.seed + 100
-    for plane in range(2):
-        got = []
-        for k in range(POSITIONS):
-            test = np.zeros(2, complex)
-            test[plane] = 10 * u_mar * np.exp(-1j * math.radians(30.0 * k))
-            seed += 1
-            m = _measure(_with_unbalance(scene, U1 + test, seed), p)
-            got.append(abs(m.solution.U_kg_m[plane]))
-        mean = float(np.mean(got))
-        spreads.append(float(np.max(np.abs(np.array(got) / mean - 1))))
-        readings.append(tuple(round(g * 1e6, 3) for g in got))
+def evaluate_runs(
+    runs: list[ProvingRun], rotor_mass_kg: float, urr_claim: float = DEFAULT_URR_CLAIM
+) -> Evaluation:
+    """ISO 21940-21's tests on a proving rotor's runs (one reference run, 12 U_mar runs,
+    URR runs)."""
+    refs = [r for r in runs if r.kind == "reference"]
+    why: list[str] = []
+    if len(refs) != 1:
+        why.append(f"{len(refs)} reference runs (one is needed: the balanced proving rotor)")
+        base = np.zeros(2, complex)
+    else:
+        base = np.asarray(refs[0].U_kg_m)
+    refused, kept = [], []
+    for r in runs:
+        bad = None if r.kind == "reference" or len(refs) != 1 else _contradiction(r, base)
+        (refused.append((r.name, bad)) if bad else kept.append(r))
+    umar_runs = [r for r in kept if r.kind == "umar"]
+    umar, u_mar, umar_verdict = _umar(umar_runs, why)
+    urr_runs = tuple(_urr_run(r) for r in kept if r.kind == "urr")
+    urr_verdict = _urr_verdict(urr_runs, urr_claim, why)
+    cross = _cross(kept, base) if len(refs) == 1 else (None, None)
     return Evaluation(
-        urr_measured=(urr_meas[0], urr_meas[1]),
-        urr_true=(urr_true[0], urr_true[1]),
-        u_mar_g_mm=u_mar * 1e6,
-        e_mar_g_mm_per_kg=u_mar * 1e6 / p.M3,
-        spread=(spreads[0], spreads[1]),
-        passed=all(s <= SPREAD_LIMIT for s in spreads),
-        readings_g_mm=(readings[0], readings[1]),
+        u_mar,
+        None if u_mar is None else e_mar(u_mar, rotor_mass_kg),
+        umar,
+        umar_verdict if len(refs) == 1 else "not judged",
+        urr_runs,
+        urr_claim,
+        urr_verdict if len(refs) == 1 else "not judged",
+        cross,
+        tuple(refused),
+        tuple(why),
     )
+
+
+def _umar(
+    runs: list[ProvingRun], why: list[str]
+) -> tuple[tuple[UmarResult, ...], float | None, str]:
+    """The U_mar test on the 12 positions' runs, if they are all there and alike."""
+    if len(runs) != UMAR_POSITIONS:
+        why.append(f"U_mar: {len(runs)} of {UMAR_POSITIONS} positions")
+        return (), None, "not judged"
+    amounts = {round(abs(a) * 1e9) for r in runs for a in r.applied_kg_m}
+    if len(amounts) != 1 or 0 in amounts:
+        why.append("U_mar: the test masses differ between positions or planes")
+        return (), None, "not judged"
+    u_mar = abs(runs[0].applied_kg_m[0]) / UMAR_TEST_FACTOR
+    res = umar_test(np.array([r.U_kg_m for r in runs]))
+    return res, u_mar, "pass" if all(x.passed for x in res) else "fail"
+
+
+def _urr_run(r: ProvingRun) -> UrrRun:
+    u = urr(r.applied_kg_m, r.U_kg_m)
+    vals = tuple(None if np.isnan(x) else float(x) for x in u)
+    return UrrRun(r.name, r.applied_kg_m, r.U_kg_m, (vals[0], vals[1]))
+
+
+def _urr_verdict(runs: tuple[UrrRun, ...], claim: float, why: list[str]) -> str:
+    loaded = {i for r in runs for i in range(2) if r.urr[i] is not None}
+    if loaded != {0, 1}:
+        why.append("URR: no run loads " + " or ".join(f"plane {i + 1}" for i in {0, 1} - loaded))
+        return "not judged"
+    ok = all(u >= claim for r in runs for u in r.urr if u is not None)
+    return "pass" if ok else "fail"
+
+
+def _cross(runs: list[ProvingRun], base: np.ndarray) -> tuple[float | None, float | None]:
+    """The largest cross-effect of each plane's mass, from the runs loaded in it alone."""
+    out: list[float | None] = [None, None]
+    for r in runs:
+        loaded = [i for i in range(2) if abs(r.applied_kg_m[i]) > 0]
+        if len(loaded) == 1:
+            i = loaded[0]
+            ce = cross_effect(np.asarray(r.U_kg_m) - base, i)
+            out[i] = ce if out[i] is None else max(out[i], ce)  # type: ignore[type-var]
+    return out[0], out[1]
