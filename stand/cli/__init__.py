@@ -48,7 +48,10 @@ SUBCOMMANDS: dict[str, str] = {
     "calibrate": "identify the stand (or a new rotor type) from runs with test masses",
     "influence": "influence coefficients (field balancing): corrections from trial runs",
     "advise": "natural frequencies and the recommended balancing speed range",
-    "evaluate": "ISO 21940-21 evaluation of stand + software on a simulated scene",
+    "evaluate": "ISO 21940-21's machine tests (U_mar, URR, cross-effect) from a proving "
+    "rotor's runs or a scene",
+    "residual": "a rotor's residual-unbalance check (API): a trial mass at 6 or 12 positions, "
+    "the circle through the readings",
     "forward": "support accelerations for given unbalances, and the natural frequencies",
     "archive": "the archive of runs: import runs recorded before, verify the run files",
     "history": "find archived runs by serial, rotor type, order, operator, date, verdict",

@@ -17,6 +17,10 @@ from stand.files import output
 from stand.solve import Job
 from stand.solve.pipeline import SolveOptions, precision_targets
 
+ACCEPTANCE_EXIT = {"pass": 0, "fail": 1, "not judged": 3, "undecided": 3}
+"""Every acceptance test's exit code: 0 passed, 1 judged and failed, 3 not judged or
+undecided (2 is bad input)."""
+
 
 def add_force_argument(p: argparse.ArgumentParser, what: str) -> None:
     """``--force``: replace ``what`` if it exists (else an existing file is never replaced)."""

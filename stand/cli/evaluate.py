@@ -7,16 +7,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from stand.cli.common import ACCEPTANCE_EXIT
 from stand.cli.format import dump_json
 from stand.core.machine_tests import UMAR_SPREAD, check_run_urr
 from stand.errors import UsageError
 from stand.health.evaluate import DEFAULT_URR_CLAIM, Evaluation, evaluate_runs
 from stand.health.proving import file_runs, scene_runs
 from stand.sim import load_scene
-
-EXIT = {"pass": 0, "fail": 1, "not judged": 3}
-"""Every acceptance test's exit code: 0 passed, 1 judged and failed, 3 not judged (2 is
-bad input)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -80,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         dump_json(out)
     else:
         _print(e, out)
-    return EXIT[e.verdict]
+    return ACCEPTANCE_EXIT[e.verdict]
 
 
 def _record_dir(path: str | None) -> Path | None:

@@ -81,7 +81,7 @@ def _run(name: str, kind: str, applied: np.ndarray, m: Measurement) -> ProvingRu
     )
 
 
-def _with_unbalance(scene: Scene, U_kg_m: np.ndarray, seed: int) -> Scene:
+def with_unbalance(scene: Scene, U_kg_m: np.ndarray, seed: int) -> Scene:
     q, phi = unbalance_to_polar(U_kg_m)
     table = UnbalanceTable(
         plane1=PlaneUnbalance(g_mm=float(q[0]) * 1e6, angle_deg=float(phi[0])),
@@ -135,22 +135,22 @@ def scene_runs(scene: Scene, p: StandParameters, record: Path | None = None) -> 
     cfg = scene.config()
     u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
     U0 = unbalance_from_polar([u1.g_mm * 1e-6, u2.g_mm * 1e-6], [u1.angle_deg, u2.angle_deg])
-    m0 = _measure(_with_unbalance(scene, U0, scene.run.seed), p, cfg, None)
+    m0 = measure_scene(with_unbalance(scene, U0, scene.run.seed), p, cfg, None)
     residual, seed = U0 - m0.solution.U_kg_m, scene.run.seed + 1
     checks = []
     for _ in range(PREPARATION_PASSES - 1):  # balanced as well as the stand can
-        m = _measure(_with_unbalance(scene, residual, seed), p, cfg, None)
+        m = measure_scene(with_unbalance(scene, residual, seed), p, cfg, None)
         residual, seed = residual - m.solution.U_kg_m, seed + 1
         checks.append(m.solution.U_kg_m)
-    ref_scene = _with_unbalance(scene, residual, seed)
-    ref = _measure(ref_scene, p, cfg, None if record is None else record / "reference.h5")
+    ref_scene = with_unbalance(scene, residual, seed)
+    ref = measure_scene(ref_scene, p, cfg, None if record is None else record / "reference.h5")
     u_mar = step_up(
         max(5 * float(np.max(ref.radius95_kg_m)), float(np.max(np.abs(ref.solution.U_kg_m))))
     )
     runs = [_run("reference", "reference", np.zeros(2, complex), ref)]
     for k, (name, kind, applied) in enumerate(_plan(u_mar)):
-        sc = _with_unbalance(scene, residual + applied, seed + 100 + k)
-        m = _measure(sc, p, cfg, None if record is None else record / f"{name}.h5")
+        sc = with_unbalance(scene, residual + applied, seed + 100 + k)
+        m = measure_scene(sc, p, cfg, None if record is None else record / f"{name}.h5")
         runs.append(_run(name, kind, applied, m))
     if record is not None:
         write_runs_toml(record / "runs.toml", runs, p)
@@ -163,7 +163,7 @@ def scene_runs(scene: Scene, p: StandParameters, record: Path | None = None) -> 
     )
 
 
-def _measure(scene: Scene, p: StandParameters, cfg: Config, out: Path | None) -> Measurement:
+def measure_scene(scene: Scene, p: StandParameters, cfg: Config, out: Path | None) -> Measurement:
     """One simulated run measured as every run is; written to ``out`` when given."""
     frames = simulate(scene, p).frames
     streams = acquisition_of(cfg, None).streams(frames)
@@ -207,7 +207,8 @@ class TestMass(BaseModel):
 class ProvingEntry(BaseModel):
     model_config = STRICT
     file: Annotated[str, Field(min_length=1, max_length=4000)]
-    test: Kind
+    test: Kind | None = None
+    """The run's part in ``stand evaluate`` (``stand residual`` takes none)."""
     masses: Annotated[list[TestMass], Field(max_length=8)] = []
 
 
@@ -216,15 +217,20 @@ class ProvingFile(BaseModel):
     runs: Annotated[list[ProvingEntry], Field(min_length=1, max_length=200)]
 
 
-def file_runs(path: str, config: str | None) -> tuple[list[ProvingRun], float]:
-    """The recorded proving runs ``path`` names, each read and measured as ``stand solve``
-    reads it (relative files from the file's folder), and the proving rotor's mass [kg]
-    (``M3`` of the config, or of the first run's stored one)."""
+def read_spec(path: str) -> ProvingFile:
+    """A ``RUNS.toml`` of proving or trial runs, validated (ConfigError naming the key)."""
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise ConfigError(f"not a readable TOML file ({exc})", source=path) from exc
-    spec = validate(ProvingFile, data, path)
+    return validate(ProvingFile, data, path)
+
+
+def file_runs(path: str, config: str | None) -> tuple[list[ProvingRun], float]:
+    """The recorded proving runs ``path`` names, each read and measured as ``stand solve``
+    reads it (relative files from the file's folder), and the proving rotor's mass [kg]
+    (``M3`` of the config, or of the first run's stored one)."""
+    spec = read_spec(path)
     out, mass = [], 0.0
     for k, e in enumerate(spec.runs):
         run = Path(e.file) if Path(e.file).is_absolute() else Path(path).parent / e.file
@@ -233,6 +239,9 @@ def file_runs(path: str, config: str | None) -> tuple[list[ProvingRun], float]:
         for t in e.masses:
             R = t.radius_mm * 1e-3 if t.radius_mm else (p.R1, p.R2)[t.plane - 1]
             applied[t.plane - 1] += t.mass_g * 1e-3 * R * np.exp(-1j * math.radians(t.angle_deg))
+        if e.test is None:
+            raise ConfigError("name the run's test: reference, umar or urr", source=path,
+                              key=f"runs[{k}].test")  # fmt: skip
         if e.test != "reference" and not e.masses:
             raise ConfigError(
                 "a umar or urr run declares its test masses", source=path, key=f"runs[{k}].masses"
