@@ -50,6 +50,8 @@ SUBCOMMANDS: dict[str, str] = {
     "advise": "natural frequencies and the recommended balancing speed range",
     "evaluate": "ISO 21940-21's machine tests (U_mar, URR, cross-effect) from a proving "
     "rotor's runs or a scene",
+    "capability": "the stand's measurement capability on a master rotor's runs: Cg and Cgk "
+    "for the vector unbalance",
     "residual": "a rotor's residual-unbalance check (API): a trial mass at 6 or 12 positions, "
     "the circle through the readings",
     "forward": "support accelerations for given unbalances, and the natural frequencies",

@@ -1,0 +1,62 @@
+"""The stand's measurement capability for the vector unbalance (ISO 21940-21's supplement
+on statistical capability, VDA 5 type-1 in spirit): repeated runs of one master rotor,
+each plane's readings against its known unbalance and the plane's tolerance
+(:mod:`stand.core.capability` defines the indices).
+
+On the real stand the master rotor is taken off and put back between runs, as the
+procedure says, so that the spread holds the reseating too; a simulated scene's runs
+differ by their noise only (its rotor is never taken off), which the output says.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from stand.config import Config
+from stand.core import StandParameters, unbalance_from_polar
+from stand.core.capability import MIN_RUNS, Capability, capability
+from stand.errors import UsageError
+from stand.health.proving import measure_scene, with_unbalance
+from stand.sim import Scene
+from stand.solve import measure_recording
+
+
+def scene_readings(scene: Scene, p: StandParameters, runs: int) -> tuple[np.ndarray, np.ndarray]:
+    """``runs`` runs of the scene's rotor (seeds apart): the readings (runs x 2) and the
+    master's known unbalance (the scene's) [kg m]."""
+    u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
+    U = unbalance_from_polar([u1.g_mm * 1e-6, u2.g_mm * 1e-6], [u1.angle_deg, u2.angle_deg])
+    cfg = scene.config()
+    got = [
+        measure_scene(with_unbalance(scene, U, scene.run.seed + k), p, cfg, None).solution.U_kg_m
+        for k in range(runs)
+    ]
+    return np.array(got), U
+
+
+def file_readings(
+    runs: list[str], config: str | None
+) -> tuple[np.ndarray, StandParameters, Config]:
+    """Each run's reading (runs x 2) [kg m], read and measured as ``stand solve`` does, and
+    the parameters and config of the first."""
+    got: list[np.ndarray] = []
+    first: tuple[StandParameters, Config] | None = None
+    for run in runs:
+        m, cfg, p, _ = measure_recording(run, config)
+        first = first or (p, cfg)
+        got.append(m.solution.U_kg_m)
+    assert first is not None
+    return np.array(got), first[0], first[1]
+
+
+def study(
+    readings: np.ndarray, reference: np.ndarray, tolerance: tuple[float, float]
+) -> tuple[Capability, Capability]:
+    """Both planes' studies (UsageError under :data:`MIN_RUNS` readings)."""
+    if readings.shape[0] < MIN_RUNS:
+        raise UsageError(
+            f"{readings.shape[0]} runs: a capability study needs at least {MIN_RUNS} runs of "
+            "the master rotor"
+        )
+    a, b = (capability(readings[:, i], complex(reference[i]), tolerance[i]) for i in range(2))
+    return a, b
