@@ -7,7 +7,9 @@ and the URR when it was a check), and one row per confirmed correction with
 its check (the calibration datum of :mod:`stand.health.monitor`); and the
 revisions ``stand reprocess`` makes: a named re-judgement (its config's
 digest, the software), a row per run it re-solved (its status, verdict and
-JSON) and one per plane, beside the originals, which are never changed.  SI
+JSON) and one per plane, beside the originals, which are never changed; and
+the stand's own evaluations (ISO 21940-21's machine tests, the capability
+study) with their verdicts and due dates.  SI
 units and complex parts in columns; the whole result as JSON beside them, so
 that a report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -144,3 +146,19 @@ revised_planes = Table(
     ForeignKeyConstraint(["revision_id", "run_id"], ["revised.revision_id", "revised.run_id"],
                          ondelete="CASCADE"),
 )  # fmt: skip
+
+evaluations = Table(
+    "evaluations",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("stand_id", String(64)),
+    Column("kind", String(16), nullable=False),  # machine (ISO 21940-21), capability
+    Column("performed_at", String(40), nullable=False),  # ISO 8601, UTC
+    Column("verdict", String(12), nullable=False),  # pass, fail, not judged; capable, ...
+    Column("due", String(10)),  # YYYY-MM-DD: the next one's (machine tests)
+    Column("simulated", Boolean, nullable=False),  # its runs came from the simulator
+    Column("software", String(64), nullable=False),
+    Column("result_json", Text, nullable=False),  # the evaluation's JSON form
+)  # revision 0007: the stand's own evaluations, kept with their due dates
+Index("ix_evaluations_stand", evaluations.c.stand_id, evaluations.c.kind,
+      evaluations.c.performed_at)  # fmt: skip

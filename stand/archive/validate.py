@@ -28,6 +28,9 @@ MODES = frozenset({"remove", "add", "drill", "mill"})
 STATUSES = frozenset({"ok", "missing", "altered", "unreadable", "refused"})
 KINDS = frozenset({"production", "tooling"})
 SHA256 = re.compile(r"[0-9a-f]{64}")
+DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
+EVALUATION_KINDS = frozenset({"machine", "capability"})
+EVALUATION_VERDICTS = frozenset({"pass", "fail", "not judged", "capable", "not capable"})
 MAX_UNBALANCE_KG_M = 1e3
 """No rotor a stand balances carries more (1 t at 1 m) [kg m]."""
 TEXT_COLUMNS = {"serial": 64, "order_no": 64, "operator": 64, "rotor_type": 64,
@@ -211,3 +214,23 @@ def _datum(r: _Row, d: dict[str, Any]) -> None:
             raise r.fail("datum_json", f"{key} is not {n} x {m} finite numbers")
     if not isinstance(d.get("config_toml"), str):
         raise r.fail("datum_json", "config_toml is not a text")
+
+
+def evaluation_row(row: Any, url: str) -> dict[str, Any]:
+    """An ``evaluations`` row, checked, as a dict with its result parsed."""
+    r = _Row(row, "evaluations", url, label="evaluation")
+    r.number("id", 1, 2**63)
+    r.text("stand_id", TEXT_COLUMNS["stand_id"])
+    r.choice("kind", EVALUATION_KINDS)
+    r.time("performed_at")
+    r.choice("verdict", EVALUATION_VERDICTS)
+    due = r.get("due")
+    if due is not None and not (isinstance(due, str) and DATE.fullmatch(due)):
+        raise r.fail("due", f"{str(due)[:40]!r} is not a date YYYY-MM-DD")
+    r.flag("simulated")
+    result = r.json_object("result_json")
+    return {
+        "id": r.get("id"), "stand": r.get("stand_id"), "kind": r.get("kind"),
+        "performed_at": r.get("performed_at"), "verdict": r.get("verdict"), "due": due,
+        "simulated": bool(r.get("simulated")), "result": result,
+    }  # fmt: skip

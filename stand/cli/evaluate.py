@@ -7,10 +7,20 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from stand.cli.common import ACCEPTANCE_EXIT
+from stand import __version__
+from stand.archive import url_for
+from stand.archive.evaluations import add_evaluation
+from stand.cli.common import (
+    ACCEPTANCE_EXIT,
+    add_archive_argument,
+    add_force_argument,
+    write_text_output,
+)
 from stand.cli.format import dump_json
+from stand.config import Config
 from stand.core.machine_tests import UMAR_SPREAD, check_run_urr
 from stand.errors import UsageError
+from stand.health.due import due_date
 from stand.health.evaluate import DEFAULT_URR_CLAIM, Evaluation, evaluate_runs
 from stand.health.proving import file_runs, scene_runs
 from stand.sim import load_scene
@@ -47,6 +57,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="PCT",
         help=f"the URR the stand claims (default {100 * DEFAULT_URR_CLAIM:g} %%)",
     )
+    p.add_argument("--report", metavar="FILE.html", help="the evaluation's certificate")
+    p.add_argument("--pdf", metavar="FILE.pdf", help="the certificate as PDF (Chromium)")
+    add_force_argument(p, "--report and --pdf")
+    add_archive_argument(p)
+    p.add_argument(
+        "--no-archive",
+        action="store_true",
+        help="with RUNS.toml: do not archive the evaluation (a scene's never is)",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -70,14 +89,46 @@ def run(args: argparse.Namespace) -> int:
     else:
         if args.record:
             raise UsageError("--record belongs to --scene")
-        runs, mass = file_runs(args.runs, args.config)
+        runs, cfg, params, simulated = file_runs(args.runs, args.config)
+        mass = params.M3
     e = evaluate_runs(runs, mass, claim)
     out = {**to_json(e), **extra}
+    if args.runs is not None and not args.no_archive:
+        out["archived"] = _archive(args, cfg, out, simulated)
+    if args.report or args.pdf:
+        _report(args, out, mass)
     if args.json:
         dump_json(out)
     else:
         _print(e, out)
     return ACCEPTANCE_EXIT[e.verdict]
+
+
+def _archive(
+    args: argparse.Namespace, cfg: Config, out: dict[str, Any], simulated: bool
+) -> dict[str, Any]:
+    """Archive the evaluation with the next one's due date; where and when it is due."""
+    import datetime as dt
+
+    now = dt.datetime.now(dt.UTC)
+    due = due_date(now, cfg.stand.evaluation_interval_days)
+    url = url_for(args.archive, cfg)
+    eid, where = add_evaluation(url, "machine", cfg.stand.stand_id(), out["verdict"], out,
+                         simulated=simulated, software=f"stand {__version__}", due=due,
+                         performed_at=now)  # fmt: skip
+    return {"id": eid, "archive": where, "performed_at": now.isoformat(),
+            "due": due.isoformat(), "simulated": simulated}  # fmt: skip
+
+
+def _report(args: argparse.Namespace, out: dict[str, Any], mass: float) -> None:
+    from stand.report.evaluation_page import evaluation_page
+    from stand.report.printing import write_pdf
+
+    page = evaluation_page(out, mass)
+    if args.report:
+        write_text_output(args.report, page, force=args.force)
+    if args.pdf:
+        write_pdf(page, args.pdf, force=args.force)
 
 
 def _record_dir(path: str | None) -> Path | None:
@@ -174,3 +225,9 @@ def _print(e: Evaluation, out: dict[str, Any]) -> None:
     for w in e.why_not_judged:
         print(f"not judged: {w}")
     print(f"evaluation: {e.verdict.upper()}")
+    a = out.get("archived")
+    if a:
+        print(
+            f"archived as evaluation {a['id']} in {a['archive']}; the next is due {a['due']}"
+            + (" (its runs are simulated)" if a["simulated"] else "")
+        )

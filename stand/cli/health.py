@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from stand.archive import correction_rows, url_for
+from stand.archive.evaluations import evaluations_due
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
 from stand.health import health, health_json
@@ -26,10 +27,14 @@ def _ids(ids: list[int], most: int = 8) -> str:
 
 def run(args: argparse.Namespace) -> int:
 
-    out = health_json(health(correction_rows(url_for(args.archive), args.stand, args.rotor_type)))
+    url = url_for(args.archive)
+    out = health_json(health(correction_rows(url, args.stand, args.rotor_type)))
+    out["evaluations"] = evaluations_due(url, args.stand)
     if args.json:
         dump_json(out)
         return 0
+    for e in out["evaluations"]:
+        print(e["line"])
     if not out["groups"]:
         print(
             "no calibration data yet: a check run after a correction confirmed as put on "

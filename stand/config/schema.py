@@ -73,6 +73,9 @@ class StandTable(BaseModel):
     H1: Stiffness = 0.0
     H2: Stiffness = 0.0
     reference_angle_deg: Angle = 0.0
+    evaluation_interval_days: Annotated[int, Field(ge=1, le=3650)] = 30
+    """How often ISO 21940-21's machine tests (stand evaluate) are due [days]: monthly for a
+    stand in daily use."""
     clock_tolerance_pct: PositiveFloat = 0.1
     """How far the speeds two nodes measure of one shaft may differ [%]."""
     name: Name | None = None
@@ -196,6 +199,7 @@ class Config(BaseModel):
         """The core's parameter object (raises :class:`ParameterError`)."""
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
+                    "evaluation_interval_days",
                     "id", "bending_hz", "shaft", "planes", "keys"):  # fmt: skip
             del values[key]
         return StandParameters(**values)

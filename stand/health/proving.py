@@ -38,8 +38,9 @@ from stand.errors import ConfigError
 from stand.measuring import Measurement
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable
-from stand.solve import SolveOptions, measure_recording, measure_streams
+from stand.solve import SolveOptions, measure_streams
 from stand.solve.acquisition import acquisition_of
+from stand.solve.recordings import read_run
 
 URR_TEST_FACTOR = 20.0
 """The URR test's unbalances: 20 U_mar."""
@@ -226,15 +227,24 @@ def read_spec(path: str) -> ProvingFile:
     return validate(ProvingFile, data, path)
 
 
-def file_runs(path: str, config: str | None) -> tuple[list[ProvingRun], float]:
+def file_runs(
+    path: str, config: str | None
+) -> tuple[list[ProvingRun], Config, StandParameters, bool]:
     """The recorded proving runs ``path`` names, each read and measured as ``stand solve``
-    reads it (relative files from the file's folder), and the proving rotor's mass [kg]
-    (``M3`` of the config, or of the first run's stored one)."""
+    reads it (relative files from the file's folder); the config and parameters (the
+    given config, or the first run's stored one: its ``M3`` the proving rotor's mass); and
+    whether any run came from the simulator."""
     spec = read_spec(path)
-    out, mass = [], 0.0
+    out: list[ProvingRun] = []
+    first: tuple[Config, StandParameters] | None = None
+    simulated = False
     for k, e in enumerate(spec.runs):
         run = Path(e.file) if Path(e.file).is_absolute() else Path(path).parent / e.file
-        m, _cfg, p, _ = measure_recording(str(run), config)
+        read = read_run(str(run), config)
+        m, p = measure_streams(read.streams, read.cfg, read.params, SolveOptions()), read.params
+        first = first or (read.cfg, p)
+        source = str(read.rec.meta.get("source", ""))
+        simulated = simulated or source.startswith(("simulated", "virtual:"))
         applied = np.zeros(2, complex)
         for t in e.masses:
             R = t.radius_mm * 1e-3 if t.radius_mm else (p.R1, p.R2)[t.plane - 1]
@@ -247,5 +257,5 @@ def file_runs(path: str, config: str | None) -> tuple[list[ProvingRun], float]:
                 "a umar or urr run declares its test masses", source=path, key=f"runs[{k}].masses"
             )
         out.append(_run(e.file, e.test, applied, m))
-        mass = mass if k else p.M3
-    return out, mass
+    assert first is not None  # the file holds at least one run
+    return out, first[0], first[1], simulated

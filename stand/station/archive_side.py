@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, correction_rows, file_digest
+from stand.archive.evaluations import evaluations_due
 from stand.archive.query import Filters, history, run_file
 from stand.config import load_config
 from stand.errors import StandError, UsageError
@@ -34,6 +35,10 @@ class ArchiveSide:
     config_dir: Path
     _printing: threading.Lock
     _state: Snapshot
+
+    def stand_id(self) -> str:
+        """The station's stand id (:meth:`stand.station.service.Station.stand_id`)."""
+        raise NotImplementedError
 
     def _datum(self, before: Any, result: Any) -> str:
         """A check after a confirmed correction into the archive as a calibration datum;
@@ -61,7 +66,9 @@ class ArchiveSide:
     def health(self) -> dict[str, Any]:
         """What the archive's calibration data say (:func:`stand.health.monitor.health_json`)."""
 
-        return health_json(health(correction_rows(self.archive_url)))
+        out = health_json(health(correction_rows(self.archive_url)))
+        out["evaluations"] = evaluations_due(self.archive_url, self.stand_id())
+        return out
 
     # -- the archive ---------------------------------------------------------------------
     def history(

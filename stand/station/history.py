@@ -26,6 +26,9 @@ def _health_panel(station: Station) -> None:
         ui.label(f"stand health: {exc}").classes("text-body1")
         return
     with ui.card().classes("w-full").mark("health"):
+        for e in out.get("evaluations", []):
+            tone = {"due": "pass", "overdue": "fail", "never": "fail"}[e["state"]]
+            ui.label(e["line"]).classes(f"text-h6 {tone}").mark("evaluation-due")
         if not out["groups"]:
             ui.label("Stand health: no calibration data yet (confirm corrections as applied)")
         for g in out["groups"]:

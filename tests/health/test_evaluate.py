@@ -133,3 +133,51 @@ def test_bad_input_is_one_line(
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and says in err[0]
+
+
+def test_an_evaluation_is_archived_with_its_due_date_and_health_says_when(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Evaluated from its runs, the evaluation is archived with the next one's due date
+    (today + the config's interval: 7 days here); stand health says when it is due, and
+    OVERDUE once an older one is all there is; a scene's evaluation is never archived; a
+    row no evaluation could have written is refused in one line naming it."""
+    import datetime as dt
+
+    import sqlalchemy as sa
+
+    from stand.archive import Archive
+    from stand.archive.evaluations import add_evaluation
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    scene = short_demo(tmp_path)
+    live = _json(["evaluate", "--scene", str(scene), "--record", str(tmp_path / "r")], capsys, 0)
+    assert "archived" not in live
+    cfg = tmp_path / "cfg.toml"
+    assert main(["inspect", str(tmp_path / "r" / "reference.h5"), "--config-out", str(cfg)]) == 0
+    text = cfg.read_text().replace("evaluation_interval_days = 30", "evaluation_interval_days = 7")
+    cfg.write_text(text.replace("[stand]\n", '[stand]\nid = "S-7"\n', 1))
+    out = _json(["evaluate", str(tmp_path / "r" / "runs.toml"), "--config", str(cfg),
+                 "--archive", url, "--report", str(tmp_path / "e.html")], capsys, 0)  # fmt: skip
+    today = dt.datetime.now(dt.UTC).date()
+    assert out["archived"]["due"] == (today + dt.timedelta(days=7)).isoformat()
+    assert out["archived"]["simulated"] is True
+    page = (tmp_path / "e.html").read_text()
+    assert "ISO 21940-21" in page and "U_mar test: PASS" in page and "next due" in page
+    health = _json(["health", "--archive", url], capsys, 0)
+    (e,) = health["evaluations"]
+    assert e["stand"] == "S-7" and e["state"] == "due" and "in 7 days" in e["line"]
+    empty = _json(["health", "--archive", f"sqlite:///{tmp_path / 'b.sqlite'}"], capsys, 0)
+    assert empty["evaluations"][0]["state"] == "never"
+    old = dt.datetime.now(dt.UTC) - dt.timedelta(days=40)
+    other = f"sqlite:///{tmp_path / 'c.sqlite'}"
+    due = old.date() + dt.timedelta(days=30)
+    add_evaluation(other, "machine", "S-8", "pass", {"verdict": "pass"}, simulated=False,
+                   software="test", due=due, performed_at=old)  # fmt: skip
+    (late,) = _json(["health", "--archive", other], capsys, 0)["evaluations"]
+    assert late["state"] == "overdue" and "OVERDUE since" in late["line"]
+    with Archive(other) as archive, archive.transaction() as conn:
+        conn.execute(sa.text("UPDATE evaluations SET verdict = 'maybe'"))
+    assert main(["health", "--archive", other]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "evaluations" in err[0] and "verdict" in err[0]
