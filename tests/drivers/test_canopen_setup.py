@@ -108,13 +108,14 @@ def test_a_wrong_module_or_a_refusal_is_one_line(
     assert says in str(caught.value) and "\n" not in str(caught.value), caught.value
 
 
-def test_a_silent_module_is_named_within_a_second(buses: tuple[Any, Any]) -> None:
+def test_a_silent_module_is_named_not_waited_for(buses: tuple[Any, Any]) -> None:
     host, _ = buses
     start = time.monotonic()
     with pytest.raises(BusError, match=r"CANopen node 1 does not answer SDO \(read 0x1018:1, "
                        r"COB-ID 0x601\)"):  # fmt: skip
         configure_modules(host, _layout(), "virtual:x")
-    assert time.monotonic() - start < 1.5  # 0.3 s, asked twice, and the notifier's stop
+    # a hang guard, not a speed figure: 0.3 s asked twice and the notifier's stop, when idle
+    assert time.monotonic() - start < 10.0
 
 
 @pytest.mark.realtime
@@ -140,7 +141,7 @@ def test_the_hosts_sync_is_answered_and_decoded_in_order(buses: tuple[Any, Any])
         sync = SyncProducer(host, layout)
         sync.start()
         blocks = []
-        deadline = time.monotonic() + 5.0
+        deadline = time.monotonic() + 60.0  # ends a stuck loop only: 0.6 s when idle
         while min(sim.answered.values()) < n and time.monotonic() < deadline:
             blocks.append(reader.read_block(0.05))
         sync.stop()

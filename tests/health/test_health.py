@@ -121,8 +121,14 @@ def test_health_without_data_and_bad_options(
         "false_alarm": "at most 1 % chance of an alarm within 1000 corrected rotors of a "
         "stable stand",
         "groups": [],
-        "evaluations": [{"stand": None, "state": "never", "line": "machine evaluation: never "
-                         "evaluated: run stand evaluate on the proving rotor's runs"}],
+        "evaluations": [
+            {
+                "stand": None,
+                "state": "never",
+                "line": "machine evaluation: never "
+                "evaluated: run stand evaluate on the proving rotor's runs",
+            }
+        ],
     }
     cfg = str(ROOT / "examples" / "demo-stand.toml")
     out = tmp_path / "x.toml"
