@@ -10,10 +10,10 @@ from dataclasses import replace
 from typing import Any
 
 from stand.archive import archive_result, url_for
-from stand.cli.common import add_archive_argument
+from stand.cli.common import ACCEPTANCE_EXIT, add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import load_config, validate
-from stand.config.autobalancer import AutobalancerTable
+from stand.config.autobalancer import AutobalancerTable, check_autobalancer
 from stand.config.rocker import load_rocker
 from stand.config.typed import parse_rpm, parse_unbalance, positive_float
 from stand.errors import UsageError
@@ -98,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
         for plane, g_mm, deg in args.unbalance:
             U[plane - 1] += cmath.rect(g_mm * 1e-6, -math.radians(deg))
     table = _table(args, cfg, source)
+    check_autobalancer(table, params, source)  # the options too, against the rotor
     doc = predict(params, table, rpm=args.rpm, unbalance_kg_m=U if args.rpm else None,
                   max_rpm=args.max_rpm)  # fmt: skip
     if args.json:
@@ -218,21 +219,21 @@ def _test(args: argparse.Namespace) -> int:
         url = url_for(args.archive, cfg)
         doc["archived"] = []
         for k, s in enumerate(starts):
-            job = replace(s.result.provenance.job, note=f"balancer test: {doc['verdict']} "
+            job = replace(s.result.provenance.job, note=f"balancer test: {doc['line']} "
                           f"(start {k + 1} of {len(starts)})")  # fmt: skip
             result = replace(s.result, provenance=replace(s.result.provenance, job=job))
             doc["archived"].append(archive_result(result, url, config=args.config))
     if args.json:
         dump_json(doc)
-        return 0
-    _print_test(doc)
-    return 0
+    else:
+        _print_test(doc)
+    return ACCEPTANCE_EXIT[doc["overall"]]
 
 
 def certificate_line(doc: dict[str, Any]) -> str:
     """The test's one line for a certificate."""
     who = f"serial {doc['serial']}" if doc["serial"] else "the rotor"
-    parts = [f"balancer test of {who}: {doc['verdict']}, {doc['starts_n']} start(s) at "
+    parts = [f"balancer test of {who}: {doc['line']}, {doc['starts_n']} start(s) at "
              f"{doc['rpm']:.0f} rpm"]  # fmt: skip
     for r in doc["residual"]:
         pred = r["predicted_mean_g_mm"]

@@ -37,7 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
 
     cfg = load_config(args.config)[0] if args.config else None
-    zone = args.timezone or (cfg.plant.qdas_timezone if cfg and cfg.plant else None)
+    zone = args.timezone  # "" is a zone named wrongly, refused: never the machine's in silence
+    if zone is None and cfg is not None and cfg.plant is not None:
+        zone = cfg.plant.qdas_timezone
     f = Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision)
     _, n = export_qdas(url_for(args.archive, cfg), args.rotor_type, f, args.out,
                        force=args.force, runs=args.runs, timezone=zone)  # fmt: skip

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 from stand.archive import url_for
@@ -109,6 +111,20 @@ def _duration(s: float) -> str:
     return f"{s / 60:.0f} min" if s < 5400 else f"{s / 3600:.1f} h"
 
 
+REVISION_NAME = re.compile(r"^[^\x00-\x1f\x7f]{1,64}$")
+
+
+def _check_names(revision: str, runs_root: str | None) -> None:
+    """A revision named by something to read (not blank, no control characters, at most 64
+    characters), a runs root that is a folder: one line each, before any run is read."""
+    if not REVISION_NAME.fullmatch(revision) or not revision.strip():
+        raise UsageError(f"--revision {revision[:40]!r}: a name of 1 to 64 characters, not blank "
+                         "and without control characters")  # fmt: skip
+    if runs_root is not None and not Path(runs_root).is_dir():
+        what = "a file" if Path(runs_root).exists() else "not there"
+        raise UsageError(f"--runs-root {runs_root}: {what}; the folder the run files lie in now")
+
+
 def run(args: argparse.Namespace) -> int:
 
     if args.report:  # refuse a report that cannot be written before solving anything
@@ -116,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
     sel = Selection(stand=args.stand, rotor_type=args.rotor_type, since=args.since,
                     until=args.until, serial=args.serial, from_run=args.from_run,
                     kind=args.kind)  # fmt: skip
+    _check_names(args.revision, args.runs_root)
     req = Request(sel, args.revision, args.config, args.runs_root, args.force)
     if args.scheduler and args.jobs is not None:
         raise UsageError("--jobs and --scheduler: one or the other (a cluster has its workers)")

@@ -54,9 +54,10 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
 
 def _where(args: argparse.Namespace, cfg: Any) -> Path:
     """The folder of the toolings: ``--folder``, else the config's, else the data folder's."""
-    if args.folder:
-        return Path(args.folder)
-    return folder(None if cfg is None else cfg.tooling)
+    where = Path(args.folder) if args.folder else folder(None if cfg is None else cfg.tooling)
+    if where.exists() and not where.is_dir():
+        raise UsageError(f"the tooling folder {where} is a file: toolings are kept in a folder")
+    return where
 
 
 def _measure(args: argparse.Namespace) -> int:

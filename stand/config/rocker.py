@@ -31,10 +31,11 @@ key (``rocker.arm_m``).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
-from pydantic import BaseModel, Field, FiniteFloat
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.config.schema import read_toml, validate
 from stand.config.tables import STRICT
@@ -42,7 +43,8 @@ from stand.errors import ConfigError
 
 Inertia = Annotated[FiniteFloat, Field(ge=0.0, le=1e3)]
 Positive = Annotated[FiniteFloat, Field(gt=0.0, le=1e6)]
-Length = Annotated[FiniteFloat, Field(gt=0.0, le=10.0)]
+Length = Annotated[FiniteFloat, Field(ge=1e-4, le=2.0)]
+"""[m]: 0.1 mm to 2 m, a hand grinder's rocker."""
 
 
 class CuttingTable(BaseModel):
@@ -54,7 +56,7 @@ class CuttingTable(BaseModel):
     phi0_rad: Annotated[FiniteFloat, Field(ge=-1.0, le=1.0)]
     c_n_n_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e10)]
     f_n: Annotated[FiniteFloat, Field(ge=0.0, le=2.0)]
-    gamma_rad: Annotated[FiniteFloat, Field(ge=0.0, le=3.2)]
+    gamma_rad: Annotated[FiniteFloat, Field(ge=0.0, le=math.pi)]
     disc_radius_m: Length
 
 
@@ -67,15 +69,28 @@ class RockerTable(BaseModel):
     J_disc_kg_m2: Inertia
     disc_kg: Annotated[FiniteFloat, Field(ge=0.0, le=1e4)]
     arm_m: Length
-    hinge_c_n_m: Positive
+    hinge_c_n_m: Annotated[FiniteFloat, Field(ge=1e-3, le=1e6)]
+    """At least 1e-3 N m/rad: a hinge with no stiffness holds no rocker."""
     hinge_h_n_s_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e6)]
     unbalance_kg_m: Annotated[FiniteFloat, Field(ge=0.0, le=10.0)]
     unbalance_radius_m: Length
-    balls: Annotated[int, Field(ge=1, le=64)]
+    balls: Annotated[int, Field(ge=2, le=64)]
+    """Two or more: one ball cannot make less than its own unbalance."""
     ball_kg: Annotated[FiniteFloat, Field(gt=0.0, le=100.0)]
     race_radius_m: Length
     ball_drag_n_s_m: Annotated[FiniteFloat, Field(ge=0.0, le=1e6)] = 0.0
     cutting: CuttingTable | None = None
+
+    @model_validator(mode="after")
+    def _on_the_disc(self) -> RockerTable:
+        c = self.cutting
+        if c is not None and self.race_radius_m > c.disc_radius_m:
+            raise ValueError(f"race_radius_m {self.race_radius_m:g} m lies outside the disc "
+                             f"(cutting.disc_radius_m {c.disc_radius_m:g} m)")  # fmt: skip
+        if self.balls * self.ball_kg > self.disc_kg > 0:
+            raise ValueError(f"{self.balls} balls of {self.ball_kg:g} kg weigh more than the "
+                             f"disc ({self.disc_kg:g} kg, disc_kg)")  # fmt: skip
+        return self
 
     @property
     def capacity_kg_m(self) -> float:

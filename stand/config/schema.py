@@ -36,7 +36,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat, field_validator
 from pydantic_core import PydanticCustomError
 
-from stand.config.autobalancer import AutobalancerTable
+from stand.config.autobalancer import AutobalancerTable, check_autobalancer
 from stand.config.bus import bus_choice
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config.correction import check_correction
@@ -233,6 +233,7 @@ def config_from_dict(
     params = parameters_of(cfg, source)
     check_tolerance(cfg.tolerance, params, source)
     check_keys(cfg.rotor.keys, params, source)
+    check_autobalancer(cfg.autobalancer, params, source)
     return cfg, params
 
 

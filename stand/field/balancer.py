@@ -36,6 +36,7 @@ from stand.core.autobalance import balanced, driving_point, receptance, windows
 from stand.core.model import StandParameters, natural_frequencies
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import MeasurementError, RecordingError
+from stand.field.starts import check_distinct, check_recorded
 from stand.measuring.track import track_1x
 from stand.solve.autobalance import balls_stand
 from stand.solve.recordings import read_run, solve_read
@@ -131,6 +132,7 @@ def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
     """Start ``k`` (0 first) of the test, from its run file."""
     table = cfg.autobalancer
     run = read_run(path, config)  # read once: its attributes, streams and result
+    check_recorded(path, run.rec.meta, cfg)
     test = _test_unbalance(run.rec.meta, path, first, k, moved_deg)
     result = solve_read(run)
     q = balls_stand(params, table)
@@ -175,14 +177,15 @@ def verdict(starts: Sequence[Start], table: Any, q: StandParameters) -> tuple[st
             "balls did not move (rolling resistance, a blocked race)"
         )
         return "stuck", notes
-    if len(predicted) < len(starts):
-        notes.append("no test unbalance known for every start: stuck, onset and the residual "
-                     "against its prediction not judged (give --unbalance)")  # fmt: skip
     late = [_off(s, table) for s in starts]
     if any("balls have not settled" in x for s in starts for x in s.warnings) or any(late):
         notes.extend(n for n in late if n)
         notes.append("a start's balls had not reached their place: hold longer")
         return "unsettled", notes
+    if len(predicted) < len(starts):
+        notes.append("no test unbalance known for every start: stuck, onset and the residual "
+                     "against its prediction not judged (give --unbalance)")  # fmt: skip
+        return "not judged", notes
     return "ok", notes
 
 
@@ -224,12 +227,46 @@ def balancer_test(runs: Sequence[str], config: str, cfg: Any, params: StandParam
     if table is None:
         raise MeasurementError(f"{config} has no [autobalancer]: which balancer is tested?")
     starts = [one_start(r, k, config, cfg, params, first, moved_deg) for k, r in enumerate(runs)]
+    check_distinct(list(runs), [s.result for s in starts])
     q = balls_stand(params, table)
     w = float(np.median([s.rpm for s in starts])) * math.pi / 30
     found = windows(q, table.plane, max(4 * float(natural_frequencies(q)[-1]), 1.5 * w))
     edge = next((lo for lo, hi in found if lo <= w and (hi is None or w <= hi)), None)
     word, notes = verdict(starts, table, q)
-    return _document(starts, word, notes, found, edge), starts
+    doc = _document(starts, word, notes, found, edge)
+    doc["rotor"] = rotor_verdict(starts)
+    doc["line"] = f"balls {word}; rotor {doc['rotor']['words']}"
+    doc["overall"] = overall_state(word, doc["rotor"]["verdict"])
+    return doc, starts
+
+
+BALLS_FAILED = frozenset({"below_onset", "in_gap", "over_capacity", "stuck", "unsettled"})
+"""The balancer verdicts that judged the balls and found them wanting."""
+
+
+def rotor_verdict(starts: Sequence[Start]) -> dict[str, Any]:
+    """The rotor's own tolerance verdict over the starts (ISO 21940-14, each start's one
+    verdict): ``fail`` if a start fails, ``undecided`` if one is, ``none`` without a
+    tolerance; and where."""
+    states = [s.result.verdict for s in starts]
+    word = next((v for v in ("fail", "undecided") if v in states), None)
+    if word is None:
+        word = "none" if all(v == "none" for v in states) else "pass"
+    where = sorted({j.name for s in starts for j in s.result.judgements if j.state == word})
+    words = {"pass": "within tolerance", "none": "not judged (no [tolerance])"}.get(
+        word, f"{word.upper()} in {', '.join(where)}"
+    )
+    return {"verdict": word, "where": where, "words": words}
+
+
+def overall_state(balls: str, rotor: str) -> str:
+    """The acceptance state of the whole test: ``fail`` when the balls or the rotor failed,
+    ``not judged`` when either was not judged (or undecided), else ``pass``."""
+    if balls in BALLS_FAILED or rotor == "fail":
+        return "fail"
+    if balls == "not judged" or rotor == "undecided":
+        return "not judged"
+    return "pass"
 
 
 def _polar(U: complex) -> dict[str, float]:

@@ -115,9 +115,12 @@ class Zone:
         know is refused."""
         if name is None:
             return cls(dt.datetime.now().astimezone().tzname() or "local")
+        if not name.strip() or len(name) > 64:  # IANA's names are under 40 characters
+            shown = name if len(name) <= 64 else name[:40] + f"... ({len(name)} characters)"
+            raise UsageError(f"time zone {shown!r}: no such IANA zone (e.g. Europe/Berlin)")
         try:
             return cls(name, zoneinfo.ZoneInfo(name))
-        except (zoneinfo.ZoneInfoNotFoundError, ValueError) as exc:
+        except (zoneinfo.ZoneInfoNotFoundError, ValueError, OSError) as exc:
             raise UsageError(f"time zone {name!r}: no such IANA zone (e.g. Europe/Berlin)") from exc
 
     def local(self, iso: str) -> dt.datetime | None:

@@ -41,11 +41,13 @@ def _starts(tmp_path: Path, scene: Path | str, n: int, capsys: pytest.CaptureFix
     return runs, cfg
 
 
-def _test(runs: list[str], cfg: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
-          ) -> dict:  # type: ignore[type-arg]  # fmt: skip
+def _test(runs: list[str], cfg: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+          code: int = 1) -> dict:  # type: ignore[type-arg]  # fmt: skip
+    """The test's document; its exit code ``code`` (1: the balls or the rotor failed; the
+    demo-balls rotor keeps 3000 g mm in plane 2, where the balls are not)."""
     db = f"sqlite:///{tmp_path / 'archive.db'}"
     assert main(["autobalance", "test", *runs, "--config", str(cfg), "--archive", db,
-                 "--json"]) == 0  # fmt: skip
+                 "--json"]) == code  # fmt: skip
     doc: dict = json.loads(capsys.readouterr().out)  # type: ignore[type-arg]
     return doc
 
@@ -53,21 +55,28 @@ def _test(runs: list[str], cfg: Path, tmp_path: Path, capsys: pytest.CaptureFixt
 def test_a_working_balancer_passes_and_each_start_is_archived(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Two starts at 900 rpm, the test unbalance turned 180 deg: ok, each plane's
-    residual at the prediction (within 3 of its 95 % radii), the archive holds both starts
-    with the verdict in their note, the certificate line names the serial."""
+    """Two starts at 900 rpm, the test unbalance turned 180 deg: the balls ok, each
+    plane's residual at the prediction (within 3 of its 95 % radii); the rotor itself
+    fails its tolerance in plane 2 (3000 g mm against 1220: the balls work in plane 1), and
+    the line, the archive's notes and the exit code (1) say both; the certificate line
+    names the serial."""
     runs, cfg = _starts(tmp_path, _scene(tmp_path), 2, capsys)
     doc = _test(runs, cfg, tmp_path, capsys)
     assert doc["verdict"] == "ok", doc["notes"]
+    assert doc["rotor"] == {"verdict": "fail", "where": ["plane 2"], "words": "FAIL in plane 2"}
+    assert doc["line"] == "balls ok; rotor FAIL in plane 2" and doc["overall"] == "fail"
     for s in doc["starts"]:
         for got, want in zip(s["residual"], s["predicted"], strict=True):
             assert abs(got["unbalance_g_mm"] - want["unbalance_g_mm"]) < 3 * got["uncertainty_g_mm"]
     assert doc["starts"][1]["test_unbalance"][0]["angle_deg"] == 210.0  # turned 180 deg
-    assert doc["certificate"].startswith("balancer test of serial BB-7: ok, 2 start(s)")
+    assert doc["certificate"].startswith(
+        "balancer test of serial BB-7: balls ok; rotor FAIL in plane 2, 2 start(s)"
+    )
     assert main(["history", "--archive", f"sqlite:///{tmp_path / 'archive.db'}", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)
     notes = [r["note"] for r in listed["runs"]]
-    assert notes == ["balancer test: ok (start 1 of 2)", "balancer test: ok (start 2 of 2)"]
+    assert notes == [f"balancer test: balls ok; rotor FAIL in plane 2 (start {k} of 2)"
+                     for k in (1, 2)]  # fmt: skip
 
 
 @pytest.mark.parametrize(
@@ -212,3 +221,41 @@ def test_starts_honour_the_speed_given(tmp_path: Path, capsys: pytest.CaptureFix
     capsys.readouterr()
     doc = _test([str(out / "start-01.h5")], cfg, tmp_path, capsys)
     assert doc["rpm"] == pytest.approx(430.0, abs=0.5) and doc["verdict"] == "in_gap"
+
+
+def test_starts_that_are_not_this_rotors_own_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One file given twice, a byte copy, a config with 40 g balls where the runs had
+    50 g, a run of the demo rotor without balls: each one line, exit 2; a start whose test
+    unbalance nobody knows is not judged (exit 3) on a rotor within its tolerance."""
+    import shutil
+
+    scene = _scene(tmp_path, **{"plane2 = { g_mm = 3000.0": "plane2 = { g_mm = 300.0"})
+    runs, cfg = _starts(tmp_path, scene, 2, capsys)
+    copy = tmp_path / "copy.h5"
+    shutil.copy(runs[0], copy)
+    lighter = tmp_path / "lighter.toml"
+    lighter.write_text(cfg.read_text().replace("ball_g = 50.0", "ball_g = 40.0", 1))
+    plain = tmp_path / "plain.h5"
+    assert main(["simulate", "demo", "--out", str(plain), "--seed", "3"]) == 0
+    cases = [
+        ([runs[0], runs[0]], cfg, "one run per start"),
+        ([runs[0], str(copy)], cfg, "one recording"),
+        (runs, lighter, "[autobalancer] ball_g = 50.0, the config has 40.0: another balancer"),
+        ([runs[0], str(plain)], cfg, "without a ball balancer"),
+    ]
+    for starts, config, says in cases:
+        capsys.readouterr()
+        argv = ["autobalance", "test", *starts, "--config", str(config), "--no-archive"]
+        assert main(argv) == 2, says
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and says in err[0], err
+    unknown = tmp_path / "unknown.h5"
+    assert main(["simulate", str(scene), "--out", str(unknown), "--seed", "5"]) == 0
+    capsys.readouterr()
+    argv = ["autobalance", "test", str(unknown), "--config", str(cfg), "--no-archive", "--json"]
+    assert main(argv) == 3
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["verdict"] == "not judged" and doc["rotor"]["verdict"] == "pass"
+    assert doc["line"] == "balls not judged; rotor within tolerance"

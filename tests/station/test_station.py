@@ -115,7 +115,7 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
     row = {"id": 3, "start_time": "2026-11-22T10:00:00+00:00", "serial": "U-1",
            "rotor_type": "us", "verdict": "pass", "checks_run": None,
            "planes": [plane]}  # fmt: skip
-    note = "balancer test: ok (start 1 of 2)"  # what stand autobalance test archives
+    note = "balancer test: balls ok; rotor within tolerance (start 1 of 2)"  # as archived
     assert _history_row({**row, "note": note}, Display(*st.display_units("us")))["note"] == note
     shown = _history_row(row, Display(*st.display_units("us")))["plane 1"]
     assert shown == "3.937 oz in at 30°"  # 2834.952 g mm / 28.3495 g/oz / 25.4 mm/in

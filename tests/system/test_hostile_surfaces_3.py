@@ -1,0 +1,115 @@
+"""The third hostile matrix: the surfaces added in the month of the ball balancer and the
+rocker (their bounds against the whole), reprocess, the Q-DAS time zone and the tooling
+store, and the machine's own tests (evaluate, residual, capability).
+
+Every case ends in exit 2 with one line on stderr that starts ``stand: error:`` and names
+what and where (``says``).  No case may let a Python warning through, end in "internal
+error" or a traceback, or take longer than :data:`LIMIT_S` (a hang guard: each takes under
+a second idle).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from stand.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+ROCKER = (ROOT / "examples" / "grinder-rocker.toml").read_text()
+LIMIT_S = 30.0
+"""A hang guard, not a speed figure."""
+
+
+def _rocker(tmp: Path, old: str, new: str) -> list[str]:
+    assert old in ROCKER, old
+    path = tmp / "rocker.toml"
+    path.write_text(ROCKER.replace(old, new, 1))
+    return ["autobalance", "--rocker", str(path)]
+
+
+def _archive(tmp: Path) -> str:
+    return f"sqlite:///{tmp / 'a.sqlite'}"
+
+
+def _file(tmp: Path) -> str:
+    path = tmp / "a-file"
+    path.write_text("x")
+    return str(path)
+
+
+BALLS = ["autobalance", "--scene", "demo-balls", "--rpm", "900"]
+CASES: dict[str, tuple[Callable[[Path], list[str]], str]] = {
+    "ball of 1e-300 g": (lambda t: [*BALLS, "--ball-g", "1e-300"], "[autobalancer.ball_g]"),
+    "race of 1e-300 mm": (lambda t: [*BALLS, "--radius-mm", "1e-300"], "[autobalancer.radius_mm]"),
+    "a 5 m race on a 90 mm plane": (lambda t: [*BALLS, "--radius-mm", "5000"], "beyond 1.5 times"),
+    "a 0.2 m race on a 90 mm plane": (lambda t: [*BALLS, "--radius-mm", "200"], "beyond 1.5"),
+    "640 kg of balls on 60 kg": (lambda t: [*BALLS, "--ball-g", "10000"], "more than 10 %"),
+    "rocker: one ball": (lambda t: _rocker(t, "balls = 2", "balls = 1"), "[rocker.balls]"),
+    "rocker: hinge 1e-300": (lambda t: _rocker(t, "hinge_c_n_m = 2000.0", "hinge_c_n_m = 1e-300"),
+                             "[rocker.hinge_c_n_m]"),
+    "rocker: cutting angle 3.2 rad": (lambda t: _rocker(t, "gamma_rad = 1.4", "gamma_rad = 3.2"),
+                                      "gamma_rad"),
+    "rocker: contact geometry 10 m": (
+        lambda t: _rocker(t, "disc_radius_m = 0.0625", "disc_radius_m = 10.0"), "disc_radius_m"),
+    "rocker: race outside the disc": (
+        lambda t: _rocker(t, "race_radius_m = 0.03", "race_radius_m = 0.07"), "outside the disc"),
+    "reprocess: revision of spaces": (
+        lambda t: ["reprocess", "--archive", _archive(t), "--revision", "   "], "--revision"),
+    "reprocess: revision with a control character": (
+        lambda t: ["reprocess", "--archive", _archive(t), "--revision", "r\x01"], "--revision"),
+    "reprocess: revision of 65 characters": (
+        lambda t: ["reprocess", "--archive", _archive(t), "--revision", "r" * 65], "--revision"),
+    "reprocess: runs root a file": (
+        lambda t: ["reprocess", "--archive", _archive(t), "--revision", "r", "--runs-root",
+                   _file(t)], "a file"),
+    "reprocess: runs root missing": (
+        lambda t: ["reprocess", "--archive", _archive(t), "--revision", "r", "--runs-root",
+                   str(t / "gone")], "not there"),
+    "qdas: empty time zone": (
+        lambda t: ["export", "qdas", "--rotor-type", "x", "--archive", _archive(t), "--timezone",
+                   "", "-o", str(t / "x.dfq")], "no such IANA zone"),
+    "qdas: a time zone of 5000 characters": (
+        lambda t: ["export", "qdas", "--rotor-type", "x", "--archive", _archive(t), "--timezone",
+                   "A" * 5000, "-o", str(t / "x.dfq")], "(5000 characters)"),
+    "qdas: a time zone of spaces": (
+        lambda t: ["export", "qdas", "--rotor-type", "x", "--archive", _archive(t), "--timezone",
+                   "   ", "-o", str(t / "x.dfq")], "no such IANA zone"),
+    "tooling: folder a file": (
+        lambda t: ["tooling", "show", "--folder", _file(t)], "is a file"),
+    "evaluate: URR claim of 0": (
+        lambda t: ["evaluate", "--scene", "demo", "--urr-claim", "0"], "--urr-claim"),
+    "evaluate: record into a folder that exists": (
+        lambda t: ["evaluate", "--scene", "demo", "--record", str(t)], "exists already"),
+    "residual: trial of 3 x": (
+        lambda t: ["residual", "--scene", "demo", "--trial", "3"], "--trial"),
+    "capability: 24 runs": (
+        lambda t: ["capability", "--scene", "demo", "--count", "24"], "--count"),
+    "capability: a master without its angle": (
+        lambda t: ["capability", "x.h5", "--master", "1:5000"], "PLANE:G_MM@DEG"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_hostile_input_is_one_line(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    build, says = CASES[name]
+    argv = build(tmp_path)
+    capsys.readouterr()
+    t0 = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        code = main(argv)
+    took = time.perf_counter() - t0
+    _, err = capsys.readouterr()
+    lines = err.strip().splitlines()
+    assert not caught, [str(w.message) for w in caught]
+    assert "internal error" not in err and "Traceback" not in err, err
+    assert took < LIMIT_S, f"{took:.1f} s"
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("stand: error: "), (code, err)
+    assert says in lines[0], err
