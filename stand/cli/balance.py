@@ -7,7 +7,6 @@ import copy
 import sys
 from pathlib import Path
 
-from stand.archive import Archive, drift_rows, file_digest, url_for
 from stand.cli.common import (
     DEFAULT_TARGET_PCT,
     TOLERANCE_SHARE,
@@ -27,6 +26,7 @@ from stand.errors import ArchiveError, StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
 from stand.health import datum_row, with_drift
+from stand.process import warm_imports
 from stand.report import render, render_speeds
 from stand.solve import to_json, with_check
 from stand.solve.recordings import result_masses, solve_recording
@@ -96,6 +96,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+AFTER_THE_MEASUREMENT = ("stand.archive", "alembic.command", "stand.report.plots",
+                         "matplotlib.pyplot")  # fmt: skip
+"""What ``stand balance`` needs after its measurement (the stand's drift from the archive,
+the report): imported while it measures (:func:`stand.process.warm_imports`)."""
+
+
 def run(args: argparse.Namespace) -> int:
 
     if args.speeds:
@@ -107,9 +113,12 @@ def run(args: argparse.Namespace) -> int:
             args.report, force=args.force, inputs=[i for i in (args.check, args.config) if i]
         )
     options = solve_options(args, traces=True)
+    warm_imports(AFTER_THE_MEASUREMENT)  # while the physics runs, not after it
     result, cfg, params = measure_live_from_args(
         args, "balance", targets_from(args, TOLERANCE_SHARE), options
     )
+    from stand.archive import drift_rows, url_for
+
     if args.check:
         result = with_check(
             result, args.check, cfg, params, strict=not args.check_any, matrix=options.matrix
@@ -152,6 +161,8 @@ def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: 
     if args.no_archive:
         print("not stored as a calibration datum: --no-archive", file=sys.stderr)
         return
+    from stand.archive import Archive, file_digest, url_for
+
     run_file = result.provenance.run_file  # type: ignore[attr-defined]
     before = solve_recording(args.check)
     if args.applied_masses:

@@ -17,13 +17,11 @@ import argparse
 import sys
 from typing import Any
 
-from stand.archive import archive_result, url_for
 from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.live import live_source, measure_live
-from stand.plant import publish_archived
 from stand.report import Display
 from stand.sim import Mass
 from stand.solve.recordings import correction_masses
@@ -231,6 +229,9 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
     """Archive a live run (unless ``--no-archive``); say where on stderr."""
     if args.no_archive or not result.provenance.run_file:
         return
+    from stand.archive import archive_result, url_for  # after the answer: SQLAlchemy
+    from stand.plant import publish_archived
+
     url = url_for(args.archive, cfg)
     try:
         run_id = archive_result(result, url, config=args.config)

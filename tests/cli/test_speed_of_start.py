@@ -63,3 +63,15 @@ def test_solving_a_rigid_rotor_imports_only_what_it_needs(
     loaded = set(done.stdout.split())
     assert "stand.measuring.measure" in loaded  # it did measure
     assert not loaded & LEFT_OUT, sorted(loaded & LEFT_OUT)
+
+
+def test_balance_leaves_the_archive_and_the_report_until_it_measures() -> None:
+    """``stand balance`` loads without SQLAlchemy, Alembic or matplotlib: they come on a
+    thread while the physics runs (:func:`stand.process.warm_imports`), after the answer's
+    own modules."""
+    code = (
+        "import sys; import stand.cli.balance; "
+        "print(sorted(m for m in ('sqlalchemy', 'alembic', 'matplotlib') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]", done.stdout
