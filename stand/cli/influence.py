@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BaseModel, Field, FiniteFloat
+from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
 from stand.calib.influence import (
     TRIAL_CHANGE,
@@ -65,6 +65,15 @@ class RunsFile(BaseModel):
     plane (reading per g at the trial radius)."""
     weights: list[Annotated[FiniteFloat, Field(gt=0.0, le=1e12)]] | None = None
     """Per reading, for ``--method wls`` (and ``minmax``)."""
+
+    @model_validator(mode="after")
+    def _amplitudes(self) -> RunsFile:
+        for i, row in enumerate(self.matrix or []):
+            for j, (amplitude, _) in enumerate(row):
+                if amplitude < 0:
+                    raise ValueError(f"matrix[{i}][{j}]: an amplitude is negative "
+                                     f"({amplitude:g}): [amplitude, phase_deg]")  # fmt: skip
+        return self
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

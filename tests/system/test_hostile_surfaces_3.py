@@ -36,6 +36,13 @@ def _archive(tmp: Path) -> str:
     return f"sqlite:///{tmp / 'a.sqlite'}"
 
 
+def _negative_matrix(tmp: Path) -> list[str]:
+    path = tmp / "runs.toml"
+    path.write_text("matrix = [[[-3.0, 0.0], [1.0, 0.0]], [[1.0, 0.0], [2.0, 0.0]]]\n\n"
+                    "[[runs]]\nsensors = [[1.0, 0.0], [1.0, 0.0]]\n")  # fmt: skip
+    return ["influence", str(path)]
+
+
 def _file(tmp: Path) -> str:
     path = tmp / "a-file"
     path.write_text("x")
@@ -87,6 +94,7 @@ CASES: dict[str, tuple[Callable[[Path], list[str]], str]] = {
         lambda t: ["evaluate", "--scene", "demo", "--record", str(t)], "exists already"),
     "residual: trial of 3 x": (
         lambda t: ["residual", "--scene", "demo", "--trial", "3"], "--trial"),
+    "influence: a typed-in amplitude of -3": (_negative_matrix, "an amplitude is negative"),
     "capability: 24 runs": (
         lambda t: ["capability", "--scene", "demo", "--count", "24"], "--count"),
     "capability: a master without its angle": (
