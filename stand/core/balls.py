@@ -266,6 +266,7 @@ def integrate_balls(
     start = np.concatenate((np.zeros(4) if y0 is None else np.asarray(y0, float), phi0,
                             np.zeros(balls.n)))  # fmt: skip
     options = {"method": method, "rtol": rtol, "atol": atol, "max_step": 0.5 * math.pi / w_top}
+    _not_too_stiff(balls, float(t_eval[-1]), options["max_step"])
     y, xdd, power, nfev = _segments(sys, start, t_eval, options)
     n = balls.n
     return BallsRun(
@@ -274,6 +275,29 @@ def integrate_balls(
         omega_rad_s=speed.omega(t_eval), drive_w=power[0], dissipated_w=power[1],
         energy_j=power[2], nfev=nfev,
     )  # fmt: skip
+
+
+MAX_EVALUATIONS = 2_000_000
+"""No run of the balls takes more evaluations of their equations (the 60 s demo-balls
+takes about 105 000, 8 s): beyond, the integration is refused, never left running."""
+EVALUATIONS_PER_STEP = 12
+"""DOP853's evaluations per step."""
+
+
+def _not_too_stiff(balls: Balls, t_end_s: float, max_step_s: float) -> None:
+    """Refuse before it starts a run whose drag makes the balls' equations stiff: an
+    explicit step must stay within about 3 of the drag's time constant ``m / c``, and the
+    steps that asks for would take more than :data:`MAX_EVALUATIONS` evaluations."""
+    if balls.drag_n_s_m <= 0:
+        return
+    tau = balls.mass_kg / balls.drag_n_s_m
+    need = EVALUATIONS_PER_STEP * t_end_s / min(max_step_s, 3.0 * tau)
+    if need > MAX_EVALUATIONS:
+        raise ModelError(
+            f"the balls' drag makes their equations stiff: a time constant of {tau:.2g} s "
+            f"(ball mass / drag_n_s_m) asks for about {need:.2g} evaluations over {t_end_s:g} "
+            f"s, more than {MAX_EVALUATIONS:g}: a drag this large holds the balls (lower it)"
+        )
 
 
 MAX_SWITCHES = 20_000
@@ -293,7 +317,15 @@ def _segments(sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str
     for _ in range(MAX_SWITCHES):
         h, sl = held.copy(), slip.copy()
 
-        def rhs(t: float, z: FloatArray, h: Any = h, sl: Any = sl) -> FloatArray:
+        count = [nfev]
+
+        def rhs(
+            t: float, z: FloatArray, h: Any = h, sl: Any = sl, count: list[int] = count
+        ) -> FloatArray:
+            count[0] += 1
+            if count[0] > MAX_EVALUATIONS:  # whatever made it stiff: ended, never left running
+                raise ModelError(f"the balls' equations took more than {MAX_EVALUATIONS:g} "
+                                 f"evaluations by t = {t:.3g} s: too stiff")  # fmt: skip
             xdd, phidd = sys.accel(np.array([t]), z[:, None], h, sl)
             return np.concatenate((z[2:4], xdd[:, 0], z[4 + n :], phidd[:, 0]))
 

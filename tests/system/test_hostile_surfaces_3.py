@@ -43,6 +43,15 @@ def _negative_matrix(tmp: Path) -> list[str]:
     return ["influence", str(path)]
 
 
+def _stiff(tmp: Path) -> list[str]:
+    from stand.sim import shipped_scenes
+
+    text = Path(str(shipped_scenes()["demo-balls"])).read_text()
+    path = tmp / "stiff.toml"
+    path.write_text(text.replace("drag_n_s_m = 0.5", "drag_n_s_m = 5000.0"))
+    return ["simulate", str(path), "--out", str(tmp / "s.h5")]
+
+
 def _file(tmp: Path) -> str:
     path = tmp / "a-file"
     path.write_text("x")
@@ -95,6 +104,7 @@ CASES: dict[str, tuple[Callable[[Path], list[str]], str]] = {
     "residual: trial of 3 x": (
         lambda t: ["residual", "--scene", "demo", "--trial", "3"], "--trial"),
     "influence: a typed-in amplitude of -3": (_negative_matrix, "an amplitude is negative"),
+    "simulate: a drag that stiffens the balls": (_stiff, "the balls' drag makes their equations"),
     "capability: 24 runs": (
         lambda t: ["capability", "--scene", "demo", "--count", "24"], "--count"),
     "capability: a master without its angle": (
