@@ -265,8 +265,9 @@ def integrate_balls(
     ))  # fmt: skip
     start = np.concatenate((np.zeros(4) if y0 is None else np.asarray(y0, float), phi0,
                             np.zeros(balls.n)))  # fmt: skip
-    options = {"method": method, "rtol": rtol, "atol": atol, "max_step": 0.5 * math.pi / w_top}
-    _not_too_stiff(balls, float(t_eval[-1]), options["max_step"])
+    max_step = 0.5 * math.pi / w_top
+    _not_too_stiff(balls, float(t_eval[-1]), max_step)
+    options = {"method": method, "rtol": rtol, "atol": atol, "max_step": max_step}
     y, xdd, power, nfev = _segments(sys, start, t_eval, options)
     n = balls.n
     return BallsRun(
