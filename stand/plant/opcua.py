@@ -18,6 +18,7 @@ from __future__ import annotations
 import asyncio
 import errno
 import logging
+import re
 import sys
 import threading
 from collections.abc import Callable
@@ -45,8 +46,11 @@ POLL_S = 0.25
 """How often the archive is asked for a new run [s] (an event within about this)."""
 NO_RESULT, FILTER_NOT_SUPPORTED, ARCHIVE_UNAVAILABLE = -1, -2, -3
 """The methods' application-specific ``Error`` outputs (OPC 40001-101: 0 OK, < 0 the
-application's own): no such result; a Filter with elements (only the empty filter, every
-result, is supported); the archive did not answer."""
+application's own): no such result; a Filter with elements, or one that is no
+ContentFilter (only the empty filter, every result, is supported); the archive did not
+answer."""
+RESULT_ID = re.compile(r"[1-9][0-9]{0,17}")
+"""A ResultId: the archive's run id in ASCII digits (``[0-9]`` is ASCII in ``re``)."""
 
 __all__ = ["NAMESPACE", "Access", "ResultServer", "check_bind"]
 
@@ -146,8 +150,9 @@ class ResultServer:
             self._drop()
             return self._answer(None, ARCHIVE_UNAVAILABLE)
 
-    async def _by_id(self, result_id: str, timeout_ms: int) -> list[Any]:
-        if not result_id.isdigit() or len(result_id) > 18:
+    async def _by_id(self, result_id: str | None, timeout_ms: int) -> list[Any]:
+        # ASCII digits only: "²" or "١" are no run id under another spelling; null is none
+        if not isinstance(result_id, str) or not RESULT_ID.fullmatch(result_id):
             return self._answer(None)
         try:
             return self._answer(latest(self._open(), self.stand_id, int(result_id)))
@@ -163,8 +168,8 @@ class ResultServer:
                     ua.Variant(ids, ua.VariantType.String),
                     ua.Variant(error, ua.VariantType.Int32)]  # fmt: skip
 
-        if getattr(filt, "Elements", None):
-            return out([], FILTER_NOT_SUPPORTED)
+        if filt is not None and (not hasattr(filt, "Elements") or filt.Elements):
+            return out([], FILTER_NOT_SUPPORTED)  # elements, or no ContentFilter at all
         try:
             ids = newest_ids(self._open(), self.stand_id, most or None)
         except ArchiveError:

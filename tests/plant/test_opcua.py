@@ -178,6 +178,15 @@ async def _calls(ns: dict[str, int], rm: Any, run_id: str, event: Any, url: str)
     assert error == 0 and again == result
     _, none, error = await rm.call_method(by_id, ua.Variant("999"), timeout)
     assert error == -1 and getattr(none, "Body", none) is None  # a null ExtensionObject
+    for spelled in ("²", "\u0661", "0" + run_id, None):  # another spelling, or none at all
+        got = await rm.call_method(by_id, ua.Variant(spelled, ua.VariantType.String), timeout)
+        assert got[2] == -1, spelled
+    wrong = await rm.call_method(  # a ReadValueId where the ContentFilter goes: not "all"
+        await method("GetResultIdListFiltered"), ua.Variant(ua.ReadValueId()),
+        ua.Variant([], ua.VariantType.ExtensionObject), ua.Variant(0, ua.VariantType.UInt32),
+        timeout,
+    )  # fmt: skip
+    assert wrong == [0, [], -2]
     listed = await rm.call_method(
         await method("GetResultIdListFiltered"), ua.Variant(ua.ContentFilter()),
         ua.Variant([], ua.VariantType.ExtensionObject), ua.Variant(0, ua.VariantType.UInt32),
