@@ -4,7 +4,7 @@ this balancer, each its own.
 A start recorded with another rotor (its stored ``[rotor]``), without balls, or with
 another balancer (plane, count, ball mass, race radius) than the config's is refused, as
 are two starts that are one file, or one recording (their 1x alike beyond any chance of
-noise, :func:`stand.core.same.is_same_data`: a copy).  Each refusal is one line naming
+noise, :func:`stand.solve.index_runs.same_data`: a copy).  Each refusal is one line naming
 the start and what differs.
 """
 
@@ -15,11 +15,9 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from stand.config import Config
-from stand.core.same import is_same_data
 from stand.errors import ConfigError, UsageError
+from stand.solve.index_runs import same_data
 
 BALANCER_KEYS = ("plane", "balls", "ball_g", "radius_mm")
 """What makes a balancer another one."""
@@ -65,11 +63,6 @@ def check_distinct(paths: list[str], results: list[Any]) -> None:
     for (i, a), (j, b) in itertools.combinations(enumerate(paths), 2):
         if Path(a).resolve() == Path(b).resolve():
             raise UsageError(f"start {j + 1} is start {i + 1} again ({a}): one run per start")
-        ma, mb = results[i].measurement, results[j].measurement
-        if ma.cov_A_m2_s4 is None or mb.cov_A_m2_s4 is None:
-            continue
-        pa = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in ma.supports]).ravel()
-        pb = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in mb.supports]).ravel()
-        if is_same_data(pb - pa, np.asarray(ma.cov_A_m2_s4) + np.asarray(mb.cov_A_m2_s4)):
+        if same_data(results[i].measurement, results[j].measurement):
             raise UsageError(f"starts {i + 1} and {j + 1} ({a}, {b}) are one recording (their "
                              "1x alike beyond any chance of noise): one run per start")  # fmt: skip

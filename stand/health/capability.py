@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from stand.config import Config
-from stand.core import StandParameters, unbalance_from_polar
+from stand.core import StandParameters
 from stand.core.capability import MIN_RUNS, Capability, capability
 from stand.errors import UsageError
-from stand.health.proving import measure_scene, with_unbalance
+from stand.health.proving import measure_scene, scene_unbalance, with_unbalance
 from stand.sim import Scene
 from stand.solve import measure_recording
 
@@ -24,8 +24,7 @@ from stand.solve import measure_recording
 def scene_readings(scene: Scene, p: StandParameters, runs: int) -> tuple[np.ndarray, np.ndarray]:
     """``runs`` runs of the scene's rotor (seeds apart): the readings (runs x 2) and the
     master's known unbalance (the scene's) [kg m]."""
-    u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
-    U = unbalance_from_polar([u1.g_mm * 1e-6, u2.g_mm * 1e-6], [u1.angle_deg, u2.angle_deg])
+    U = scene_unbalance(scene)
     cfg = scene.config()
     got = [
         measure_scene(with_unbalance(scene, U, scene.run.seed + k), p, cfg, None).solution.U_kg_m

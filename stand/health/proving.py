@@ -92,6 +92,13 @@ def with_unbalance(scene: Scene, U_kg_m: np.ndarray, seed: int) -> Scene:
     return scene.model_copy(update={"unbalance": table, "run": run})
 
 
+def scene_unbalance(scene: Scene) -> np.ndarray:
+    """The scene's rotor unbalance per plane [kg m] (its ``[unbalance]`` table: what
+    :func:`with_unbalance` writes)."""
+    u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
+    return unbalance_from_polar([u1.g_mm * 1e-6, u2.g_mm * 1e-6], [u1.angle_deg, u2.angle_deg])
+
+
 def step_up(x: float) -> float:
     """The smallest 1-2-5 step >= x."""
     decade = 10.0 ** math.floor(math.log10(x))
@@ -134,8 +141,7 @@ def scene_runs(scene: Scene, p: StandParameters, record: Path | None = None) -> 
     1-2-5 step), then the reference run, the 12 U_mar runs and the URR runs.  ``record``:
     a folder the runs and ``runs.toml`` are written to."""
     cfg = scene.config()
-    u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
-    U0 = unbalance_from_polar([u1.g_mm * 1e-6, u2.g_mm * 1e-6], [u1.angle_deg, u2.angle_deg])
+    U0 = scene_unbalance(scene)
     m0 = measure_scene(with_unbalance(scene, U0, scene.run.seed), p, cfg, None)
     residual, seed = U0 - m0.solution.U_kg_m, scene.run.seed + 1
     checks = []

@@ -24,7 +24,13 @@ from stand.core import StandParameters
 from stand.core.machine_tests import fit_circle
 from stand.core.tolerance import judge
 from stand.errors import ConfigError, StandError
-from stand.health.proving import TestMass, measure_scene, read_spec, with_unbalance
+from stand.health.proving import (
+    TestMass,
+    measure_scene,
+    read_spec,
+    scene_unbalance,
+    with_unbalance,
+)
 from stand.sim import Scene
 from stand.solve import measure_recording
 
@@ -144,9 +150,7 @@ def scene_check(
     """The check on a scene (its unbalance the rotor's residual): a trial of ``trial_share``
     times each plane's permissible at ``positions`` positions, plane by plane."""
     cfg = scene.config()
-    u1, u2 = scene.unbalance.plane1, scene.unbalance.plane2
-    U0 = np.array([u1.g_mm * 1e-6 * np.exp(-1j * math.radians(u1.angle_deg)),
-                   u2.g_mm * 1e-6 * np.exp(-1j * math.radians(u2.angle_deg))])  # fmt: skip
+    U0 = scene_unbalance(scene)
     out = []
     for i in range(2):
         trial = trial_share * permissible[i]

@@ -23,15 +23,20 @@ from stand.solve.recordings import measure_recording
 from stand.solve.tooling import TOOLING_NAME, Tooling
 
 
+def same_data(m_a: Any, m_b: Any) -> bool:
+    """Whether two measurements are one recording: their support phasors alike beyond what
+    noise can make (:mod:`stand.core.same`; a byte copy, a run kept twice).  False where a
+    measurement carries no covariance to judge by."""
+    if m_a.cov_A_m2_s4 is None or m_b.cov_A_m2_s4 is None:
+        return False
+    a = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m_a.supports]).ravel()
+    b = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m_b.supports]).ravel()
+    return is_same_data(b - a, np.asarray(m_a.cov_A_m2_s4) + np.asarray(m_b.cov_A_m2_s4))
+
+
 def _two_runs(m0: Any, m180: Any, run_0: str, run_180: str) -> None:
-    """Refuse two index runs that are one: the support phasors alike beyond what noise
-    can make (:mod:`stand.core.same`; a byte copy, a run recorded once and kept twice)."""
-    a0 = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m0.supports]).ravel()
-    a1 = np.array([(p.A_m_s2.real, p.A_m_s2.imag) for p in m180.supports]).ravel()
-    if m0.cov_A_m2_s4 is None or m180.cov_A_m2_s4 is None:
-        return
-    cov = np.asarray(m0.cov_A_m2_s4) + np.asarray(m180.cov_A_m2_s4)
-    if is_same_data(a1 - a0, cov):
+    """Refuse two index runs that are one (:func:`same_data`)."""
+    if same_data(m0, m180):
         raise UsageError(
             f"{run_0} and {run_180} are the same data (their 1x alike beyond any chance of "
             f"noise): the 180 deg run must be the rotor turned half a revolution on its tooling"
