@@ -12,6 +12,7 @@ from typing import Any
 
 from stand.archive.schema import runs
 from stand.archive.store import Archive, default_url
+from stand.config import Config
 from stand.errors import RecordingError, StandError
 from stand.files import check_input
 from stand.solve import Result, json_text, solve_recording, to_json
@@ -19,7 +20,7 @@ from stand.solve import Result, json_text, solve_recording, to_json
 READ_CHUNK = 1 << 20
 
 
-def url_for(option: str | None, cfg: Any = None) -> str:
+def url_for(option: str | None, cfg: Config | None = None) -> str:
     """The archive to use: the option, else the config's ``[archive] url``, else the default."""
     if option:
         return option

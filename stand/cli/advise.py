@@ -7,7 +7,7 @@ from typing import Any
 
 from stand.calib.advisor import advise, plan_across_speeds
 from stand.cli.format import dump_json
-from stand.config import load_config
+from stand.config import Config, load_config
 from stand.config.typed import parse_rpm
 from stand.core.flexible import rigid_limit_rpm
 
@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _json(a: Any, cfg: Any, limit: float | None, plan: Any) -> dict[str, Any]:
+def _json(a: Any, cfg: Config, limit: float | None, plan: Any) -> dict[str, Any]:
     out: dict[str, Any] = {
         "natural_frequencies_hz": list(a.natural_frequencies_hz),
         "natural_frequencies_rpm": [f * 60 for f in a.natural_frequencies_hz],
@@ -71,7 +71,7 @@ def _json(a: Any, cfg: Any, limit: float | None, plan: Any) -> dict[str, Any]:
     return out
 
 
-def _print(a: Any, cfg: Any, limit: float | None, plan: Any, beam: Any) -> None:
+def _print(a: Any, cfg: Config, limit: float | None, plan: Any, beam: Any) -> None:
     rec = a.recommended_rpm
     print("balance between " + (f"{rec[0]:.0f} and {rec[1]:.0f} rpm" if rec else "- (none found)"))
     for reason in a.reasons:

@@ -12,7 +12,7 @@ from typing import Any
 from stand.archive import archive_result, url_for
 from stand.cli.common import ACCEPTANCE_EXIT, add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
-from stand.config import load_config, validate
+from stand.config import Config, load_config, validate
 from stand.config.autobalancer import AutobalancerTable, check_autobalancer
 from stand.config.rocker import load_rocker
 from stand.config.typed import parse_rpm, parse_unbalance, positive_float
@@ -68,7 +68,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-archive", action="store_true", help="test: do not archive the starts")
 
 
-def _table(args: argparse.Namespace, cfg: Any, source: str) -> AutobalancerTable:
+def _table(args: argparse.Namespace, cfg: Config, source: str) -> AutobalancerTable:
     """The config's ``[autobalancer]`` with the options over it (or the options alone)."""
     given = {k: getattr(args, k) for k in BALL_KEYS if getattr(args, k) is not None}
     base = cfg.autobalancer.model_dump() if cfg.autobalancer is not None else {}

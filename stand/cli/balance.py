@@ -19,7 +19,7 @@ from stand.cli.common import (
 )
 from stand.cli.format import dump_json, print_speeds, show
 from stand.cli.panel import archive_live, measure_live_from_args
-from stand.config import SAME_SPEED
+from stand.config import SAME_SPEED, Config
 from stand.config.typed import parse_mass, parse_rpm
 from stand.core import rad_s_to_rpm
 from stand.errors import ArchiveError, StandError, UsageError
@@ -148,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _store_datum(args: argparse.Namespace, result: object, cfg: object, params: object) -> None:
+def _store_datum(args: argparse.Namespace, result: object, cfg: Config, params: object) -> None:
     """A check after a confirmed correction: the pair into the archive (stand health)."""
 
     if not (args.applied or args.applied_masses):

@@ -16,6 +16,7 @@ from stand.archive import correction_rows, url_for
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
 from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
 from stand.cli.format import dump_json
+from stand.config import Config
 from stand.config.edit import updated_toml
 from stand.config.schema import STRICT, load_config, read_toml, validate
 from stand.errors import ConfigError, ModelError, UsageError
@@ -138,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _identified_config(cfg: Any, v: dict[str, float]) -> Any:
+def _identified_config(cfg: Config, v: dict[str, float]) -> Any:
     """The config with the identified stand: masses, stiffnesses, damping, the reference
     angle, the sensors' gains and delays, today's date."""
     stand = cfg.stand.model_copy(
@@ -175,11 +176,12 @@ def _calibration_runs(args: argparse.Namespace, params: Any) -> list[Any]:
     return runs
 
 
-def _rotor(args: argparse.Namespace, cfg: Any, params: Any, runs: list[Any]) -> int:
+def _rotor(args: argparse.Namespace, cfg: Config, params: Any, runs: list[Any]) -> int:
     """``--rotor``: M3, J3 and the centre of mass on the configured (identified) stand."""
 
     try:
-        res = identify_rotor(params, runs, tuple(cfg.sensors.gain), tuple(cfg.sensors.delay_s))
+        g, d = cfg.sensors.gain, cfg.sensors.delay_s
+        res = identify_rotor(params, runs, (g[0], g[1]), (d[0], d[1]))
     except ModelError as exc:
         raise ConfigError(str(exc), source=args.runs) from None
     v, se = res.values, res.std_errors
@@ -218,7 +220,7 @@ def _estimate_line(name: str, value: float, error: float) -> str:
 
 
 def _write(
-    args: argparse.Namespace, title: str, res: Any, names: list[str], whose: str, cfg: Any
+    args: argparse.Namespace, title: str, res: Any, names: list[str], whose: str, cfg: Config
 ) -> list[str]:
     """The calibrated configuration, its fit and standard errors as comments on top."""
 
@@ -250,7 +252,7 @@ def _write(
 FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
 
 
-def _refitted_config(cfg: Any, r: Any, original: str) -> tuple[list[str], str]:
+def _refitted_config(cfg: Config, r: Any, original: str) -> tuple[list[str], str]:
     """The config with the refitted values (stiffnesses, masses, gains; today's date), its
     header of comments with the fits, and its text (the user's comments kept)."""
 

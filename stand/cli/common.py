@@ -9,7 +9,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from stand.calib import Tolerances
-from stand.config import read_matrix
+from stand.config import Config, read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import UsageError
@@ -370,7 +370,7 @@ def targets_from(args: argparse.Namespace, tolerance_share: float | None = None)
 
     abs_kg_m = None if args.target_g_mm is None else args.target_g_mm * 1e-6
 
-    def targets(cfg: Any, params: Any, U: Any) -> tuple[float, float]:
+    def targets(cfg: Config, params: Any, U: Any) -> tuple[float, float]:
         return precision_targets(
             cfg, params, U,
             pct=args.target_pct,

@@ -18,7 +18,7 @@ from stand.calib.influence import (
 )
 from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json, print_warnings, show
-from stand.config import STRICT, read_toml, validate
+from stand.config import STRICT, Config, read_toml, validate
 from stand.config.matrix import Pair, matrix_document, parse_matrix, read_matrix
 from stand.config.tables import Rpm, TrialMass, TrialRadius
 from stand.config.typed import positive_float
@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
 def _measured_matrix(
     args: argparse.Namespace,
     runs: list[Any],
-    cfg: Any,
+    cfg: Config,
     text: str,
     entries: Any,
     omega: float | None,
@@ -303,7 +303,7 @@ def run_field(args: argparse.Namespace, spec: Any, entries: list[Any]) -> int:
     return 0
 
 
-def _save(args: argparse.Namespace, result: Any, cfg: Any, entries: list[Any]) -> None:
+def _save(args: argparse.Namespace, result: Any, cfg: Config, entries: list[Any]) -> None:
 
     try:
         imap = InfluenceMap(result.alpha)

@@ -18,6 +18,7 @@ import sys
 from typing import Any
 
 from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
+from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError
 from stand.field.speeds import correction_masses_across_speeds
@@ -225,7 +226,7 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
     return masses
 
 
-def archive_live(args: argparse.Namespace, result: Any, cfg: Any) -> None:
+def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
     """Archive a live run (unless ``--no-archive``); say where on stderr."""
     if args.no_archive or not result.provenance.run_file:
         return

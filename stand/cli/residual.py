@@ -8,6 +8,7 @@ from typing import Any
 
 from stand.cli.common import ACCEPTANCE_EXIT, add_force_argument, write_text_output
 from stand.cli.format import dump_json
+from stand.config import Config
 from stand.errors import ConfigError, UsageError
 from stand.health.residual import PlaneCheck, check_plane, check_trial, file_readings, scene_check
 from stand.sim import load_scene
@@ -86,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     return ACCEPTANCE_EXIT[out["verdict"]]
 
 
-def _permissible(cfg: Any, params: Any, source: str) -> tuple[float, float]:
+def _permissible(cfg: Config, params: Any, source: str) -> tuple[float, float]:
     tol = tolerance_of(cfg, params)
     if tol is None:
         raise ConfigError("no [tolerance]: the check judges against the permissible", source=source)

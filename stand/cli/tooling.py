@@ -10,7 +10,7 @@ from typing import Any
 from stand.archive import Archive, file_digest, url_for
 from stand.cli.common import add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
-from stand.config import load_config
+from stand.config import Config, load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
 from stand.errors import ArchiveError, UsageError
@@ -52,7 +52,7 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
     ]  # fmt: skip
 
 
-def _where(args: argparse.Namespace, cfg: Any) -> Path:
+def _where(args: argparse.Namespace, cfg: Config | None) -> Path:
     """The folder of the toolings: ``--folder``, else the config's, else the data folder's."""
     where = Path(args.folder) if args.folder else folder(None if cfg is None else cfg.tooling)
     if where.exists() and not where.is_dir():

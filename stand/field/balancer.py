@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.config import Config
 from stand.core import rad_s_to_rpm
 from stand.core.autobalance import balanced, driving_point, receptance, windows
 from stand.core.model import StandParameters, natural_frequencies
@@ -127,10 +128,11 @@ def _test_unbalance(meta: dict[str, Any], path: str, first: Sequence[complex] | 
     return (first[0] * turn, first[1] * turn)
 
 
-def one_start(path: str, k: int, config: str, cfg: Any, params: StandParameters,
+def one_start(path: str, k: int, config: str, cfg: Config, params: StandParameters,
               first: Sequence[complex] | None, moved_deg: float) -> Start:  # fmt: skip
     """Start ``k`` (0 first) of the test, from its run file."""
     table = cfg.autobalancer
+    assert table is not None  # balancer_test refuses a config without one
     run = read_run(path, config)  # read once: its attributes, streams and result
     check_recorded(path, run.rec.meta, cfg)
     test = _test_unbalance(run.rec.meta, path, first, k, moved_deg)
@@ -218,7 +220,7 @@ def _follows_the_test(starts: Sequence[Start], plane: int) -> bool:
     return float(np.mean(missed)) > STUCK_SHARE * float(np.mean(moved))
 
 
-def balancer_test(runs: Sequence[str], config: str, cfg: Any, params: StandParameters,
+def balancer_test(runs: Sequence[str], config: str, cfg: Config, params: StandParameters,
                   first: Sequence[complex] | None = None, moved_deg: float = 180.0
                   ) -> tuple[dict[str, Any], list[Start]]:  # fmt: skip
     """The test of the starts ``runs`` (in order): its JSON document (see

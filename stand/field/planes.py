@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.config import Config
 from stand.core import phasor_to_polar, unbalance_to_polar
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
 from stand.errors import ConfigError, ModelError
@@ -133,7 +134,7 @@ def _polar(z: complex, typed: bool) -> list[float]:
     return [float(amp[0]), round(float(ph[0]), 2)]
 
 
-def _plane_json(result: FieldResult, j: int, cfg: Any) -> dict[str, Any]:
+def _plane_json(result: FieldResult, j: int, cfg: Config | None) -> dict[str, Any]:
     """Plane ``j``: the weights to put on as the config's ``[correction]`` says (else masses
     to add at any angle), what it cancels, Darlow's factor, the cap."""
 
@@ -154,7 +155,7 @@ def _plane_json(result: FieldResult, j: int, cfg: Any) -> dict[str, Any]:
     }
 
 
-def field_json(result: FieldResult, cfg: Any = None) -> dict[str, Any]:
+def field_json(result: FieldResult, cfg: Config | None = None) -> dict[str, Any]:
     """The result as one strict-JSON object: per plane the weights to put on as the
     config's ``[correction]`` says, and every reading before and after."""
     sol, t = result.solution, result.typed

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from stand.calib.influence import InfluenceRun, influence_matrix, phasors
-from stand.config import SAME_SPEED
+from stand.config import SAME_SPEED, Config
 from stand.core import rad_s_to_rpm
 from stand.errors import ConfigError, ModelError
 from stand.field.planes import FieldResult, label_readings, reading_weights, solve_field
@@ -125,7 +125,7 @@ def _matrix(spec: Any, runs: list[Any], source: str) -> tuple[np.ndarray, list[A
     return np.array(rows), []
 
 
-def _radii(runs: list[Any], planes: int, cfg: Any) -> list[float]:
+def _radii(runs: list[Any], planes: int, cfg: Config | None) -> list[float]:
     """Each plane's correction radius [m]: its trial's, else the config's (two planes), else
     1 m (masses "at the trial radius")."""
     R = [1.0] * planes

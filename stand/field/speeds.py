@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.config import SAME_SPEED
+from stand.config import SAME_SPEED, Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.core.beam import receptance, receptance_at
 from stand.core.multiplane import METHOD_NAMES, MultiPlaneSolution, solve_multiplane
@@ -246,7 +246,7 @@ def _readings(
 
 
 def _plane_corrections(
-    cfg: Any, sol: MultiPlaneSolution, radii: np.ndarray
+    cfg: Config, sol: MultiPlaneSolution, radii: np.ndarray
 ) -> tuple[PlaneCorrection, ...]:
     """Each plane's correction as the config's ``[correction]`` makes it (weights, stock),
     with its 95 % radius [kg m]."""

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.config import SAME_SPEED, config_from_dict
+from stand.config import SAME_SPEED, Config, config_from_dict
 from stand.core import Diagnostic, rad_s_to_rpm, solve_unbalance, unbalance_to_polar
 from stand.core.drift import (
     CUSUM_H,
@@ -256,7 +256,7 @@ def drift_bands(rows: Sequence[Any], result: Any) -> dict[str, float] | None:
     }
 
 
-def with_drift(rows: Sequence[Any], result: Any, cfg: Any, params: Any, options: Any) -> Any:
+def with_drift(rows: Sequence[Any], result: Any, cfg: Config, params: Any, options: Any) -> Any:
     """``result`` with its calibration interval widened by what :func:`drift_bands` found,
     and a warning saying so; ``result`` itself when the stand is as calibrated."""
 

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from stand.config import Config
 from stand.core import Diagnostic
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, config_digest
 from stand.drivers.v1.build import StreamBuilder
@@ -90,7 +91,7 @@ def _next_check(
 
 def measure_until_precise(
     session: LiveSession,
-    cfg: Any,
+    cfg: Config,
     params: Any,
     options: SolveOptions,
     targets: Callable[[Any], tuple[float, float]],
@@ -156,7 +157,7 @@ def measure_until_precise(
     return _final_result(session, cfg, params, options, targets, last, stopped_by)
 
 
-def _settled(cfg: Any, full: Any) -> bool:
+def _settled(cfg: Config, full: Any) -> bool:
     """A rotor with a ball balancer stops for precision only once the last full pass saw
     its balls settled (a precise average of balls on their way is not the answer)."""
     if cfg.autobalancer is None:
@@ -172,7 +173,7 @@ class Estimates:
     estimate (the benchmark and the tests read it).
     """
 
-    def __init__(self, session: LiveSession, cfg: Any, params: Any, options: SolveOptions):
+    def __init__(self, session: LiveSession, cfg: Config, params: Any, options: SolveOptions):
         self.session, self.cfg, self.params, self.options = session, cfg, params, options
         self.last: Any = None
         self.full: Any = None
@@ -231,7 +232,12 @@ class _Replay:
 
 
 def replay_estimates(
-    frames: Any, cfg: Any, params: Any, options: SolveOptions, every_s: float, block_s: float = 0.1
+    frames: Any,
+    cfg: Config,
+    params: Any,
+    options: SolveOptions,
+    every_s: float,
+    block_s: float = 0.1,
 ) -> Estimates:
     """A recorded run's frames fed, as fast as the machine goes, to the live estimates as a
     live session would feed them (blocks of ``block_s`` of host time), with an estimate every
@@ -263,7 +269,7 @@ def _kept_estimate(last: Any, exc: Exception) -> Any:
 
 def _final_result(
     session: LiveSession,
-    cfg: Any,
+    cfg: Config,
     params: Any,
     options: SolveOptions,
     targets: Callable[[Any], tuple[float, float]],

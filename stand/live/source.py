@@ -10,7 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from stand.config import config_toml
+from stand.config import Config, config_toml
 from stand.config.bus import bus_choice
 from stand.errors import UsageError
 from stand.sim import load_scene, scene_modules, simulate, with_masses
@@ -26,7 +26,7 @@ class LiveSource:
     private virtual bus: ``scene_bus``); ``config_toml`` is stored in the run.
     """
 
-    cfg: Any
+    cfg: Config
     params: Any
     config_toml: str
     bus_table: dict[str, Any] | None = None

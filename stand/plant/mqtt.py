@@ -18,6 +18,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from stand.archive import file_digest, verdict
+from stand.config import Config
 from stand.errors import ArchiveError
 from stand.solve import Result, json_text, to_json
 
@@ -83,7 +84,7 @@ def publish(result: Result, run_id: int, url: str) -> str:
     return name
 
 
-def publish_archived(result: Result, run_id: int, cfg: Any) -> str | None:
+def publish_archived(result: Result, run_id: int, cfg: Config) -> str | None:
     """Publish an archived result (``run_id``, the archive's) when the config names a
     broker; a note (never an error) when it could not be: the run is archived and kept."""
     plant = getattr(cfg, "plant", None)

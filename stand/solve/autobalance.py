@@ -14,6 +14,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from stand.config import Config
 from stand.core import Diagnostic, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.autobalance import antiresonance, balanced, driving_point, windows, with_balls
 from stand.core.model import StandParameters, natural_frequencies
@@ -109,7 +110,7 @@ BALLS_DRIFT = 0.01
 of that change's standard errors) is taken as balls still on their way."""
 
 
-def balls_note(cfg: Any, p: StandParameters, m: Any) -> Any:
+def balls_note(cfg: Config, p: StandParameters, m: Any) -> Any:
     """A warning on the measurement ``m`` of a rotor with a ball balancer (the config's
     ``[autobalancer]``): outside every window the balls gather on the heavy side; a 1x
     that wanders, or drifts across the window, means they have not settled.  None when

@@ -13,7 +13,7 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from stand.config import SAME_SPEED, config_toml
+from stand.config import SAME_SPEED, Config, config_toml
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
 from stand.errors import UsageError
 from stand.measuring import Measurement
@@ -28,7 +28,7 @@ from stand.solve.result import Check, Result
 
 def check_against(
     previous: str,
-    cfg: Any,
+    cfg: Config,
     params: StandParameters,
     after: Measurement,
     *,
@@ -115,7 +115,7 @@ def check_notes(check: Check) -> list[Diagnostic]:
 def with_check(
     result: Result,
     previous: str,
-    cfg: Any,
+    cfg: Config,
     params: StandParameters,
     *,
     strict: bool = True,

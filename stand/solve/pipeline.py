@@ -26,7 +26,7 @@ import numpy as np
 
 from stand import __version__
 from stand.calib.tolerance import Tolerances, parameter_uncertainty
-from stand.config import config_from_dict, read_toml
+from stand.config import Config, config_from_dict, read_toml
 from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_to_rpm
 from stand.core.balance import static_couple
 from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
@@ -132,7 +132,7 @@ class ConfigText:
 
 
 def precision_targets(
-    cfg: Any,
+    cfg: Config,
     params: StandParameters,
     U_kg_m: Sequence[complex],
     *,
@@ -173,7 +173,7 @@ def _uncertainty(m: Measurement, params: StandParameters, options: SolveOptions)
 
 def calibration_radius(
     m: Measurement,
-    cfg: Any,
+    cfg: Config,
     params: StandParameters,
     options: SolveOptions,
     drifted: dict[str, float] | None = None,
@@ -253,7 +253,7 @@ def _floor_notes(m: Measurement, noise: Sequence[bool], provenance: Provenance) 
 
 def build_result(
     m: Measurement,
-    cfg: Any,
+    cfg: Config,
     params: StandParameters,
     *,
     stream_warnings: Sequence[Any] = (),
@@ -309,7 +309,9 @@ def build_result(
     )
 
 
-def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: SolveOptions) -> Any:
+def measure_streams(
+    streams: Any, cfg: Config, params: StandParameters, options: SolveOptions
+) -> Any:
     """The measurement of a run's streams with the config's sensor calibration (and the
     options' influence matrix in place of the model, if any)."""
     m = measure(
@@ -322,7 +324,7 @@ def measure_streams(streams: Any, cfg: Any, params: StandParameters, options: So
 
 
 def remeasure_streams(
-    prev: Any, tails: Any, cfg: Any, params: StandParameters, options: SolveOptions
+    prev: Any, tails: Any, cfg: Config, params: StandParameters, options: SolveOptions
 ) -> Any:
     """:func:`measure_streams` of a live run from its last measurement ``prev`` and the
     streams of its last frames (:func:`stand.measuring.live_fit.remeasure`); None when a full pass
@@ -336,7 +338,7 @@ def remeasure_streams(
     return None if m is None else _finish(m, cfg, params, options)
 
 
-def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) -> Any:
+def _finish(m: Any, cfg: Config, params: StandParameters, options: SolveOptions) -> Any:
     """The config's notes on a measurement, and its tooling taken out."""
     flexible = cfg.rotor.shaft is not None and options.matrix is None
     notes = [None if flexible else rigid_note(cfg, params, m.omega_rad_s)]
@@ -361,7 +363,7 @@ def _finish(m: Any, cfg: Any, params: StandParameters, options: SolveOptions) ->
     return m
 
 
-def rigid_note(cfg: Any, params: StandParameters, omega_rad_s: float) -> Diagnostic | None:
+def rigid_note(cfg: Config, params: StandParameters, omega_rad_s: float) -> Diagnostic | None:
     """A warning when a rotor bending at ``[rotor] bending_hz`` would put the rigid model's
     answer more than 1 % off at this speed (:mod:`stand.core.flexible`)."""
 
@@ -390,7 +392,7 @@ def rigid_note(cfg: Any, params: StandParameters, omega_rad_s: float) -> Diagnos
     )
 
 
-def check_matrix(options: SolveOptions, cfg: Any, *, live: bool) -> None:
+def check_matrix(options: SolveOptions, cfg: Config, *, live: bool) -> None:
     """Refuse the options' influence matrix for another rotor type (or typed-in readings
     on the stand) before anything is measured."""
     if options.matrix is not None:
