@@ -11,6 +11,7 @@ import numpy as np
 
 from stand.cli.common import add_force_argument
 from stand.cli.format import dump_json
+from stand.cli.progress import ProgressLine
 from stand.core import unbalance_from_polar, unbalance_to_polar
 from stand.core.capability import BAND, CAPABLE, MIN_RUNS, Capability, runs_needed
 from stand.errors import ConfigError, UsageError
@@ -62,13 +63,19 @@ def run(args: argparse.Namespace) -> int:
         if not MIN_RUNS <= args.count <= 2000:
             raise UsageError(f"--count must be within {MIN_RUNS} to 2000, got {args.count}")
         scene, params, _ = load_scene(args.scene)
-        readings, reference = scene_readings(scene, params, args.count)
+        line = ProgressLine(f"simulating {args.count} runs of {args.scene}")
+        readings, reference = scene_readings(
+            scene, params, args.count, lambda k: line.count(k, args.count, "run")
+        )
         cfg = scene.config()
     else:
         reference = _master(args.master)
         if len(args.runs) < MIN_RUNS:
             raise UsageError(f"{len(args.runs)} runs: a capability study needs at least {MIN_RUNS}")
-        readings, params, cfg = file_readings(args.runs, args.config)
+        line = ProgressLine(f"reading {len(args.runs)} runs")
+        readings, params, cfg = file_readings(
+            args.runs, args.config, lambda k: line.count(k, len(args.runs), "run")
+        )
     tol = tolerance_of(cfg, params)
     if tol is None:
         raise ConfigError("no [tolerance]: capability is judged against it", source="the config")

@@ -20,6 +20,7 @@ from stand.cli.common import (
     job_from,
 )
 from stand.cli.panel import scene_masses
+from stand.cli.progress import ProgressLine
 from stand.config import config_toml
 from stand.core import unbalance_from_polar
 from stand.drivers.bus import describe_bus, open_bus, play
@@ -104,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         scene = scene.model_copy(update={"run": scene.run.model_copy(update={"seed": args.seed})})
     label = args.scene if args.scene in shipped_scenes() else source
     _same_family(believed, args.config, scene, label)
-    sim = simulate(scene, params)
+    sim = simulate(scene, params, progress=ProgressLine(f"simulating {label}").simulated)
     print(
         f"{Path(source).stem}: {len(sim.frames)} frames, {scene.run.seconds:g} s at "
         f"{scene.run.rpm:g} rpm ({sim.physics.replace('_', ' ')}, {sim.wall_s:.2f} s)",
@@ -195,6 +196,7 @@ def _series(args: argparse.Namespace) -> int:
         raise UsageError("stand simulate: --series N needs N >= 1")
     folder = _out_dir(args, "--series N")
     url = url_for(args.archive)
+    line = ProgressLine(f"simulating a series of {args.series}")
     done = simulate_series(
         args.scene,
         args.series,
@@ -202,11 +204,7 @@ def _series(args: argparse.Namespace) -> int:
         url,
         seed=args.seed or 0,
         force=args.force,
-        on_rotor=lambda i: (
-            print(f"rotor {i} of {args.series}", file=sys.stderr)
-            if i % 10 == 0 or i == args.series
-            else None
-        ),
+        on_rotor=lambda i: line.count(i, args.series, "rotor"),
     )
     print(f"{done} rotors balanced, corrected and checked; their data in {url}")
     return 0
@@ -247,9 +245,14 @@ def _starts(args: argparse.Namespace) -> int:
                          "--starts simulates a ball balancer's test")  # fmt: skip
     label = args.scene if args.scene in shipped_scenes() else source
     _same_family(believed, args.config, base, label)
+    line = ProgressLine(f"simulating {args.starts} starts of {label}")
     for k, name in enumerate(names):
         scene = turned(base, 180.0 * k, (args.seed if args.seed is not None else base.run.seed) + k)
-        sim = simulate(scene, params)
+
+        def told(t: float, end: float, k: int = k) -> None:
+            line.say(f"start {k + 1} of {args.starts}: {t:.0f} of {end:.0f} s simulated")
+
+        sim = simulate(scene, params, progress=told)
         test = [[u.real, u.imag] for u in unbalance_from_polar(*unbalance_kg_m(scene))]
         _write(args, scene, sim, label, stored, believed, source,
                {TEST_UNBALANCE_ATTR: json.dumps(test)}, out=str(name))  # fmt: skip

@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core.autobalance import plane_positions, with_balls
 from stand.core.model import FloatArray, StandParameters, mass_matrix, natural_frequencies
-from stand.core.transient import Speed
+from stand.core.transient import PROGRESS_EVERY, Progress, Speed
 from stand.errors import ModelError
 
 G_M_S2 = 9.80665
@@ -217,6 +217,7 @@ def integrate_balls(
     rtol: float = 1e-9,
     method: str = "DOP853",
     locked: bool = False,
+    progress: Progress | None = None,
 ) -> BallsRun:
     """Integrate the stand and the balls with :func:`scipy.integrate.solve_ivp`.
 
@@ -248,6 +249,8 @@ def integrate_balls(
     locked
         Hold the balls where they start (the balancer locked): the stand model with their
         unbalance and mass added, the reference the tests hold the free balls to.
+    progress
+        Told the simulated time reached now and then (a progress line); default none.
     """
     U = np.asarray(U_kg_m, dtype=np.complex128)
     t_eval = np.asarray(t_eval_s, dtype=float)
@@ -268,7 +271,7 @@ def integrate_balls(
     max_step = 0.5 * math.pi / w_top
     _not_too_stiff(balls, float(t_eval[-1]), max_step)
     options = {"method": method, "rtol": rtol, "atol": atol, "max_step": max_step}
-    y, xdd, power, nfev = _segments(sys, start, t_eval, options)
+    y, xdd, power, nfev = _segments(sys, start, t_eval, options, progress)
     n = balls.n
     return BallsRun(
         t_s=t_eval, x_m=y[:2].T.copy(), a_m_s2=xdd.T.copy(), phi_rad=y[4 : 4 + n].T.copy(),
@@ -306,8 +309,10 @@ MAX_SWITCHES = 20_000
 race (a rolling resistance at the edge of what holds them) cost a step each."""
 
 
-def _segments(sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str, Any]
-              ) -> tuple[FloatArray, FloatArray, FloatArray, int]:  # fmt: skip
+def _segments(
+    sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str, Any],
+    progress: Progress | None,
+) -> tuple[FloatArray, FloatArray, FloatArray, int]:  # fmt: skip
     """The run in segments of one mode each (one segment without rolling resistance): the
     states, the support accelerations and the powers at ``t_eval``, and the evaluations."""
     from scipy.integrate import solve_ivp
@@ -327,6 +332,8 @@ def _segments(sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str
             if count[0] > MAX_EVALUATIONS:  # whatever made it stiff: ended, never left running
                 raise ModelError(f"the balls' equations took more than {MAX_EVALUATIONS:g} "
                                  f"evaluations by t = {t:.3g} s: too stiff")  # fmt: skip
+            if progress is not None and count[0] % PROGRESS_EVERY == 0:
+                progress(t)
             xdd, phidd = sys.accel(np.array([t]), z[:, None], h, sl)
             return np.concatenate((z[2:4], xdd[:, 0], z[4 + n :], phidd[:, 0]))
 

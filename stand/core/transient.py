@@ -209,6 +209,13 @@ def steady_state_initial(
     return np.concatenate(((X * e).real, (1j * w * X * e).real))
 
 
+Progress = Callable[[float], None]
+"""Told now and then how far an integration has come: the simulated time reached [s]
+(every :data:`PROGRESS_EVERY` evaluations of the equations); for a progress line."""
+PROGRESS_EVERY = 4096
+"""Evaluations between two calls of a :data:`Progress`."""
+
+
 def integrate(
     p: StandParameters,
     speed: Speed,
@@ -221,6 +228,7 @@ def integrate(
     rtol: float = 1e-9,
     atol_scale: float | None = None,
     max_step_s: float | None = None,
+    progress: Progress | None = None,
 ) -> TransientResult:
     """Integrate the stand in time with :func:`scipy.integrate.solve_ivp`.
 
@@ -251,6 +259,8 @@ def integrate(
     max_step_s
         Largest step [s]; default a quarter of the shortest of the forcing
         period at the top speed and the stand's shortest natural period.
+    progress
+        Told the simulated time reached now and then (:data:`Progress`); default none.
 
     Returns
     -------
@@ -290,7 +300,12 @@ def integrate(
         result: FloatArray = Minv @ (Q - H[:, None] * v - K[:, None] * x)
         return result
 
+    count = [0]
+
     def rhs(t: float, y: FloatArray) -> FloatArray:
+        count[0] += 1
+        if progress is not None and count[0] % PROGRESS_EVERY == 0:
+            progress(t)
         return np.concatenate((y[2:], accel(np.array([t]), y[:, None])[:, 0]))
 
     y_start = np.zeros(4) if y0 is None else np.asarray(y0, dtype=float)

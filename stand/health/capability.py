@@ -10,6 +10,8 @@ differ by their noise only (its rotor is never taken off), which the output says
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from stand.config import Config
@@ -20,30 +22,39 @@ from stand.health.proving import measure_scene, scene_unbalance, with_unbalance
 from stand.sim import Scene
 from stand.solve import measure_recording
 
+OnRun = Callable[[int], None]
+"""Told the number of runs done after each (for a progress line)."""
 
-def scene_readings(scene: Scene, p: StandParameters, runs: int) -> tuple[np.ndarray, np.ndarray]:
+
+def scene_readings(
+    scene: Scene, p: StandParameters, runs: int, on_run: OnRun | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """``runs`` runs of the scene's rotor (seeds apart): the readings (runs x 2) and the
     master's known unbalance (the scene's) [kg m]."""
     U = scene_unbalance(scene)
     cfg = scene.config()
-    got = [
-        measure_scene(with_unbalance(scene, U, scene.run.seed + k), p, cfg, None).solution.U_kg_m
-        for k in range(runs)
-    ]
+    got = []
+    for k in range(runs):
+        m = measure_scene(with_unbalance(scene, U, scene.run.seed + k), p, cfg, None)
+        got.append(m.solution.U_kg_m)
+        if on_run is not None:
+            on_run(k + 1)
     return np.array(got), U
 
 
 def file_readings(
-    runs: list[str], config: str | None
+    runs: list[str], config: str | None, on_run: OnRun | None = None
 ) -> tuple[np.ndarray, StandParameters, Config]:
     """Each run's reading (runs x 2) [kg m], read and measured as ``stand solve`` does, and
     the parameters and config of the first."""
     got: list[np.ndarray] = []
     first: tuple[StandParameters, Config] | None = None
-    for run in runs:
+    for k, run in enumerate(runs):
         m, cfg, p, _ = measure_recording(run, config)
         first = first or (p, cfg)
         got.append(m.solution.U_kg_m)
+        if on_run is not None:
+            on_run(k + 1)
     assert first is not None
     return np.array(got), first[0], first[1]
 

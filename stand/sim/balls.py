@@ -19,7 +19,7 @@ import numpy as np
 from stand.core.autobalance import with_balls
 from stand.core.balls import G_M_S2, Balls, integrate_balls
 from stand.core.model import StandParameters
-from stand.core.transient import steady_state_initial
+from stand.core.transient import Progress, steady_state_initial
 
 TRUTH_HZ = 50.0
 """How often the truth keeps the balls' places [Hz]."""
@@ -42,8 +42,8 @@ def start_places(table: Any) -> np.ndarray:
 
 
 def free_balls(table: Any, p: StandParameters, speed: Any, U: np.ndarray, seen: list[Any],
-               rtol: float, from_speed: bool, truth: dict[str, object]
-               ) -> tuple[list[Any], int]:  # fmt: skip
+               rtol: float, from_speed: bool, truth: dict[str, object],
+               progress: Progress | None = None) -> tuple[list[Any], int]:  # fmt: skip
     """Each support's acceleration at the times its sensor sees [m/s^2] and the
     integrator's evaluations; the balls' places and unbalance into ``truth``."""
     balls = balls_of(table)
@@ -57,7 +57,7 @@ def free_balls(table: Any, p: StandParameters, speed: Any, U: np.ndarray, seen: 
     both = np.concatenate(seen)
     grid = np.arange(0.0, float(both.max()) if len(both) else 0.0, 1.0 / TRUTH_HZ)
     t_all, back = np.unique(np.concatenate((np.maximum(both, 0.0), grid)), return_inverse=True)
-    run = integrate_balls(p, speed, U, balls, t_all, phi0, y0=y0, rtol=rtol)
+    run = integrate_balls(p, speed, U, balls, t_all, phi0, y0=y0, rtol=rtol, progress=progress)
     a = run.a_m_s2[back[: len(both)]]
     at_grid = back[len(both) :]
     truth["balls_t_s"] = grid

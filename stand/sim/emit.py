@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,6 +23,7 @@ import numpy as np
 from stand.core import forward, rpm_to_rad_s, unbalance_from_polar
 from stand.core.dsp import sensor_response
 from stand.core.model import FloatArray, StandParameters
+from stand.core.transient import Progress
 from stand.drivers import Frames
 from stand.drivers.runs.budget import frames_budget
 from stand.drivers.v1.nodes import merge
@@ -166,12 +168,13 @@ def _physics(
     seen: list[Any],
     beam: Any,
     truth: dict[str, object],
+    progress: Progress | None,
 ) -> tuple[list[Any], int]:
     """Each support's acceleration at the times its sensor sees [m/s^2]: integrated in time
     (a run-up, nonlinear supports) or in closed form; and the integrator's evaluations."""
     if scene.effects.autobalancer is not None:
         return free_balls(scene.effects.autobalancer, p, speed, U, seen, scene.run.rtol,
-                          scene.effects.run_up is None, truth)  # fmt: skip
+                          scene.effects.run_up is None, truth, progress)  # fmt: skip
     if scene.needs_integration:
         both = np.concatenate(seen)
         a_both, nfev = integrated(
@@ -182,6 +185,7 @@ def _physics(
             force=_support_force(scene, p, speed, U),
             rtol=scene.run.rtol,
             from_steady=scene.effects.run_up is None,
+            progress=progress,
         )
         return [a_both[: len(seen[0]), 0], a_both[len(seen[0]) :, 1]], nfev
     spread = node_unbalance(scene, beam)
@@ -203,8 +207,13 @@ def _on_the_bus(scene: Scene, blocks: list[Frames]) -> Frames:
     return frames
 
 
-def simulate(scene: Scene, p: StandParameters) -> Simulation:
-    """Simulate the scene: its frames, and the truth they were made from."""
+def simulate(
+    scene: Scene, p: StandParameters, *, progress: Callable[[float, float], None] | None = None
+) -> Simulation:
+    """Simulate the scene: its frames, and the truth they were made from.
+
+    ``progress``, where given, is told now and then during a time integration the physics'
+    time reached and its end [s] (for a progress line on a long simulation)."""
     start = time.perf_counter()
     scene_budget(scene)
     e = scene.effects
@@ -234,7 +243,8 @@ def simulate(scene: Scene, p: StandParameters) -> Simulation:
     times = _sample_times(scene, t_start, ppm, offset)
     seen = [t - d for t, d in zip(times, delay, strict=True)]  # a group delay: earlier motion
     truth: dict[str, object] = {}
-    a_phys, nfev = _physics(scene, p, speed, U, seen, beam, truth)
+    told = None if progress is None else (lambda t: progress(t, t_end))
+    a_phys, nfev = _physics(scene, p, speed, U, seen, beam, truth, told)
 
     edges = edge_times(speed, math.radians(scene.stand.reference_angle_deg), t_start, t_end)
     if e.edge_jitter:

@@ -30,7 +30,13 @@ from numpy.typing import ArrayLike
 from stand.core import forward
 from stand.core.beam import forward_beam
 from stand.core.model import FloatArray, StandParameters
-from stand.core.transient import SupportForce, integrate, smooth_sign, steady_state_initial
+from stand.core.transient import (
+    Progress,
+    SupportForce,
+    integrate,
+    smooth_sign,
+    steady_state_initial,
+)
 from stand.errors import ModelError
 
 
@@ -255,6 +261,7 @@ def integrated(
     force: SupportForce | None,
     rtol: float,
     from_steady: bool,
+    progress: Progress | None = None,
 ) -> tuple[FloatArray, int]:
     """Support accelerations by time integration at times ``t_s`` (any order), and ``nfev``.
 
@@ -269,7 +276,15 @@ def integrated(
         else None
     )
     res = integrate(
-        p, speed, U_kg_m, t_unique, y0=y0, method=method, rtol=rtol, support_force=force
+        p,
+        speed,
+        U_kg_m,
+        t_unique,
+        y0=y0,
+        method=method,
+        rtol=rtol,
+        support_force=force,
+        progress=progress,
     )
     a: FloatArray = res.a_m_s2[back]
     return a, res.nfev
