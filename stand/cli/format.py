@@ -319,6 +319,8 @@ def print_speeds(out: dict[str, Any]) -> None:
     for p in out["planes"]:
         ws = " + ".join(f"{w['mass_g']:.2f} g at {w['angle_deg']:.1f} deg" for w in p["weights"])
         extra = " (left out: the other planes do what it would)" if p["dependent"] else ""
+        if p["at_limit"]:
+            extra += " (at the mass limit --max-mass-g: the runs ask for more)"
         print(
             f"  plane {p['plane']} at {p['position_mm']:g} mm: {p['action']} {ws or 'nothing'} "
             f"at radius {p['radius_mm']:g} mm{extra}"

@@ -68,6 +68,11 @@ def test_three_planes_across_speeds_pass_where_two_planes_at_one_speed_fail(
     assert main(["solve", *raw, "--across-speeds", "--method", "minmax", "--max-mass-g", "20"]) == 0
     text = capsys.readouterr().out
     assert "plane 2 at 850 mm: add 20.00 g" in text and text.count("pass") == 3
+    assert text.count("at the mass limit") == 1  # plane 2's 20 g binds, plane 1's does not
+    assert main(["solve", *raw, "--across-speeds", "--method", "minmax", "--max-mass-g",
+                 "1e-6"]) == 0  # fmt: skip
+    text = capsys.readouterr().out  # a limit that binds every plane says so of each
+    assert text.count("at the mass limit") == 3 and "FAIL" in text
 
 
 @pytest.mark.parametrize(
