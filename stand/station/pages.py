@@ -308,7 +308,31 @@ def check_screen(station: Station) -> None:
                for k, v in names.items()]  # fmt: skip
     ui.table(columns=columns, rows=check_rows(out)).classes("text-h6").mark("check-table")
     with ui.row().classes("gap-4 q-mt-md"):
-        if s.run_id is not None:
+        _certificate_links(station, s.result)
+
+        def next_rotor() -> None:
+            station.next_rotor()
+
+        ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
+
+
+def _certificate_links(station: Station, result: Any) -> None:
+    """The certificate's links once the run is filed (the answer shows before: the report
+    and the archive are written while the operator reads it)."""
+    box = ui.row().classes("gap-4")
+
+    def fill() -> None:
+        s = station.snapshot()
+        if s.result is result and s.run_id is None and s.waiting:
+            with box:
+                box.clear()
+                ui.label(s.waiting).classes("text-h6 text-grey-8")
+            return
+        timer.deactivate()
+        box.clear()
+        if s.result is not result or s.run_id is None:  # moved on, or not archived (notes)
+            return
+        with box:
             ui.link("Open the certificate", f"/report/{s.run_id}", new_tab=True).classes(
                 "text-h5"
             ).mark("certificate")
@@ -316,10 +340,8 @@ def check_screen(station: Station) -> None:
                 "certificate-pdf"
             )
 
-        def next_rotor() -> None:
-            station.next_rotor()
-
-        ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
+    timer = ui.timer(REFRESH_S, fill)
+    fill()
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:

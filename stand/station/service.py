@@ -192,8 +192,9 @@ class Station(ArchiveSide):
                 )
             self._state = fresh
         self._thread = threading.Thread(
-            target=self._measure, args=(kind, config, before), name="station-run", daemon=True
-        )
+            target=self._measure, args=(kind, config, before, self._thread), name="station-run",
+            daemon=True,
+        )  # fmt: skip
         self._thread.start()
 
     def stop(self) -> None:
@@ -236,7 +237,14 @@ class Station(ArchiveSide):
             self._state = Snapshot(seq=self._state.seq + 1)
 
     # -- the measuring thread ------------------------------------------------------------
-    def _measure(self, kind: str, config: Path, before: Any) -> None:
+    def _measure(
+        self, kind: str, config: Path, before: Any, previous: threading.Thread | None
+    ) -> None:
+        """Measure, show the answer, then file it (report, archive, plant): the operator
+        reads the answer while it is filed.  The run before, if still being filed, is filed
+        first (a check is archived after the run it checks)."""
+        if previous is not None:
+            previous.join()
         try:
             result = self._run(kind, config, before)
         except StandError as exc:
@@ -246,11 +254,17 @@ class Station(ArchiveSide):
             log.exception("station run failed")
             self._set(phase="failed", error=f"{type(exc).__name__}: {exc}", progress=None)
             return
-        self._set(waiting="writing the report and archiving the run")
+        self._set(phase="done", result=result, run_id=None, notes=(),
+                  waiting="writing the report and archiving the run")  # fmt: skip
         run_id, notes = self._file(result, config)
         if kind == "check" and run_id is not None:
             notes = (*notes, self._datum(before, result))
-        self._set(phase="done", result=result, waiting="", run_id=run_id, notes=notes)
+        with self._lock:
+            s = self._state
+            if s.result is not result:  # the operator went on (next rotor) while it was filed
+                log.info("run filed after the screen moved on: %s", "; ".join(notes) or "ok")
+                return
+            self._state = replace(s, seq=s.seq + 1, waiting="", run_id=run_id, notes=notes)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
 

@@ -10,6 +10,11 @@ estimate (the plane 1 text read every 20 ms), and the CPU time the station's
 process used (server, screens and measurement together) per second of run,
 against the same run measured by ``stand measure`` (no screen).  Prints the
 README's table.
+
+Then, on a station with the shipped rotor types, the operator's answer: from the click on
+Start measuring to the Correct screen's offer ("Go to the correction") in the page, the
+page read every 20 ms; the median and worst of ``--answers`` runs (the physics needs
+2.0 s of the demo scene).
 """
 
 from __future__ import annotations
@@ -69,6 +74,25 @@ def one_station_run(base: str, pid: int, driver: object) -> tuple[float, float, 
     return (len(seen) - 1) / span, cpu / wall, len(seen)
 
 
+def answer_run(base: str, driver: object) -> float:
+    """Seconds from the click on Start measuring to the offer of the correction."""
+    from selenium.webdriver.common.by import By
+    from test_station_browser import _button, _see
+
+    d = driver
+    d.get(base + "/")  # type: ignore[attr-defined]
+    _see(d, "New rotor")
+    button = _button(d, "Start measuring")
+    t0 = time.monotonic()
+    button.click()
+    while time.monotonic() - t0 < 30:
+        body = d.find_element(By.TAG_NAME, "body").text.lower()  # type: ignore[attr-defined]
+        if "go to the correction" in body:
+            return time.monotonic() - t0
+        time.sleep(0.02)
+    raise AssertionError("no answer within 30 s")
+
+
 def cli_run(folder: Path, tmp: Path) -> float:
     """CPU s per s of the same run by ``stand measure`` (no screen)."""
     start = time.monotonic()
@@ -93,6 +117,7 @@ def main() -> None:
 
     p = argparse.ArgumentParser()
     p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--answers", type=int, default=5)
     args = p.parse_args()
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
@@ -115,6 +140,12 @@ def main() -> None:
                 rates.append(rate)
                 cpus.append(cpu)
                 print(f"  station: {n} estimates shown, {rate:.2f} per s, CPU {cpu:.2f} s/s")
+        answers = []
+        (tmp / "shipped").mkdir()
+        with served(tmp / "shipped") as base:
+            for _ in range(args.answers):
+                answers.append(answer_run(base, driver))
+                print(f"  Start -> Correct's offer: {answers[-1]:.2f} s")
         driver.quit()
         cli = [cli_run(folder, tmp) for _ in range(args.repeat)]
     print("| | estimates shown per second | CPU [s per s of run] |")
@@ -122,6 +153,11 @@ def main() -> None:
     print(f"| station, Measure screen open | {min(rates):.2f} to {max(rates):.2f} "
           f"| {min(cpus):.2f} to {max(cpus):.2f} |")  # fmt: skip
     print(f"| `stand measure`, no screen | - | {min(cli):.2f} to {max(cli):.2f} |")
+    answers.sort()
+    print(
+        f"\nStart -> the correction offered: median {answers[len(answers) // 2]:.2f} s, "
+        f"worst {answers[-1]:.2f} s of {len(answers)} (the physics: 2.0 s)"
+    )
 
 
 if __name__ == "__main__":

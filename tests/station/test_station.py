@@ -283,7 +283,8 @@ async def _flow(station: Station) -> None:
         await user.should_see("See the check", retries=20)
         user.find("See the check").click()
         await user.should_see("S-42: WITHIN TOLERANCE", retries=20)
-        await user.should_see("Open the certificate")
+        await until(lambda: station.snapshot().run_id is not None)  # filed after the answer
+        await user.should_see("Open the certificate", retries=20)
         assert "stored as a calibration datum (stand health)" in station.snapshot().notes
         user.find(marker="nav-history").click()
         await user.should_see(marker="history-table", retries=20)
