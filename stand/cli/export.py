@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from stand.archive import url_for
 from stand.archive.query import Filters
@@ -41,10 +42,12 @@ def run(args: argparse.Namespace) -> int:
     if zone is None and cfg is not None and cfg.plant is not None:
         zone = cfg.plant.qdas_timezone
     f = Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision)
-    _, n = export_qdas(url_for(args.archive, cfg), args.rotor_type, f, args.out,
+    done = export_qdas(url_for(args.archive, cfg), args.rotor_type, f, args.out,
                        force=args.force, runs=args.runs, timezone=zone)  # fmt: skip
     what = "runs" if args.runs else "rotors"
-    print(
-        f"wrote {args.out}: {n} {what} of rotor type {args.rotor_type} (Q-DAS, 8 characteristics)"
-    )
+    print(f"wrote {args.out}: {done.lines} {what} of rotor type {args.rotor_type} (Q-DAS, 8 "
+          "characteristics)")  # fmt: skip
+    if done.without_serial:
+        print(f"left out {done.without_serial} {what} without a serial: a Q-DAS part is known by "
+              "its serial (K0014)", file=sys.stderr)  # fmt: skip
     return 0

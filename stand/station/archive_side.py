@@ -80,7 +80,7 @@ class ArchiveSide:
         return rows[::-1][:limit]
 
     def export_qdas(self, rotor_type: str) -> bytes:
-        """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type
+        """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type on this stand
         (:mod:`stand.plant.qdas`; UsageError when there is none), its dates in the zone of
         the type's config (``[plant] qdas_timezone``), else this machine's."""
 
@@ -88,8 +88,8 @@ class ArchiveSide:
         if path.is_file():
             plant = load_config(str(path))[0].plant
             zone = plant.qdas_timezone if plant is not None else None
-        data, _ = export_qdas(self.archive_url, rotor_type, Filters(), None, timezone=zone)
-        return data
+        stand = Filters(stand=self.stand_id())  # one file names one machine (K1081)
+        return export_qdas(self.archive_url, rotor_type, stand, None, timezone=zone).data
 
     def report_file(self, run_id: int) -> Path:
         """The report of archived run ``run_id``, if it lies inside the runs folder."""

@@ -156,7 +156,7 @@ def test_the_qdas_part_states_the_key_convention(
 ) -> None:
     """The Q-DAS part description of a keyed rotor type says its convention and marking."""
     cfg = config(tmp_path, "keyed", None, KEY.format(convention="half"))
-    run = simulate(tmp_path / "r.h5", "--config", str(cfg))
+    run = simulate(tmp_path / "r.h5", "--config", str(cfg), "--serial", "K-1")
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     assert main(["archive", "import", str(run), "--archive", url]) == 0
     out = tmp_path / "k.dfq"
