@@ -51,6 +51,19 @@ def latest_evaluations(url: str, stand: str | None = None) -> list[dict[str, Any
     return list(last.values())
 
 
+def evaluations_of(url: str, kind: str, stand: str | None = None) -> list[dict[str, Any]]:
+    """Every evaluation of ``kind`` (of ``stand`` only, when given), oldest first."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        q = sa.select(evaluations).where(evaluations.c.kind == kind)
+        if stand is not None:
+            q = q.where(evaluations.c.stand_id == stand)
+        rows = conn.execute(q.order_by(evaluations.c.performed_at, evaluations.c.id)).all()
+        where = shown_url(conn)
+    return [evaluation_row(row, where) for row in rows]
+
+
 def evaluations_due(url: str, stand: str | None) -> list[dict[str, Any]]:
     """Each stand's latest machine evaluation and when the next is due (a line each)."""
     today = dt.datetime.now(dt.UTC).date()

@@ -9,12 +9,19 @@ from stand.archive import url_for
 from stand.archive.query import Filters
 from stand.cli.common import add_archive_argument, add_date_arguments, add_revision_argument
 from stand.config import load_config
+from stand.errors import UsageError
 from stand.plant import export_qdas
+from stand.plant.qdas_evaluations import FIGURES, export_evaluations
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("format", choices=("qdas",), help="qdas: the Q-DAS ASCII transfer format")
-    p.add_argument("--rotor-type", metavar="TYPE", required=True, help="the rotor type")
+    target = p.add_mutually_exclusive_group(required=True)
+    target.add_argument("--rotor-type", metavar="TYPE", help="the rotor type")
+    target.add_argument(
+        "--evaluations", action="store_true",
+        help="the stand's machine evaluations (ISO 21940-21, stand evaluate) instead of rotors",
+    )  # fmt: skip
     add_date_arguments(p)
     add_revision_argument(p)
     p.add_argument("--stand", metavar="ID", help="this stand's runs only")
@@ -41,6 +48,14 @@ def run(args: argparse.Namespace) -> int:
     zone = args.timezone  # "" is a zone named wrongly, refused: never the machine's in silence
     if zone is None and cfg is not None and cfg.plant is not None:
         zone = cfg.plant.qdas_timezone
+    if args.evaluations:
+        if args.runs or args.since or args.until or args.revision:
+            raise UsageError("export qdas --evaluations: every evaluation of one stand; no "
+                             "--runs, --since, --until or --revision")  # fmt: skip
+        _, n = export_evaluations(url_for(args.archive, cfg), args.stand, args.out,
+                                  force=args.force, timezone=zone)  # fmt: skip
+        print(f"wrote {args.out}: {n} machine evaluations (Q-DAS, {len(FIGURES)} characteristics)")
+        return 0
     f = Filters(since=args.since, until=args.until, stand=args.stand, revision=args.revision)
     done = export_qdas(url_for(args.archive, cfg), args.rotor_type, f, args.out,
                        force=args.force, runs=args.runs, timezone=zone)  # fmt: skip
