@@ -64,6 +64,33 @@ def evaluations_of(url: str, kind: str, stand: str | None = None) -> list[dict[s
     return [evaluation_row(row, where) for row in rows]
 
 
+def evaluation_ids(archive: Archive, stand: str | None = None) -> list[int]:
+    """The ids of an open archive's machine evaluations (of one stand), newest first (a
+    cheap poll: anything new?)."""
+    import sqlalchemy as sa
+
+    with archive.transaction() as conn:
+        q = sa.select(evaluations.c.id).where(evaluations.c.kind == "machine")
+        if stand is not None:
+            q = q.where(evaluations.c.stand_id == stand)
+        order = (evaluations.c.performed_at.desc(), evaluations.c.id.desc())
+        return [int(i) for i in conn.execute(q.order_by(*order)).scalars()]
+
+
+def evaluation_by_id(archive: Archive, eval_id: int, stand: str | None = None
+                     ) -> dict[str, Any] | None:  # fmt: skip
+    """One machine evaluation of an open archive (of ``stand``), checked; None if none."""
+    import sqlalchemy as sa
+
+    with archive.transaction() as conn:
+        q = sa.select(evaluations).where(evaluations.c.id == eval_id,
+                                         evaluations.c.kind == "machine")  # fmt: skip
+        if stand is not None:
+            q = q.where(evaluations.c.stand_id == stand)
+        row = conn.execute(q).first()
+        return None if row is None else evaluation_row(row, shown_url(conn))
+
+
 def evaluations_due(url: str, stand: str | None) -> list[dict[str, Any]]:
     """Each stand's latest machine evaluation and when the next is due (a line each)."""
     today = dt.datetime.now(dt.UTC).date()

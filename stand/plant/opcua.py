@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive
+from stand.archive.evaluations import evaluation_by_id, evaluation_ids
 from stand.archive.query import latest, latest_id, newest_ids
 from stand.errors import ArchiveError, UsageError
 from stand.plant.ua_call import guarded
@@ -39,7 +40,7 @@ from stand.plant.ua_model import (
     empty_result,
     register,
 )
-from stand.plant.ua_result import result_data
+from stand.plant.ua_result import EVALUATION_PREFIX, evaluation_data, result_data
 from stand.plant.ua_security import Access, Users, apply_security, cert_folder, check_bind
 
 POLL_S = 0.25
@@ -134,10 +135,12 @@ class ResultServer:
             self._archive.close()
         self._archive = None
 
-    def _answer(self, run: dict[str, Any] | None, error: int = 0) -> list[Any]:
+    def _answer(self, run: dict[str, Any] | None, error: int = 0, *,
+                evaluation: bool = False) -> list[Any]:  # fmt: skip
         from asyncua import ua
 
-        data = None if run is None else result_data(run)
+        make = evaluation_data if evaluation else result_data
+        data = None if run is None else make(run)
         return [ua.Variant(0, ua.VariantType.UInt32),
                 ua.Variant(data, ua.VariantType.ExtensionObject),
                 ua.Variant(NO_RESULT if run is None and not error else error,
@@ -152,9 +155,15 @@ class ResultServer:
 
     async def _by_id(self, result_id: str | None, timeout_ms: int) -> list[Any]:
         # ASCII digits only: "²" or "١" are no run id under another spelling; null is none
-        if not isinstance(result_id, str) or not RESULT_ID.fullmatch(result_id):
+        if not isinstance(result_id, str):
+            return self._answer(None)
+        number = result_id.removeprefix(EVALUATION_PREFIX)
+        if not RESULT_ID.fullmatch(number):
             return self._answer(None)
         try:
+            if number != result_id:  # a machine evaluation
+                found = evaluation_by_id(self._open(), int(number), self.stand_id)
+                return self._answer(found, evaluation=True)
             return self._answer(latest(self._open(), self.stand_id, int(result_id)))
         except ArchiveError:
             self._drop()
@@ -171,11 +180,12 @@ class ResultServer:
         if filt is not None and (not hasattr(filt, "Elements") or filt.Elements):
             return out([], FILTER_NOT_SUPPORTED)  # elements, or no ContentFilter at all
         try:
-            ids = newest_ids(self._open(), self.stand_id, most or None)
+            ids = [str(i) for i in newest_ids(self._open(), self.stand_id, most or None)]
+            ids += [f"{EVALUATION_PREFIX}{i}" for i in evaluation_ids(self._open(), self.stand_id)]
         except ArchiveError:
             self._drop()
             return out([], ARCHIVE_UNAVAILABLE)
-        return out([str(i) for i in ids], 0)
+        return out(ids[: most or None], 0)
 
     async def _write_state(self, machine: Machine, name: str) -> None:
         from asyncua import ua
@@ -185,6 +195,7 @@ class ResultServer:
 
     async def _poll(self, machine: Machine, events: Any) -> None:
         seen: int | None = -1
+        evaluated: set[int] | None = None  # the evaluations known: a new one is an event
         said = ""  # the archive's last error, said once on stderr
         assert self._stop is not None
         while not self._stop.is_set():
@@ -195,6 +206,7 @@ class ResultServer:
                     run = latest(self._open(), self.stand_id)
                     await self._publish(machine, events, run, fire=seen != -1 and run is not None)
                     seen = now
+                evaluated = await self._new_evaluations(machine, events, evaluated)
             except ArchiveError as exc:
                 state = "OutOfService"
                 if str(exc) != said:
@@ -208,23 +220,40 @@ class ResultServer:
                 pass
         self._drop()
 
-    async def _publish(self, machine: Machine, events: Any, run: Any, fire: bool) -> None:
+    async def _new_evaluations(self, machine: Machine, events: Any, known: set[int] | None
+                               ) -> set[int]:  # fmt: skip
+        """Fire a ResultReady event for each machine evaluation archived since the last poll
+        (none for those there at the start); the evaluations known now."""
+        now = set(evaluation_ids(self._open(), self.stand_id))
+        for eval_id in sorted(now - known) if known is not None else []:
+            e = evaluation_by_id(self._open(), eval_id, self.stand_id)
+            if e is not None:
+                said = f"machine evaluation E{eval_id} ready: {e['verdict']}"
+                await self._fire(machine, events, evaluation_data(e), e["verdict"], said)
+        return now
+
+    async def _fire(self, machine: Machine, events: Any, data: Any, verdict: str,
+                    message: str) -> None:  # fmt: skip
+        """A ResultReady event with ``data``, on ResultManagement and up its notifiers."""
         from asyncua import ua
 
-        data = empty_result() if run is None else result_data(run)
-        await machine.latest.write_value(ua.Variant(data, ua.VariantType.ExtensionObject))
-        if not fire:
-            return
         events.event.Result = data
-        events.event.Severity = 500 if run["verdict"] == "fail" else 100
-        events.event.Message = ua.LocalizedText(
-            f"result {run['id']} ready: {run['serial'] or 'no serial'}, {run['verdict']}"
-        )
+        events.event.Severity = 500 if verdict == "fail" else 100
+        events.event.Message = ua.LocalizedText(message)
         await events.trigger()  # on ResultManagement; then up the notifier chain
         for notifier in machine.notifiers[1:]:
             events.event.emitting_node = notifier
             await events.isession.subscription_service.trigger_event(events.event)
         events.event.emitting_node = machine.notifiers[0]
+
+    async def _publish(self, machine: Machine, events: Any, run: Any, fire: bool) -> None:
+        from asyncua import ua
+
+        data = empty_result() if run is None else result_data(run)
+        await machine.latest.write_value(ua.Variant(data, ua.VariantType.ExtensionObject))
+        if fire:
+            await self._fire(machine, events, data, run["verdict"], f"result {run['id']} ready: "
+                             f"{run['serial'] or 'no serial'}, {run['verdict']}")  # fmt: skip
 
     async def serve(self) -> None:
         """Serve until :meth:`stop` (or the task is cancelled)."""

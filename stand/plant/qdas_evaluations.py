@@ -38,6 +38,7 @@ class Figure:
     """One characteristic: its name, unit, decimals, where its value and limits come from."""
 
     name: str
+    field: str  # its name in OPC UA's MachineEvaluationDataType
     unit: str
     decimals: int
     value: Any  # (result) -> float | None
@@ -80,18 +81,20 @@ def _claim(r: dict[str, Any]) -> Any:
 
 
 FIGURES = (
-    Figure("plane 1 U_mar test mean indication", "g mm", 2, _mean(0)),
-    Figure("plane 1 U_mar test spread", "%", 2, _spread(0), upper=_limit),
-    Figure("plane 2 U_mar test mean indication", "g mm", 2, _mean(1)),
-    Figure("plane 2 U_mar test spread", "%", 2, _spread(1), upper=_limit),
-    Figure("plane 1 URR test lowest URR", "%", 2, _lowest_urr(0), lower=_claim),
-    Figure("plane 2 URR test lowest URR", "%", 2, _lowest_urr(1), lower=_claim),
-    Figure("cross-effect of plane 1 on plane 2", "%", 2, _cross(0)),
-    Figure("cross-effect of plane 2 on plane 1", "%", 2, _cross(1)),
-    Figure("e_mar (2 U_mar / rotor mass)", "g mm/kg", 3,
+    Figure("plane 1 U_mar test mean indication", "UmarMean1_g_mm", "g mm", 2, _mean(0)),
+    Figure("plane 1 U_mar test spread", "UmarSpread1_pct", "%", 2, _spread(0), upper=_limit),
+    Figure("plane 2 U_mar test mean indication", "UmarMean2_g_mm", "g mm", 2, _mean(1)),
+    Figure("plane 2 U_mar test spread", "UmarSpread2_pct", "%", 2, _spread(1), upper=_limit),
+    Figure("plane 1 URR test lowest URR", "LowestUrr1_pct", "%", 2, _lowest_urr(0),
+           lower=_claim),
+    Figure("plane 2 URR test lowest URR", "LowestUrr2_pct", "%", 2, _lowest_urr(1),
+           lower=_claim),
+    Figure("cross-effect of plane 1 on plane 2", "CrossEffect12_pct", "%", 2, _cross(0)),
+    Figure("cross-effect of plane 2 on plane 1", "CrossEffect21_pct", "%", 2, _cross(1)),
+    Figure("e_mar (2 U_mar / rotor mass)", "Emar_g_mm_per_kg", "g mm/kg", 3,
            lambda r: (r.get("u_mar_test") or {}).get("e_mar_g_mm_per_kg")),
 )  # fmt: skip
-"""The characteristics, in order."""
+"""The characteristics, in order (the same figures, by ``field``, in OPC UA)."""
 
 
 def _description(stand: str, latest: dict[str, Any], zone: Zone) -> list[str]:

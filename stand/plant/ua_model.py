@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from stand.plant.qdas_evaluations import FIGURES
 from stand.plant.ua_nodes import (
     add_node,
     add_property,
@@ -51,7 +52,9 @@ PROCESSING_TIMES, RESULT_META_DATA, RESULT_DATA = (3006, 5003), (3007, 5005), (3
 """The result data types' NodeIds and their DefaultBinary encodings' NodeIds."""
 GET_RESULT_BY_ID, GET_RESULT_ID_LIST_FILTERED, GET_LATEST_RESULT = 7005, 7006, 7008
 OWN_EVENT_TYPE, OWN_PLANE, OWN_RESULT = 1001, (3001, 5001), (3002, 5002)
-"""In :data:`NAMESPACE`: the stand's ResultReadyEventType, plane and result content."""
+OWN_EVALUATION = (3003, 5003)
+"""In :data:`NAMESPACE`: the stand's ResultReadyEventType, plane, result content and
+machine evaluation content."""
 
 
 @dataclass(frozen=True)
@@ -230,6 +233,13 @@ async def _declare_content(server: Any, ns: Namespaces) -> None:
         _field(ua, "ChecksResultId", ua.NodeId(ua.ObjectIds.TrimmedString), optional=True,
                description="the result this check run checks"),
         _field(ua, "Planes", ua.NodeId(OWN_PLANE[0], ns.own), array=True),
+    ])  # fmt: skip
+    await _structure(server, ns.own, OWN_EVALUATION, "MachineEvaluationDataType", [
+        _field(ua, "Standard", string, description="ISO 21940-21 (machine tests)"),
+        _field(ua, "Verdict", string, description="pass, fail or not judged"),
+        _field(ua, "Due", string, optional=True, description="the next one, YYYY-MM-DD"),
+        *(_field(ua, f.field, dbl, optional=True, description=f"{f.name} [{f.unit}]")
+          for f in FIGURES),
     ])  # fmt: skip
 
 

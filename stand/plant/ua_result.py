@@ -4,7 +4,9 @@ plane the initial and residual unbalance and angle, the 95 % radius, the permiss
 pass and a check's URR).
 
 The ResultId is the archive's run id as text: the same id the MQTT payload carries as
-``result_id`` and ``stand history --json`` as ``id``.  The data types must have been
+``result_id`` and ``stand history --json`` as ``id``.  The stand's machine evaluations
+(ISO 21940-21) are results too, ``E`` and the evaluation's archive id (``E12``), their
+content the stand's ``MachineEvaluationDataType``.  The data types must have been
 loaded into asyncua (:mod:`stand.plant.ua_model`, ``load_data_type_definitions``).
 """
 
@@ -13,6 +15,7 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
+from stand.plant.qdas_evaluations import FIGURES, PART
 from stand.plant.ua_model import EVALUATIONS
 
 RESULT_STATE_COMPLETED = 1
@@ -22,6 +25,12 @@ EVALUATION = {"pass": EVALUATIONS.index("OK"), "fail": EVALUATIONS.index("NotOK"
               "none": EVALUATIONS.index("Undefined")}  # fmt: skip
 """The archive's verdict as ResultEvaluationEnum (``undecided``: ISO 21940-14's interval
 straddles the limit; ``none``: no tolerance to judge by)."""
+MACHINE_EVALUATION = {"pass": EVALUATIONS.index("OK"), "fail": EVALUATIONS.index("NotOK"),
+                      "not judged": EVALUATIONS.index("NotDecidable")}  # fmt: skip
+"""A machine evaluation's verdict as ResultEvaluationEnum (not judged: a test short of its
+runs could not be decided)."""
+EVALUATION_PREFIX = "E"
+"""ResultIds of machine evaluations: ``E`` and the evaluation's archive id."""
 
 
 def _time(iso: str | None) -> dt.datetime | None:
@@ -80,6 +89,32 @@ def result_data(run: dict[str, Any]) -> Any:
         ChecksResultId=None if run["checks_run"] is None else str(run["checks_run"]),
         Planes=[_plane(ua, p, q) for p, q in zip(run["planes"], run["initial"], strict=True)],
     )
+    return ua.ResultDataType(
+        ResultMetaData=meta,
+        ResultContent=[ua.Variant(content, ua.VariantType.ExtensionObject)],
+    )
+
+
+def evaluation_data(e: dict[str, Any]) -> Any:
+    """The ``ResultDataType`` of an archived machine evaluation as
+    :func:`stand.archive.evaluations.evaluation_by_id` gives it."""
+    from asyncua import ua
+
+    when = _time(e["performed_at"])
+    figures = {f.field: f.value(e["result"]) for f in FIGURES}
+    meta = ua.ResultMetaDataType(
+        ResultId=f"{EVALUATION_PREFIX}{e['id']}",
+        IsSimulated=bool(e["simulated"]),
+        ResultState=RESULT_STATE_COMPLETED,
+        ProductId=PART,
+        CreationTime=when,
+        ResultEvaluation=ua.ResultEvaluationEnum(MACHINE_EVALUATION[e["verdict"]]),
+        ResultEvaluationDetails=ua.LocalizedText(f"machine evaluation {e['verdict']}"),
+    )
+    content = ua.MachineEvaluationDataType(
+        Standard=PART, Verdict=e["verdict"], Due=e["due"],
+        **{k: None if v is None else float(v) for k, v in figures.items()},
+    )  # fmt: skip
     return ua.ResultDataType(
         ResultMetaData=meta,
         ResultContent=[ua.Variant(content, ua.VariantType.ExtensionObject)],

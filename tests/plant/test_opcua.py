@@ -77,6 +77,21 @@ async def _typed(node: Any, type_id: Any, refs: int) -> Any:
     raise AssertionError(f"no child of type {type_id}")
 
 
+def _with_server(url: str, client: Any) -> Any:
+    """``client(endpoint)`` run against a server of stand-7 on a new archive ``url``."""
+    from stand.archive import Archive
+    from stand.plant import ResultServer
+
+    Archive(url).close()
+    port = _port()
+    server = ResultServer(url, "stand-7", "127.0.0.1", port)
+    server.run_in_thread()
+    try:
+        return asyncio.run(client(f"opc.tcp://127.0.0.1:{port}/stand/"))
+    finally:
+        server.stop()
+
+
 def test_a_client_from_the_specifications_finds_calls_and_hears_a_result(
     tmp_path: Path, demo_run: Path, capfd: pytest.CaptureFixture[str]
 ) -> None:
@@ -84,18 +99,8 @@ def test_a_client_from_the_specifications_finds_calls_and_hears_a_result(
     its type; GetLatestResult, GetResultById and GetResultIdListFiltered decoded as
     ResultDataType; a ResultReadyEventType on the Server object within 1 s of another
     process archiving a run; every node read-only."""
-    from stand.archive import Archive
-    from stand.plant import ResultServer
-
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
-    Archive(url).close()
-    port = _port()
-    server = ResultServer(url, "stand-7", "127.0.0.1", port)
-    server.run_in_thread()
-    try:
-        delay = asyncio.run(_client(f"opc.tcp://127.0.0.1:{port}/stand/", url, demo_run))
-    finally:
-        server.stop()
+    delay = _with_server(url, lambda endpoint: _client(endpoint, url, demo_run))
     err = capfd.readouterr().err
     assert "Traceback" not in err, err
     print(f"ResultReadyEvent on the Server object {1000 * delay:.0f} ms after archiving")
@@ -395,3 +400,79 @@ def test_a_toolings_index_runs_are_no_results(tmp_path: Path, demo_run: Path) ->
         got = latest(archive)
         assert got is not None and got["id"] == ids[0]
         assert latest(archive, run_id=ids[1]) is None
+
+
+EVALUATED = {
+    "verdict": "pass",
+    "u_mar_test": {"e_mar_g_mm_per_kg": 0.666667, "limit_pct": 12.0, "planes": [
+        {"plane": 1, "mean_g_mm": 199.5, "spread_pct": 1.8},
+        {"plane": 2, "mean_g_mm": 199.64, "spread_pct": 2.28}]},
+    "urr_test": {"claim_pct": 95.0, "runs": [{"urr_pct": [99.37, None]},
+                                             {"urr_pct": [99.26, 98.77]}]},
+    "cross_effect_pct": [0.37, 0.28],
+}  # fmt: skip
+"""A machine evaluation's figures as ``stand evaluate --json`` gives them (the demo's)."""
+
+
+def test_machine_evaluations_are_results_too(tmp_path: Path, demo_run: Path) -> None:
+    """An evaluation archived while the server runs is a ResultReadyEvent on the Server
+    object with ResultId ``E<id>`` and the stand's MachineEvaluationDataType; GetResultById
+    gives it again, GetResultIdListFiltered lists it after the runs; another stand's is
+    none of this server's."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    _with_server(url, lambda endpoint: _evaluation_client(endpoint, url))
+
+
+async def _evaluation_client(endpoint: str, url: str) -> None:
+    import datetime as dt
+
+    from asyncua import Client, ua
+
+    from stand.archive.evaluations import add_evaluation
+
+    async with Client(endpoint) as client:
+        ns, machine = await _machine(client, "stand-7")
+        rm = await _typed(machine, ua.NodeId(RESULT_MANAGEMENT_TYPE, ns["r"]), HAS_ADD_IN)
+        await client.load_data_type_definitions()
+        heard: list[Any] = []
+
+        class Handler:
+            def event_notification(self, event: Any) -> None:
+                heard.append(event)
+
+        sub = await client.create_subscription(50, Handler())
+        etype = client.get_node(ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"]))
+        await sub.subscribe_events(client.get_node(ua.NodeId(SERVER_OBJECT)), etype)
+        await asyncio.sleep(0.5)
+        add_evaluation(url, "machine", "stand-8", "fail", EVALUATED, simulated=True,
+                       software="test")  # another stand's: not this server's  # fmt: skip
+        eid, _ = add_evaluation(url, "machine", "stand-7", "pass", EVALUATED, simulated=True,
+                                software="test", due=dt.date(2026, 12, 27))  # fmt: skip
+        end = time.monotonic() + 5
+        while not heard and time.monotonic() < end:
+            await asyncio.sleep(0.02)
+        await asyncio.sleep(0.6)  # two polls more: nothing else is heard
+        assert len(heard) == 1, "one event, for this stand's evaluation"
+        result = heard[0].Result
+        meta = result.ResultMetaData
+        assert meta.ResultId == f"E{eid}" and meta.ProductId == "ISO 21940-21"
+        assert int(meta.ResultEvaluation) == 1 and meta.IsSimulated is True
+        (variant,) = result.ResultContent
+        content = variant.Value
+        assert content.Verdict == "pass" and content.Due == "2026-12-27"
+        assert content.LowestUrr1_pct == 99.26 and content.LowestUrr2_pct == 98.77
+        assert content.UmarSpread2_pct == 2.28 and content.Emar_g_mm_per_kg == 0.666667
+        timeout = ua.Variant(0, ua.VariantType.Int32)
+        by_id = await rm.get_child([f"{ns['r']}:GetResultById"])
+        _, again, error = await rm.call_method(by_id, ua.Variant(f"E{eid}"), timeout)
+        assert error == 0 and again == result
+        for other in (f"E{eid - 1}", "E", "E0", "e1", f"E{eid}x"):  # stand-8's, or no id
+            got = await rm.call_method(by_id, ua.Variant(other), timeout)
+            assert got[2] == -1, other
+        listed = await rm.call_method(
+            await rm.get_child([f"{ns['r']}:GetResultIdListFiltered"]),
+            ua.Variant(ua.ContentFilter()), ua.Variant([], ua.VariantType.ExtensionObject),
+            ua.Variant(0, ua.VariantType.UInt32), timeout,
+        )  # fmt: skip
+        assert listed == [0, [f"E{eid}"], 0]
+        await sub.delete()
