@@ -216,6 +216,38 @@ PROGRESS_EVERY = 4096
 """Evaluations between two calls of a :data:`Progress`."""
 
 
+def telling(
+    rhs: Callable[[float, FloatArray], FloatArray], progress: Progress | None
+) -> Callable[[float, FloatArray], FloatArray]:
+    """``rhs`` telling ``progress`` the time every :data:`PROGRESS_EVERY` evaluations
+    (``rhs`` itself where there is no one to tell)."""
+    if progress is None:
+        return rhs
+    count = [0]
+
+    def told(t: float, y: FloatArray) -> FloatArray:
+        count[0] += 1
+        if count[0] % PROGRESS_EVERY == 0:
+            progress(t)
+        return rhs(t, y)
+
+    return told
+
+
+def _atol(p: StandParameters, speed: Speed, U: ComplexArray, rtol: float,
+          atol_scale: float | None, w_top: float) -> FloatArray:  # fmt: skip
+    """The absolute tolerances of ``x1, x2, v1, v2``: ``rtol`` times the displacement scale
+    (default the steady displacement at the top speed), velocities by the top speed."""
+    if atol_scale is None:
+        atol_scale = 1e-300  # a rotor that never turns: nothing moves
+        if speed.max_omega_rad_s > 0:
+            x_ss = np.abs(forward(p, speed.max_omega_rad_s, U)) / speed.max_omega_rad_s**2
+            atol_scale = max(float(np.max(x_ss)), atol_scale)
+    out: FloatArray = rtol * np.array([atol_scale, atol_scale, w_top * atol_scale,
+                                       w_top * atol_scale])  # fmt: skip
+    return out
+
+
 def integrate(
     p: StandParameters,
     speed: Speed,
@@ -277,12 +309,7 @@ def integrate(
     w_top = max(speed.max_omega_rad_s, float(natural_frequencies(p)[-1]))
     if max_step_s is None:
         max_step_s = 0.25 * 2 * math.pi / w_top
-    if atol_scale is None:
-        atol_scale = 1e-300  # a rotor that never turns: nothing moves
-        if speed.max_omega_rad_s > 0:
-            x_ss = np.abs(forward(p, speed.max_omega_rad_s, U)) / speed.max_omega_rad_s**2
-            atol_scale = max(float(np.max(x_ss)), atol_scale)
-    atol = rtol * np.array([atol_scale, atol_scale, w_top * atol_scale, w_top * atol_scale])
+    atol = _atol(p, speed, U, rtol, atol_scale, w_top)
 
     Minv = np.linalg.inv(mass_matrix(p))
     K = np.array([p.C1, p.C2])
@@ -300,17 +327,12 @@ def integrate(
         result: FloatArray = Minv @ (Q - H[:, None] * v - K[:, None] * x)
         return result
 
-    count = [0]
-
     def rhs(t: float, y: FloatArray) -> FloatArray:
-        count[0] += 1
-        if progress is not None and count[0] % PROGRESS_EVERY == 0:
-            progress(t)
         return np.concatenate((y[2:], accel(np.array([t]), y[:, None])[:, 0]))
 
     y_start = np.zeros(4) if y0 is None else np.asarray(y0, dtype=float)
     sol = solve_ivp(
-        rhs,
+        telling(rhs, progress),
         (0.0, float(t_eval[-1])),
         y_start,
         method=method,
