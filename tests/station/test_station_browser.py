@@ -5,6 +5,7 @@ writes them into docs/ as well, where README shows them)."""
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import os
 import re
@@ -118,6 +119,20 @@ def _type(driver: Any, label: str, text: str) -> None:
     driver.find_element(By.CSS_SELECTOR, f'input[aria-label="{label}"]').send_keys(text)
 
 
+def _evaluated(tmp_path: Path) -> dt.date:
+    """A machine evaluation of the shipped rotor types' stand archived where ``served``
+    archives (its figures as the demo's); its due date."""
+    from stand.archive.evaluations import add_evaluation
+    from stand.config import load_config
+
+    rotors = ROOT / "stand" / "data" / "rotors"
+    stand = load_config(str(next(rotors.glob("*.toml"))))[0].stand.stand_id()
+    due = dt.datetime.now(dt.UTC).date() + dt.timedelta(days=30)
+    add_evaluation(f"sqlite:///{tmp_path / 'a.sqlite'}", "machine", stand, "pass",
+                   {"verdict": "pass"}, simulated=True, software="test", due=due)  # fmt: skip
+    return due
+
+
 def _shot(driver: Any, tmp_path: Path, name: str) -> None:
     driver.save_screenshot(str(tmp_path / f"station-{name}.png"))
     if os.environ.get("STAND_DOCS_SCREENSHOTS"):
@@ -184,7 +199,10 @@ def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
             assert got.read(5) == b"%PDF-"
         browser.get(link)
         assert "D-1" in browser.find_element(By.TAG_NAME, "body").text
+        due = _evaluated(tmp_path)  # a machine evaluation archived: History says when next
         browser.get(base + "/history")
+        _see(browser, f"machine evaluation (ISO 21940-21) PASS on {dt.datetime.now(dt.UTC).date()}")
+        _see(browser, f"next due {due}")
         _type(browser, "serial number", "D-1")
         _button(browser, "Search").click()
         _see(browser, "pass (check)")
