@@ -165,6 +165,10 @@ def test_missing_altered_unreadable_files_are_listed_and_the_rest_go_on(
     assert all(reasons) and any("SHA-256" in r for r in reasons)
 
 
+def _ctrl_c_counts() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_interrupted_then_run_again_solves_each_run_once(
     clumsy: tuple[str, Path, Path, Path], tmp_path: Path
 ) -> None:
@@ -174,7 +178,11 @@ def test_interrupted_then_run_again_solves_each_run_once(
     args = [sys.executable, "-m", "stand.cli", "reprocess", "--archive", url, "--config",
             str(new), "--revision", "cut", "--jobs", "1"]  # fmt: skip
     db = url.removeprefix("sqlite:///")
-    proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # Ctrl-C as a terminal gives it: a suite started in the background of a script runs
+    # with SIGINT ignored, which the child would inherit (and then never be interrupted)
+    proc = subprocess.Popen(
+        args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=_ctrl_c_counts
+    )
     written = 0
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and proc.poll() is None:
