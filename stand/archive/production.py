@@ -25,7 +25,7 @@ import numpy as np
 from stand import __version__
 from stand.archive.results import add_result, file_digest
 from stand.archive.store import Archive
-from stand.config import config_toml
+from stand.config import Config, config_toml
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.errors import UsageError
 from stand.health import datum_row
@@ -36,17 +36,19 @@ from stand.solve.acquisition import acquisition_of
 from stand.solve.recordings import result_masses
 
 
-def _write(scene: Any, params: Any, path: Path, believed: str, force: bool, job: Job) -> None:
-
+def _write(scene: Any, params: Any, path: Path, believed: tuple[Config, str], force: bool,
+           job: Job) -> None:  # fmt: skip
+    """One rotor's run: the scene's physics, the believed config stored with it and its
+    stand's id (what the software thinks; the runs are solved and archived by it)."""
     sim = simulate(scene, params)
     rec = Recording(
         path=str(path),
         frames=sim.frames,
         meta={
             "source": f"simulated production series (seed {scene.run.seed})",
-            "config_toml": believed,
+            "config_toml": believed[1],
             "software": f"stand {__version__}",
-            STAND_ATTR: scene.stand.stand_id(),
+            STAND_ATTR: believed[0].stand.stand_id(),
             JOB_ATTR: job.to_text(),
         },
     )
@@ -78,12 +80,15 @@ def simulate_series(
     seed: int = 0,
     force: bool = False,
     on_rotor: Callable[[int], None] | None = None,
+    believed: tuple[Config, str] | None = None,
 ) -> int:
     """Simulate ``count`` rotors (see the module docstring); the data stored.  A run file
-    already in ``out_dir`` is refused before the first rotor (replaced with ``force``)."""
+    already in ``out_dir`` is refused before the first rotor (replaced with ``force``).
+    ``believed``: the config the software believes and its text, stored with each run (its
+    ``[stand] id`` the runs' stand); default the scene's own."""
 
     scene, params, _ = load_scene(scene_name)
-    believed = config_toml(scene.config())
+    believed = believed or (scene.config(), config_toml(scene.config()))
     drift, place = scene.effects.drift, scene.effects.placement
     rng = np.random.default_rng(seed)
     folder = Path(out_dir)

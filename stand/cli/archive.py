@@ -8,6 +8,7 @@ import sys
 from stand.archive import import_runs, url_for, verify
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
+from stand.config import load_config
 from stand.errors import UsageError
 
 
@@ -20,15 +21,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("runs", nargs="*", metavar="RUN", help="the runs to import")
     p.add_argument(
-        "--config", metavar="CFG", help="solve imported runs with this config (default: theirs)"
-    )
+        "--config", metavar="CFG",
+        help="solve imported runs with this config (default: theirs); its [archive] url is the "
+        "archive unless --archive says another",
+    )  # fmt: skip
     add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def run(args: argparse.Namespace) -> int:
 
-    url = url_for(args.archive)
+    cfg = load_config(args.config)[0] if args.config else None
+    url = url_for(args.archive, cfg)  # --archive, else the config's [archive] url
     if args.action == "import":
         if not args.runs:
             raise UsageError("stand archive import: give the runs to import")

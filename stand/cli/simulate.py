@@ -51,7 +51,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--config",
         metavar="CFG",
         help="the configuration stored with the run: what the software believes about the "
-        "simulated stand (default: the scene's own)",
+        "simulated stand (default: the scene's own); with --series also its [stand] id and "
+        "[archive] url",
     )
     p.add_argument("--seed", type=int, help="random seed (overrides [run] seed)")
     p.add_argument(
@@ -195,7 +196,13 @@ def _series(args: argparse.Namespace) -> int:
     if args.series < 1:
         raise UsageError("stand simulate: --series N needs N >= 1")
     folder = _out_dir(args, "--series N")
-    url = url_for(args.archive)
+    believed = None
+    if args.config:  # what the software believes: stored with each run, its stand and archive
+        cfg, _, text = load_config_text(args.config)
+        base, _, _ = load_scene(args.scene)
+        _same_family(cfg, args.config, base, args.scene)
+        believed = (cfg, text)
+    url = url_for(args.archive, believed[0] if believed else None)
     line = ProgressLine(f"simulating a series of {args.series}")
     done = simulate_series(
         args.scene,
@@ -205,6 +212,7 @@ def _series(args: argparse.Namespace) -> int:
         seed=args.seed or 0,
         force=args.force,
         on_rotor=lambda i: line.count(i, args.series, "rotor"),
+        believed=believed,
     )
     print(f"{done} rotors balanced, corrected and checked; their data in {url}")
     return 0

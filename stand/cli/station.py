@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     if not config_dir.is_dir():
         raise UsageError(f"--config-dir {config_dir}: not a folder")
 
-    url = url_for(args.archive)
+    url = args.archive or Station.rotor_types_archive(config_dir) or url_for(None)
     runs = Path(args.runs_dir) if args.runs_dir else data_folder() / "runs"
 
     def targets(cfg: object, params: object, U: object) -> tuple[float, float]:

@@ -97,6 +97,20 @@ class Station(ArchiveSide):
         """The rotor types: the configuration files in ``config_dir``, by name."""
         return sorted(p.stem for p in self.config_dir.glob("*.toml") if p.is_file())
 
+    @staticmethod
+    def rotor_types_archive(config_dir: Path) -> str | None:
+        """The ``[archive] url`` the rotor types in ``config_dir`` name (the same in each
+        that names one, else this is not one station's archive); None where none does."""
+        urls = {
+            str(cfg.archive.url) for p in sorted(Path(config_dir).glob("*.toml")) if p.is_file()
+            for cfg in (load_config(str(p))[0],) if cfg.archive is not None and cfg.archive.url
+        }  # fmt: skip
+        if len(urls) > 1:
+            raise UsageError(f"{config_dir}: the rotor types name different archives "
+                             f"({', '.join(sorted(urls))}): one station archives in one "
+                             "([archive] url, or --archive)")  # fmt: skip
+        return urls.pop() if urls else None
+
     def stand_id(self) -> str:
         """The stand id its runs are archived under: its rotor types' ``[stand] id`` (the
         same in each, else this is not one stand), else the host name; for OPC UA."""
