@@ -13,8 +13,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from foreign import ajv
 
 from stand.cli import main
+from stand.plant.mqtt import SCHEMA_FILE
 
 ROOT = Path(__file__).resolve().parents[2]
 MOSQUITTO = shutil.which("mosquitto") or (
@@ -109,6 +111,8 @@ def test_a_balanced_run_is_published_as_its_json(
     assert len(got) == 1
     second = got[0]["payload"]
     validate(second)
+    by_ajv = ajv(SCHEMA_FILE, [message, second], tmp_path)  # a validator written elsewhere
+    assert by_ajv == {"compiled": True, "results": [{"valid": True, "errors": []}] * 2}
     assert main(["history", "--archive", url, "--json"]) == 0
     first, checked = json.loads(capsys.readouterr().out)["runs"]
     assert (first["id"], first["file_sha256"]) == (message["run_id"], message["file_sha256"])
@@ -120,7 +124,7 @@ def validate(message: dict) -> None:
     Schema specification, not by this project), and the docs' copy is that schema."""
     import jsonschema
 
-    from stand.plant.mqtt import SCHEMA, SCHEMA_FILE
+    from stand.plant.mqtt import SCHEMA
 
     schema = json.loads(SCHEMA_FILE.read_text())
     jsonschema.Draft202012Validator.check_schema(schema)
@@ -130,33 +134,55 @@ def validate(message: dict) -> None:
 
 def test_the_docs_publish_the_payload_s_schema() -> None:
     """docs/plant.md carries the schema the package ships, key for key."""
-    from stand.plant.mqtt import SCHEMA_FILE
 
     text = (ROOT / "docs" / "plant.md").read_text()
     block = text.split("<!-- mqtt-result.schema.json -->", 1)[1].split("```json", 1)[1]
     assert json.loads(block.split("```", 1)[0]) == json.loads(SCHEMA_FILE.read_text())
 
 
+GOOD: dict = {"schema": "urn:rotor-stand:mqtt-result:2", "run_id": 3, "result_id": "3",
+        "stand": "s", "verdict": "pass", "run_file": "/r.h5", "file_sha256": "0" * 64,
+        "result": {"rpm": 900.0, "planes": [
+            {"plane": k, "unbalance_g_mm": 1.0, "angle_deg": 0.0, "uncertainty_g_mm": 0.1}
+            for k in (1, 2)], "supports": [], "warnings": [],
+                   "job": {"serial": None, "order": None, "operator": None,
+                           "rotor_type": None},
+                   "provenance": {"software": "x", "run_file": "/r.h5",
+                                  "config_sha256": "0" * 64}}}  # fmt: skip
+"""A payload the schema takes."""
+
+
 def test_a_payload_that_breaks_the_schema_is_caught() -> None:
     """The validation can fail: a payload without its run id, or with a relative path."""
     import jsonschema
 
-    good = {"schema": "urn:rotor-stand:mqtt-result:2", "run_id": 3, "result_id": "3",
-            "stand": "s", "verdict": "pass", "run_file": "/r.h5", "file_sha256": "0" * 64,
-            "result": {"rpm": 900.0, "planes": [], "supports": [], "warnings": [],
-                       "job": {"serial": None, "order": None, "operator": None,
-                               "rotor_type": None},
-                       "provenance": {"software": "x", "run_file": "/r.h5",
-                                      "config_sha256": "0" * 64}}}  # fmt: skip
-    good["result"]["planes"] = [
-        {"plane": k, "unbalance_g_mm": 1.0, "angle_deg": 0.0, "uncertainty_g_mm": 0.1}
-        for k in (1, 2)
-    ]
+    good = json.loads(json.dumps(GOOD))
     validate(good)
-    for bad in ({k: v for k, v in good.items() if k != "run_id"}, good | {"run_file": "r.h5"},
-                good | {"verdict": "maybe"}):  # fmt: skip
+    bads = [{k: v for k, v in good.items() if k != "run_id"}, good | {"run_file": "r.h5"},
+            good | {"verdict": "maybe"}]  # fmt: skip
+    for bad in bads:
         with pytest.raises(jsonschema.ValidationError):
             validate(bad)
+
+
+def test_ajv_compiles_the_schema_strictly_and_refuses_what_jsonschema_refuses(
+    tmp_path: Path,
+) -> None:
+    """Ajv (JavaScript) in strict mode compiles the published schema (strictRequired,
+    strictTypes, no unknown keywords) and judges the good payload and the three bad ones
+    as jsonschema does."""
+    good = json.loads(json.dumps(GOOD))
+    bads = [{k: v for k, v in good.items() if k != "run_id"}, good | {"run_file": "r.h5"},
+            good | {"verdict": "maybe"}]  # fmt: skip
+    out = ajv(SCHEMA_FILE, [good, *bads], tmp_path)
+    assert out["compiled"] is True, out
+    assert [r["valid"] for r in out["results"]] == [True, False, False, False], out
+    lax = tmp_path / "lax.json"  # the schema before: provenance requires keys it lacks
+    schema = json.loads(SCHEMA_FILE.read_text())
+    schema["properties"]["result"]["properties"]["provenance"].pop("properties")
+    lax.write_text(json.dumps(schema))
+    refused = ajv(lax, [], tmp_path)
+    assert refused["compiled"] is False and "strictRequired" in refused["error"]
 
 
 def test_a_broker_that_does_not_answer_is_a_note_not_a_failure(tmp_path: Path) -> None:
