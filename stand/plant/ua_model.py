@@ -93,9 +93,17 @@ async def declare_machinery(server: Any, ns: Namespaces) -> None:
     await _object_type(server, ns.machinery, MACHINERY_ITEM_IDENTIFICATION_TYPE,
                        "MachineryItemIdentificationType",
                        ua.NodeId(DI_FUNCTIONAL_GROUP_TYPE, ns.di), abstract=True)  # fmt: skip
+    item = ua.NodeId(MACHINERY_ITEM_IDENTIFICATION_TYPE, ns.machinery)
     await _object_type(server, ns.machinery, MACHINE_IDENTIFICATION_TYPE,
-                       "MachineIdentificationType",
-                       ua.NodeId(MACHINERY_ITEM_IDENTIFICATION_TYPE, ns.machinery))  # fmt: skip
+                       "MachineIdentificationType", item)  # fmt: skip
+    for parent, number, name, value in (  # the types' mandatory instance declarations
+        (item, 6002, "Manufacturer", ua.Variant(ua.LocalizedText(""))),
+        (item, 6003, "SerialNumber", ua.Variant("", ua.VariantType.String)),
+        (ua.NodeId(MACHINE_IDENTIFICATION_TYPE, ns.machinery), 6015, "ProductInstanceUri",
+         ua.Variant("", ua.VariantType.String)),
+    ):  # fmt: skip
+        await add_property(server, parent, ua.NodeId(number, ns.machinery),
+                           ua.QualifiedName(name, ns.di), value, mandatory=True)  # fmt: skip
     machine = ua.NodeId(MACHINERY_ITEM_STATE_TYPE, ns.machinery)
     await _object_type(server, ns.machinery, MACHINERY_ITEM_STATE_TYPE,
                        "MachineryItemState_StateMachineType",
@@ -108,7 +116,8 @@ async def declare_machinery(server: Any, ns: Namespaces) -> None:
         )  # fmt: skip
         await add_property(server, state.nodeid, ua.NodeId(prop, ns.machinery),
                            ua.QualifiedName("StateNumber", 0),
-                           ua.Variant(state_number, ua.VariantType.UInt32))  # fmt: skip
+                           ua.Variant(state_number, ua.VariantType.UInt32),
+                           mandatory=True)  # fmt: skip
     await add_node(
         server, ua.NodeClass.Object, ua.NodeId(MACHINES, ns.machinery),
         ua.QualifiedName("Machines", ns.machinery), ua.NodeId(ua.ObjectIds.ObjectsFolder),
@@ -313,4 +322,4 @@ async def declare_result_objects(server: Any, ns: Namespaces) -> None:
         )  # fmt: skip
         await modelling_rule(server, method.nodeid, mandatory=False)
         await arguments(server, method.nodeid, (ua.NodeId(args, r), ua.NodeId(args + 1, r)),
-                        inputs, outputs)  # fmt: skip
+                        inputs, outputs, declaration=True)  # fmt: skip

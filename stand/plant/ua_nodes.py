@@ -28,6 +28,8 @@ def _attributes(ua: Any, cls: Any, name: str, fields: dict[str, Any]) -> Any:
     attrs.DisplayName = ua.LocalizedText(name)
     attrs.Description = ua.LocalizedText(fields.pop("description", name))
     attrs.WriteMask = attrs.UserWriteMask = 0
+    if cls in (ua.NodeClass.ObjectType, ua.NodeClass.VariableType, ua.NodeClass.DataType):
+        attrs.IsAbstract = False  # asyncua's default is True; the nodesets' is false
     if cls in (ua.NodeClass.Variable,):
         attrs.AccessLevel = attrs.UserAccessLevel = READ_ONLY
     if cls is ua.NodeClass.Method:
@@ -127,9 +129,9 @@ def _data_type(ua: Any, value: Any) -> Any:
 
 
 async def arguments(server: Any, method: Any, ids: tuple[Any, Any], inputs: list[Any],
-                    outputs: list[Any]) -> None:  # fmt: skip
+                    outputs: list[Any], *, declaration: bool = False) -> None:  # fmt: skip
     """A method's InputArguments and OutputArguments properties (``ua.Argument`` lists),
-    their NodeIds ``ids``."""
+    their NodeIds ``ids``; Mandatory where the method is a type's ``declaration``."""
     from asyncua import ua
 
     for nodeid, name, args in zip(ids, ("InputArguments", "OutputArguments"), (inputs, outputs),
@@ -142,6 +144,8 @@ async def arguments(server: Any, method: Any, ids: tuple[Any, Any], inputs: list
             Value=ua.Variant(args, ua.VariantType.ExtensionObject),
             DataType=ua.NodeId(ua.ObjectIds.Argument), ValueRank=1, ArrayDimensions=[0],
         )  # fmt: skip
+        if declaration:
+            await modelling_rule(server, nodeid, mandatory=True)
 
 
 def argument(name: str, data_type: Any, rank: int = -1, description: str = "") -> Any:
