@@ -42,6 +42,7 @@ from stand.plant.ua_model import (
 )
 from stand.plant.ua_result import EVALUATION_PREFIX, evaluation_data, result_data
 from stand.plant.ua_security import Access, Users, apply_security, cert_folder, check_bind
+from stand.plant.ua_where import install as install_where_clause
 
 POLL_S = 0.25
 """How often the archive is asked for a new run [s] (an event within about this)."""
@@ -99,6 +100,7 @@ class ResultServer:
     async def _build(self) -> tuple[Any, Machine, Any]:
         from asyncua import Server, ua
 
+        install_where_clause()  # OfType as OPC 10000-4 says: the type or any subtype
         server = Server(user_manager=Users(self.access))
         await server.init()
         server.set_endpoint(self.endpoint)

@@ -476,3 +476,128 @@ async def _evaluation_client(endpoint: str, url: str) -> None:
         )  # fmt: skip
         assert listed == [0, [f"E{eid}"], 0]
         await sub.delete()
+
+
+BASE_EVENT_TYPE, AUDIT_EVENT_TYPE = 2041, 2052
+"""Namespace 0: BaseEventType and AuditEventType (which the stand never emits)."""
+
+
+def _filter(ns: dict[str, int], elements: list[Any]) -> Any:
+    """An EventFilter written from OPC 10000-4: select EventType, Severity and the Result
+    field; where ``elements`` (element 0 the root)."""
+    from asyncua import ua
+
+    def field(name: str, type_id: Any) -> Any:
+        op = ua.SimpleAttributeOperand()
+        op.TypeDefinitionId = type_id
+        op.BrowsePath = [ua.QualifiedName(name, type_id.NamespaceIndex)]
+        op.AttributeId = ua.AttributeIds.Value
+        return op
+
+    base = ua.NodeId(BASE_EVENT_TYPE)
+    f = ua.EventFilter()
+    f.SelectClauses = [field("EventType", base), field("Severity", base),
+                       field("Result", ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"]))]  # fmt: skip
+    f.WhereClause = ua.ContentFilter()
+    f.WhereClause.Elements = elements
+    return f
+
+
+def _element(op: Any, *operands: Any) -> Any:
+    from asyncua import ua
+
+    el = ua.ContentFilterElement()
+    el.FilterOperator = op
+    el.FilterOperands = list(operands)
+    return el
+
+
+def _where_cases(ns: dict[str, int]) -> dict[str, tuple[list[Any], bool]]:
+    """Where clauses a client written from Part 4 sends, and whether the stand's result
+    event (a BalancingResultReadyEventType, severity 500 for the demo's failed run)
+    passes each."""
+    from asyncua import ua
+
+    op = ua.FilterOperator
+    ready = ua.LiteralOperand(Value=ua.Variant(ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"])))
+    base = ua.LiteralOperand(Value=ua.Variant(ua.NodeId(BASE_EVENT_TYPE)))
+    audit = ua.LiteralOperand(Value=ua.Variant(ua.NodeId(AUDIT_EVENT_TYPE)))
+    severity = ua.SimpleAttributeOperand(TypeDefinitionId=ua.NodeId(BASE_EVENT_TYPE),
+                                         BrowsePath=[ua.QualifiedName("Severity", 0)],
+                                         AttributeId=ua.AttributeIds.Value)  # fmt: skip
+    missing = ua.SimpleAttributeOperand(TypeDefinitionId=ua.NodeId(BASE_EVENT_TYPE),
+                                        BrowsePath=[ua.QualifiedName("NoSuchField", 0)],
+                                        AttributeId=ua.AttributeIds.Value)  # fmt: skip
+
+    def lit(x: int) -> Any:
+        return ua.LiteralOperand(Value=ua.Variant(x, ua.VariantType.UInt16))
+
+    def el(i: int) -> Any:
+        return ua.ElementOperand(Index=i)
+
+    return {
+        "OfType ResultReadyEventType": ([_element(op.OfType, ready)], True),
+        "OfType BaseEventType": ([_element(op.OfType, base)], True),
+        "OfType AuditEventType": ([_element(op.OfType, audit)], False),
+        "And(OfType ready, Severity = 500)": ([_element(op.And, el(1), el(2)),
+                                               _element(op.OfType, ready),
+                                               _element(op.Equals, severity, lit(500))], True),
+        "And(OfType ready, Severity = 100)": ([_element(op.And, el(1), el(2)),
+                                               _element(op.OfType, ready),
+                                               _element(op.Equals, severity, lit(100))], False),
+        "Or(OfType audit, Severity InList 100, 500)": (
+            [_element(op.Or, el(1), el(2)), _element(op.OfType, audit),
+             _element(op.InList, severity, lit(100), lit(500))], True),
+        "Not(OfType ready)": ([_element(op.Not, el(1)), _element(op.OfType, ready)], False),
+        "Equals(NoSuchField, 1)": ([_element(op.Equals, missing, lit(1))], False),
+        "IsNull(NoSuchField)": ([_element(op.IsNull, missing)], True),
+    }  # fmt: skip
+
+
+def test_where_clauses_are_evaluated_as_part_4_says(
+    tmp_path: Path, demo_run: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Nine event monitored items on the Server object, each with a where clause a client
+    written from OPC 10000-4 sends; one run archived: OfType matches the type and its
+    subtypes (asyncua compared for equality: OfType ResultReadyEventType heard nothing),
+    And, Or, Not, Equals, InList and IsNull decide the rest; a field the event lacks is
+    NULL, never a traceback."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    heard = _with_server(url, lambda endpoint: _where_client(endpoint, url, demo_run))
+    for name, (got, want) in heard.items():
+        assert got == want, name
+    err = capfd.readouterr().err
+    assert "Traceback" not in err, err
+
+
+async def _where_client(endpoint: str, url: str, run: Path) -> dict[str, tuple[bool, bool]]:
+    from asyncua import Client, ua
+
+    async with Client(endpoint) as client:
+        ns, _ = await _machine(client, "stand-7")
+        cases = _where_cases(ns)
+        heard: dict[int, list[Any]] = {}
+
+        class Handler:
+            def __init__(self, k: int) -> None:
+                self.k = k
+
+            def event_notification(self, event: Any) -> None:
+                heard.setdefault(self.k, []).append(event)
+
+        server_node = client.get_node(ua.NodeId(SERVER_OBJECT))
+        etype = client.get_node(ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"]))
+        subs = []
+        for k, (elements, _) in enumerate(cases.values()):  # one subscription per clause
+            subs.append(await client.create_subscription(50, Handler(k)))
+            await subs[-1].subscribe_events(server_node, etype, evfilter=_filter(ns, elements))
+        await asyncio.sleep(0.5)
+        proc = await asyncio.create_subprocess_exec(
+            sys.executable, "-c", ARCHIVE_IN_ANOTHER_PROCESS, str(run), url,
+            stdout=asyncio.subprocess.PIPE,
+        )  # fmt: skip
+        await proc.communicate()
+        await asyncio.sleep(1.5)  # six polls: every event there is has come
+        for sub in subs:
+            await sub.delete()
+    return {name: (k in heard, want) for k, (name, (_, want)) in enumerate(cases.items())}
