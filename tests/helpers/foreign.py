@@ -39,3 +39,42 @@ def ajv(schema: Path, documents: list[Any], folder: Path) -> dict[str, Any]:
     assert done.returncode == 0, done.stderr
     out: dict[str, Any] = json.loads(done.stdout)
     return out
+
+
+class NodeUaClient:
+    """``tests/js/ua_client.js`` (node-opcua) running against an endpoint: its JSON lines
+    read as they come (node-opcua's own log lines, which it writes to stdout too, skipped).
+
+    ``prefix`` runs it inside something else (``ip netns exec NS``)."""
+
+    def __init__(self, endpoint: str, serial: str, events: int, *extra: str,
+                 prefix: tuple[str, ...] = ()) -> None:  # fmt: skip
+        import queue
+        import threading
+
+        node = node_with("node-opcua-client")
+        self.proc = subprocess.Popen(
+            [*prefix, node, str(JS / "ua_client.js"), endpoint, serial, str(events), *extra],
+            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+        )  # fmt: skip
+        self.lines: queue.Queue[dict[str, Any]] = queue.Queue()
+
+        def read() -> None:
+            assert self.proc.stdout is not None
+            for line in self.proc.stdout:
+                if line.startswith("{"):
+                    self.lines.put(json.loads(line))
+            self.lines.put({"error": f"ua_client.js ended ({self.proc.wait()})"})
+
+        threading.Thread(target=read, daemon=True).start()
+
+    def next(self, timeout_s: float = 60.0) -> dict[str, Any]:
+        """Its next JSON line (a hang guard of ``timeout_s``, not a speed requirement)."""
+        got = self.lines.get(timeout=timeout_s)
+        assert "error" not in got, got["error"]
+        return got
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait(10)
