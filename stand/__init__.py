@@ -1,4 +1,4 @@
-"""Host software of a soft-bearing two-plane rotor balancing stand.
+"""Host software of a soft-bearing rotor balancing stand (two or more correction planes).
 
 Data flows one way: CAN frame -> samples and marks per node -> complex 1x per
 support -> unbalance per plane -> correction -> one frozen Result.  The packages,

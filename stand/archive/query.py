@@ -184,6 +184,17 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
     ]
 
 
+def serials_by_digest(url: str, file_sha256s: list[str]) -> dict[str, str]:
+    """The serial of each archived run with one of these file digests (runs without a
+    serial left out)."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        found = conn.execute(sa.select(runs.c.file_sha256, runs.c.serial)
+                             .where(runs.c.file_sha256.in_(file_sha256s))).all()  # fmt: skip
+    return {str(d): str(s) for d, s in found if s}
+
+
 def run_file(url: str, run_id: int) -> str | None:
     """The run file archived as ``run_id`` (None if there is no such run)."""
     import sqlalchemy as sa

@@ -143,26 +143,40 @@ def _rotors(rows: list[Any]) -> list[Any]:
     return first
 
 
-def _first_pass(rows: list[Any], rotors: list[Any]) -> tuple[int, int, int]:
-    """Of the rotors: passed at their first run or first check, failed their first check,
-    not checked yet (a first run that failed, with no check run after it)."""
+def first_pass(rows: list[Any], rotors: list[Any]) -> dict[str, Any]:
+    """The quality figures of the rotors (each by its first run, :func:`_rotors`).
+
+    ``first_pass_yield``: the share of the rotors judged at their first run that passed
+    it (within tolerance before any correction); ``first_check_pass_rate``: of the rotors
+    whose first run failed and that were checked, the share whose first check passed (the
+    correction right at the first attempt); rotors failed and not checked yet, and rotors
+    never judged (no tolerance, undecided at the first run), are counted apart."""
     checks: dict[int, list[Any]] = {}
     for r in rows:
         if r.checks_run_id is not None:
             checks.setdefault(r.checks_run_id, []).append(r)
-    passed = failed = open_ = 0
+    n = {"passed_first_run": 0, "failed_first_run": 0, "not_judged_first_run": 0,
+         "passed_first_check": 0, "failed_first_check": 0, "not_checked_yet": 0}  # fmt: skip
     for r in rotors:
         if r.verdict == "pass":
-            passed += 1
-        elif r.verdict in ("fail", "undecided"):  # a check must decide
-            after = checks.get(r.id)
-            if not after:
-                open_ += 1
-            elif after[0].verdict == "pass":
-                passed += 1
-            else:
-                failed += 1
-    return passed, failed, open_
+            n["passed_first_run"] += 1
+            continue
+        n["failed_first_run" if r.verdict == "fail" else "not_judged_first_run"] += 1
+        if r.verdict not in ("fail", "undecided"):
+            continue
+        after = checks.get(r.id)
+        if not after:
+            n["not_checked_yet"] += 1
+        else:
+            n["passed_first_check" if after[0].verdict == "pass" else "failed_first_check"] += 1
+    judged = n["passed_first_run"] + n["failed_first_run"]
+    checked = n["passed_first_check"] + n["failed_first_check"]
+    return {
+        "first_pass_yield": None if judged == 0 else round(n["passed_first_run"] / judged, 4),
+        "first_check_pass_rate":
+            None if checked == 0 else round(n["passed_first_check"] / checked, 4),
+        **n,
+    }  # fmt: skip
 
 
 def verdict_counts(rows: list[Any], rotors: list[Any]) -> dict[str, dict[str, int]]:
@@ -195,15 +209,11 @@ def production(url: str, rotor_type: str, filters: Any = None) -> dict[str, Any]
             if p.permissible_kg_m is not None:
                 per[p.plane - 1].append(p.permissible_kg_m)
     rotors = _rotors(rows)
-    passed, failed, open_ = _first_pass(rows, rotors)
     out: dict[str, Any] = {
         "rotor_type": rotor_type,
         "runs": len(rows),
         "rotors": len(rotors),
-        "first_pass_yield": None if passed + failed == 0 else round(passed / (passed + failed), 4),
-        "passed_first_time": passed,
-        "failed_first_check": failed,
-        "not_checked_yet": open_,
+        **first_pass(rows, rotors),
         "verdicts": verdict_counts(rows, rotors),
         "permissible_g_mm": [  # the tolerance in force (the latest runs')
             round(v[-1] * 1e6, 3) if v else None for v in per

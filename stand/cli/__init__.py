@@ -85,7 +85,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     common.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     parser = _Parser(
         prog="stand",
-        description="Host software of a soft-bearing two-plane rotor balancing stand.",
+        description="Host software of a soft-bearing rotor balancing stand (two or more "
+        "correction planes).",
         parents=[common],
     )
     parser.add_argument("--version", action="version", version=f"stand {__version__}")

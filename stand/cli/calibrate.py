@@ -13,6 +13,7 @@ import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.archive import correction_rows, url_for
+from stand.archive.query import serials_by_digest
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
 from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
 from stand.cli.format import dump_json
@@ -23,6 +24,7 @@ from stand.errors import ConfigError, ModelError, UsageError
 from stand.files import check_output
 from stand.health.monitor import answers, refit
 from stand.solve import measure_recording
+from stand.solve.words import counted
 
 
 class MassTable(BaseModel):
@@ -278,6 +280,28 @@ def _refitted_config(cfg: Config, r: Any, original: str) -> tuple[list[str], str
     return header, "\n".join(header) + "\n" + updated_toml(original, new)
 
 
+def _fits_json(r: Any) -> list[dict[str, Any]]:
+    return [{"parameter": f.name, "change_pct": round(100 * f.change, 4),
+             "interval95_pct": round(100 * f.interval95, 4)} for f in r.fits]  # fmt: skip
+
+
+def _no_change(r: Any, as_json: bool) -> bool:
+    """Say "no significant change" where every fitted change lies inside its own 95 %
+    interval (then nothing is written); whether it did."""
+    if any(abs(f.change) > f.interval95 for f in r.fits):
+        return False
+    fits = "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
+                     for f in r.fits)  # fmt: skip
+    used = counted(len(r.group.rows) - r.start, "corrected rotor")
+    said = (f"no significant change: keep the calibration ({fits}, 95 %: each change inside "
+            f"its interval, from {used}); nothing written (--force writes it)")  # fmt: skip
+    if as_json:
+        dump_json({"significant": False, "said": said, "config": None, "fits": _fits_json(r)})
+    else:
+        print(said)
+    return True
+
+
 def _from_archive(args: argparse.Namespace) -> int:
     """``--from-archive``: the stand re-identified from production data; the new config
     written beside the old (with a diff), the last rotors' answers old and new."""
@@ -297,8 +321,11 @@ def _from_archive(args: argparse.Namespace) -> int:
                 f"--fit: {', '.join(bad) or 'nothing'}: choose from {', '.join(FITTABLE)}"
             )
     cfg, params = load_config(args.config)
-    rows = correction_rows(url_for(args.archive, cfg), args.stand, args.rotor_type)
+    url = url_for(args.archive, cfg)
+    rows = correction_rows(url, args.stand, args.rotor_type)
     r = refit(rows, params, names)
+    if not args.force and _no_change(r, args.json):
+        return 0
     original, _ = read_toml(args.config)
     header, text = _refitted_config(cfg, r, original)
     write_text_output(out_path, text, force=args.force, inputs=[args.config])
@@ -308,14 +335,15 @@ def _from_archive(args: argparse.Namespace) -> int:
         )
     )
     rows = answers(r)
+    shown = r.group.rows[-len(rows) :] if rows else []
+    serials = serials_by_digest(url, [row["check_sha256"] for row in shown])
+    for e, row in zip(rows, shown, strict=True):
+        e["serial"] = serials.get(row["check_sha256"])
     if args.json:
         dump_json(
             {
-                "fits": [
-                    {"parameter": f.name, "change_pct": round(100 * f.change, 4),
-                     "interval95_pct": round(100 * f.interval95, 4)}
-                    for f in r.fits
-                ],
+                "significant": any(abs(f.change) > f.interval95 for f in r.fits),
+                "fits": _fits_json(r),
                 "data": len(r.group.rows) - r.start,
                 "config": out_path,
                 "diff": diff,
@@ -328,8 +356,9 @@ def _from_archive(args: argparse.Namespace) -> int:
     print("the last rotors' initial unbalance, old -> new calibration [g mm at deg]:")
     for e in rows:
         (o1, o2), (n1, n2) = e["old"], e["new"]
+        who = e["serial"] or "run " + e["check_sha256"]
         print(
-            f"  {e['check_sha256']}: plane 1 {o1[0]:.0f} at {o1[1]:.0f} -> {n1[0]:.0f} at "
+            f"  {who}: plane 1 {o1[0]:.0f} at {o1[1]:.0f} -> {n1[0]:.0f} at "
             f"{n1[1]:.0f}; plane 2 {o2[0]:.0f} at {o2[1]:.0f} -> {n2[0]:.0f} at {n2[1]:.0f}"
         )
     print(f"wrote {out_path}")

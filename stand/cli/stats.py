@@ -17,6 +17,7 @@ from stand.cli.common import (
 from stand.cli.format import dump_json
 from stand.report import render_production
 from stand.solve.verdict import verdicts_text
+from stand.solve.words import counted, first_pass_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,7 +66,7 @@ def _stands_text(out: dict[str, Any]) -> None:
         ps = " / ".join("-" if p is None else f"{p:.3g}" for p in s["p_value"])
         verdict = "DIFFERS from the others" if s["differs"] else "like the others"
         print(
-            f"  {s['stand']:16} {s['rotors']:5d} rotors  median residual {med} g mm  "
+            f"  {s['stand']:16} {counted(s['rotors'], 'rotor'):>11}  median residual {med} g mm  "
             f"p {ps}  {verdict}"
         )
 
@@ -74,13 +75,9 @@ def _text(out: dict[str, Any]) -> None:
     if not out["rotors"]:
         print(f"rotor type {out['rotor_type']}: no archived rotor")
         return
-    fpy = out["first_pass_yield"]
-    print(
-        f"rotor type {out['rotor_type']}: {out['rotors']} rotors ({out['runs']} runs); "
-        f"first-pass yield {'-' if fpy is None else f'{100 * fpy:.1f} %'} "
-        f"({out['passed_first_time']} within tolerance first time, {out['failed_first_check']} "
-        f"failed their first check, {out['not_checked_yet']} not checked yet)"
-    )
+    print(f"rotor type {out['rotor_type']}: {counted(out['rotors'], 'rotor')} "
+          f"({counted(out['runs'], 'run')})")  # fmt: skip
+    print("  " + first_pass_text(out))
     print("verdicts (ISO 21940-14): " + verdicts_text(out["verdicts"]))
     print("initial unbalance (each rotor's first run); angles from the reference mark, against")
     print("the direction of rotation:")

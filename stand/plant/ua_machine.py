@@ -39,7 +39,7 @@ from stand.plant.ua_model import (
 from stand.plant.ua_nodes import add_node, add_property, add_reference, arguments
 
 MANUFACTURER = "rotor-stand (open source)"
-MODEL = "soft-bearing two-plane balancing stand"
+MODEL = "soft-bearing rotor balancing stand, N correction planes"
 
 
 @dataclass(frozen=True)

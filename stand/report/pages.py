@@ -12,6 +12,7 @@ from typing import Any
 from stand.report.certificate import CSS
 from stand.report.plots import production, speed_bars
 from stand.solve.verdict import verdicts_text
+from stand.solve.words import counted, first_pass_text
 
 
 def _p(p: float) -> str:
@@ -46,10 +47,9 @@ def render_production(out: dict[str, Any]) -> str:
 <html lang="en"><head><meta charset="utf-8"><title>Production of {e(out["rotor_type"])}</title>
 <style>{CSS}</style></head><body>
 <header><h1>Production statistics: {e(out["rotor_type"])}</h1></header>
-<p>{out["rotors"]} rotors ({out["runs"]} runs). First-pass yield
-<b>{"–" if fpy is None else f"{100 * fpy:.1f} %"}</b>: {out["passed_first_time"]} within
-tolerance at their first run or first check, {out["failed_first_check"]} failed their
-first check, {out["not_checked_yet"]} not checked yet. Verdicts (ISO 21940-14):
+<p>{counted(out["rotors"], "rotor")} ({counted(out["runs"], "run")}). First-pass yield
+<b>{"–" if fpy is None else f"{100 * fpy:.1f} %"}</b>: {e(first_pass_text(out))}.
+Verdicts (ISO 21940-14):
 {e(verdicts_text(out["verdicts"]))}.</p>
 <h2>Initial unbalance (each rotor's first run)</h2>
 <table><tr><th class=l>part</th><th>mean [g mm]</th><th>at</th>

@@ -306,3 +306,40 @@ def test_a_series_makes_its_out_dir_and_refuses_a_file_there(
     assert main([*args, "--out-dir", str(tmp_path / "file")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not a folder" in err
+
+
+def test_a_change_inside_its_interval_keeps_the_calibration(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Twelve rotors on a stand that did not change: C1 refitted moves less than its own
+    95 % interval, so `calibrate --from-archive` says "no significant change: keep the
+    calibration" and writes nothing (it wrote a new calibration); `--force` writes it, and
+    the last rotors are named by their serials, not by digests."""
+    from stand.config import config_toml
+    from stand.sim import load_scene
+
+    scene = tmp_path / "steady.toml"
+    scene.write_text((SCENES / "production-drift.toml").read_text()
+                     .replace("from_rotor = 100", "from_rotor = 100000"))  # fmt: skip
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    assert main(["simulate", str(scene), "--series", "12", "--out-dir", str(tmp_path / "runs"),
+                 "--archive", url]) == 0  # fmt: skip
+    cfg = tmp_path / "stand.toml"
+    cfg.write_text(config_toml(load_scene(str(scene))[0].config()))
+    capsys.readouterr()
+    argv = ["calibrate", "--from-archive", "--config", str(cfg), "--archive", url, "--fit", "C1"]
+    out = run_json([*argv, "--json"], capsys)
+    (fit,) = out["fits"]
+    assert out["significant"] is False and out["config"] is None
+    assert abs(fit["change_pct"]) <= fit["interval95_pct"]
+    assert not (tmp_path / "stand-recalibrated.toml").exists()
+    assert main(argv) == 0
+    said = capsys.readouterr().out
+    assert (
+        said.startswith("no significant change: keep the calibration (C1 ")
+        and said.count("\n") == 1
+    )
+    assert "from 12 corrected rotors" in said
+    assert main([*argv, "--force"]) == 0
+    forced = capsys.readouterr().out
+    assert (tmp_path / "stand-recalibrated.toml").is_file() and "  S-00012: plane 1" in forced
