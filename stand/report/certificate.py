@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import datetime as dt
 import html
+from pathlib import PurePath
 from typing import Any
 
 from stand.report.plots import polar, spectrum_and_speed
@@ -85,7 +86,7 @@ def _job(out: dict[str, Any], result: Result) -> str:
     cells = [
         ("rotor type", j.get("rotor_type")), ("serial number", j.get("serial")),
         ("order", j.get("order")), ("operator", j.get("operator")),
-        ("balancing stand", st.get("name")),
+        ("balancing stand", st.get("name") or st.get("id")),
         ("date", local_time(result.provenance.start_time)),
     ]  # fmt: skip
     row = "".join(f"<th>{k}</th><td>{e(v or '–')}</td>" for k, v in cells[:3])
@@ -178,8 +179,8 @@ def _results(out: dict[str, Any]) -> str:
         per = d.number(tol[i]["permissible_g_mm"]) if i in tol else "–"
         rows.append(f"<tr><td>{i}</td>{cells}<td>{angle}</td><td>{per}</td><td>{verdict}</td></tr>")
     prev = (
-        f"<p class=muted>Before: the run {e(out['check']['previous_run'])}, before the "
-        "correction; after: this run.</p>"
+        f"<p class=muted>Before: the run {e(_file_name(out['check']['previous_run']))}, "
+        "before the correction; after: this run.</p>"
         if check
         else ""
     )
@@ -261,9 +262,24 @@ def _calibration(out: dict[str, Any], result: Result) -> str:
             f"by the two-run index procedure; its unbalance ({e(parts)}) is subtracted"
         )
     return (
-        f"<p><b>Calibration used:</b> configuration {e(p.config_source)}, SHA-256 "
-        f"{p.config_sha256[:16]}…, {cal}{matrix}. Measured with {e(p.software)}.</p>"
+        f"<p><b>Calibration used:</b> {e(_config_named(p.config_source))} (SHA-256 "
+        f"{p.config_sha256[:16]}…, the stand's archive keeps it whole), {cal}{matrix}. "
+        f"Measured with {e(p.software)}.</p>"
     )
+
+
+def _file_name(path: str | None) -> str:
+    """A file as a customer's paper names it: its name, never the stand's folders."""
+    return PurePath(path).name if path else "–"
+
+
+def _config_named(source: str | None) -> str:
+    """The configuration a run was solved with, as the certificate names it."""
+    if not source or source == "the stand's configuration":
+        return "the stand's configuration"
+    if source in ("scene", "stored") or source.endswith("(stored)"):
+        return "the configuration stored with the run"
+    return f"the configuration {_file_name(source)}"
 
 
 def _signatures(out: dict[str, Any]) -> str:
@@ -315,8 +331,9 @@ def _appendix(out: dict[str, Any], result: Result) -> str:
     spectrum, speed = spectrum_and_speed(result.traces, out["rpm"])
     p = result.provenance
     meta = {
-        "run file": p.run_file or "", "start time (UTC)": p.start_time, "source": p.source,
+        "run file": _file_name(p.run_file), "start time (UTC)": p.start_time,
         "frames": p.frames, "duration [s]": round(p.duration_s, 3),
+        **_parameters(out),
     }  # fmt: skip
     rows = "".join(
         f"<tr><th class=l>{e(str(k))}</th><td class=l>{e(str(v))}</td></tr>"
@@ -330,9 +347,23 @@ def _appendix(out: dict[str, Any], result: Result) -> str:
 <h2>Spectrum around 1x</h2><img alt="spectrum" src="{spectrum}">
 <h2>Speed over the run</h2><img alt="speed" src="{speed}">
 <h2>Warnings</h2>{warnings}
-<h2>Run</h2><table>{rows}</table>
-<pre>{e(p.config_toml)}</pre>
+<h2>Run and parameters</h2><table>{rows}</table>
+<p class=muted>The whole configuration is kept in the stand's archive under its SHA-256
+({e(p.config_sha256[:16])}…).</p>
 </div>"""
+
+
+def _parameters(out: dict[str, Any]) -> dict[str, str]:
+    """The few parameters a customer needs (the rest stays in the archive)."""
+    d = Display.of(out)
+    got = {"speed [rpm]": f"{out['rpm']:.0f}"}
+    for x in out.get("planes", []):
+        if x.get("radius_mm") is not None:
+            got[f"plane {x['plane']}: correction radius"] = d.length(x["radius_mm"])
+    t = out.get("tolerance") or {}
+    if t.get("source"):
+        got["tolerance"] = str(t["source"])
+    return got
 
 
 def render(result: Result) -> str:

@@ -167,12 +167,15 @@ def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
         _type(browser, "order", "O-77")
         _type(browser, "operator", "kim")
         _shot(browser, tmp_path, "start")
+        first = browser.current_window_handle
+        browser.switch_to.new_window("window")  # a second browser on the same station,
+        browser.get(base + "/")  # open before the first starts: its Start comes while the
+        _see(browser, "New rotor")  # 2 s run goes on, however loaded the machine is
+        second = browser.current_window_handle
+        browser.switch_to.window(first)
         _button(browser, "Start measuring").click()
         _see(browser, "measuring D-1")
-        first = browser.current_window_handle
-        browser.switch_to.new_window("window")  # a second browser on the same station
-        browser.get(base + "/")
-        _see(browser, "measuring D-1")
+        browser.switch_to.window(second)
         _button(browser, "Start measuring").click()
         _see(browser, "the station is measuring the initial run of D-1 already")
         browser.close()
