@@ -164,6 +164,11 @@ class Station(ArchiveSide):
         config = self.config_path(rotor_type)
         if source not in self.sources():
             raise UsageError(f"no source {source!r}: the bus or one of the scenes")
+        if not (job.serial or "").strip() and self._state.phase != "measuring":
+            raise UsageError(
+                "enter the rotor's serial number first (type it or scan it): without one "
+                "the rotor is anonymous in the archive, Q-DAS and OPC UA"
+            )
         self._launch(
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )

@@ -50,11 +50,12 @@ def tight_rotor_types(folder: Path) -> Path:
 def one_station_run(base: str, pid: int, driver: object) -> tuple[float, float, int]:
     """(estimates shown per second, station CPU s per s, estimates shown) for one run."""
     from selenium.webdriver.common.by import By
-    from test_station_browser import _button, _see
+    from test_station_browser import _button, _see, _type
 
     d = driver
     d.get(base + "/")  # type: ignore[attr-defined]
     _see(d, "New rotor")
+    _type(d, "serial number", f"B-{time.monotonic_ns()}")
     _button(d, "Start measuring").click()
     _see(d, "measuring")
     c0, t0 = cpu_s(pid), time.monotonic()
@@ -77,11 +78,12 @@ def one_station_run(base: str, pid: int, driver: object) -> tuple[float, float, 
 def answer_run(base: str, driver: object) -> float:
     """Seconds from the click on Start measuring to the offer of the correction."""
     from selenium.webdriver.common.by import By
-    from test_station_browser import _button, _see
+    from test_station_browser import _button, _see, _type
 
     d = driver
     d.get(base + "/")  # type: ignore[attr-defined]
     _see(d, "New rotor")
+    _type(d, "serial number", f"A-{time.monotonic_ns()}")
     button = _button(d, "Start measuring")
     t0 = time.monotonic()
     button.click()

@@ -419,3 +419,12 @@ def test_one_station_is_one_stand(tmp_path: Path) -> None:
     (folder / "b.toml").write_text(text.replace("[stand]\n", '[stand]\nid = "line-4"\n'))
     with pytest.raises(UsageError, match="name different stands"):
         st.stand_id()
+
+
+def test_a_rotor_without_a_serial_is_not_started(station: Station) -> None:
+    """Start without a serial (blank or spaces) is refused, saying what to do: the rotor
+    would be anonymous in the archive, Q-DAS and OPC UA."""
+    for blank in (Job(), Job(serial="   ")):
+        with pytest.raises(UsageError, match="serial number first"):
+            station.start("demo-auger", "demo", blank)
+    assert station.snapshot().phase == "idle"
