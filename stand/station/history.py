@@ -9,13 +9,23 @@ comes from :class:`stand.station.service.Station`.
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any
+from typing import Any, Literal
 
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
 from stand.report import Display
 from stand.station.service import Station
+
+TOAST: Literal["top-right"] = "top-right"
+"""Where the screens' notes appear: the header's corner, never over a control (the
+screens' buttons are at their foot, where Quasar's default put the notes)."""
+Kind = Literal["positive", "negative", "warning"]
+
+
+def notify(text: str, kind: Kind, *, multi_line: bool = False, timeout: int = 5000) -> None:
+    """A note on the screen, at :data:`TOAST`."""
+    ui.notify(text, type=kind, position=TOAST, multi_line=multi_line, timeout=timeout)
 
 
 def _health_panel(station: Station) -> None:
@@ -55,7 +65,7 @@ def history_screen(station: Station) -> None:
 
         def export() -> None:
             if not rotor.value:
-                ui.notify("choose a rotor type to export", type="warning")
+                notify("choose a rotor type to export", "warning")
                 return
             ui.navigate.to(f"/export/qdas/{rotor.value}", new_tab=True)
 
@@ -74,7 +84,7 @@ def history_screen(station: Station) -> None:
     def across_speeds() -> None:
         ids = sorted(r["run"] for r in table.selected)
         if len(ids) < 2:
-            ui.notify("tick one rotor's runs at two speeds or more", type="warning")
+            notify("tick one rotor's runs at two speeds or more", "warning")
             return
         ui.navigate.to(f"/speeds/{','.join(map(str, ids))}", new_tab=True)
 
@@ -91,7 +101,7 @@ def history_screen(station: Station) -> None:
         try:
             rows = station.history(serial.value or None, rotor.value or None)
         except StandError as exc:
-            ui.notify(str(exc), type="negative")
+            notify(str(exc), "negative")
             return
         units = {t: Display(*station.display_units(t)) for t in {r["rotor_type"] for r in rows}}
         table.rows = [_history_row(r, units[r["rotor_type"]]) for r in rows]

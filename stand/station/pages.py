@@ -19,7 +19,7 @@ from stand.plant import TokenGate
 from stand.report import Display
 from stand.solve import Job, to_json
 from stand.station.face import SEEN_FROM, face_svg
-from stand.station.history import add_routes, history_screen
+from stand.station.history import add_routes, history_screen, notify
 from stand.station.service import Station
 from stand.station.snapshot import BUS
 from stand.station.views import (
@@ -68,7 +68,7 @@ def _guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], N
         try:
             action()
         except StandError as exc:
-            ui.notify(str(exc), type="negative", multi_line=True, timeout=8000)
+            notify(str(exc), "negative", multi_line=True, timeout=8000)
             return
         if then:
             ui.navigate.to(then)
@@ -253,7 +253,7 @@ def correct_screen(station: Station) -> None:
 
             def apply() -> None:
                 masses = station.apply_correction()
-                ui.notify(f"{len(masses)} masses put on the simulated rotor", type="positive")
+                notify(f"{len(masses)} masses put on the simulated rotor", "positive")
 
             ui.button("Apply the correction (simulated stand)", on_click=_guard(apply)).props(
                 "size=xl color=secondary"
@@ -262,7 +262,7 @@ def correct_screen(station: Station) -> None:
 
             def confirm() -> None:
                 station.confirm_applied()
-                ui.notify("confirmed: the check will calibrate the stand too", type="positive")
+                notify("confirmed: the check will calibrate the stand too", "positive")
 
             ui.button("Applied as shown", on_click=_guard(confirm)).props(
                 "size=xl color=secondary"

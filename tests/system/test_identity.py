@@ -63,10 +63,12 @@ def _rows(url: str) -> tuple[list[Any], list[Any]]:
 
 @pytest.mark.realtime
 def test_every_command_that_archives_uses_the_configs_stand_and_archive(
-    tmp_path: Path,
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from stand.archive import default_url
     from stand.station.service import Station
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "xdg"))  # a default archive of its own
 
     url = f"sqlite:///{tmp_path / 'walk.sqlite'}"
     cfg = identified(ROOT / "examples" / "demo-stand.toml", tmp_path / "c.toml", url)

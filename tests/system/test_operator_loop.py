@@ -114,7 +114,8 @@ def test_the_simulated_stand_in_another_process_over_the_loopback_bus(tmp_path: 
     out = tmp_path / "r.h5"
     balance = subprocess.Popen(
         [sys.executable, "-m", "stand.cli", "balance", "--config", cfg, *bus, "--out", str(out),
-         "--json", "--max-seconds", "20", "--report", str(tmp_path / "r.html")],
+         "--json", "--max-seconds", "20", "--report", str(tmp_path / "r.html"),
+         "--timeout", "30"],  # the other process may start slowly on a loaded machine
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
@@ -164,7 +165,7 @@ def test_canopen_modules_in_another_process_answer_the_set_up_and_the_sync(
         rec = subprocess.run(
             [sys.executable, "-m", "stand.cli", "record", "--config",
              str(ROOT / "examples" / "canopen-stand.toml"), *bus, "--out", str(out),
-             "--seconds", "20", "--quiet"],
+             "--seconds", "20", "--quiet", "--timeout", "30"],
             capture_output=True, text=True, timeout=60, check=False,
         )  # fmt: skip
         assert rec.returncode == 0, rec.stderr
