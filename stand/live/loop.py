@@ -69,11 +69,28 @@ TAIL_MARGIN_S = 0.2
 
 @dataclass(frozen=True)
 class Progress:
-    """One live solve, for the display."""
+    """One live solve, for the display; ``waiting_for``: why the run goes on, in words
+    (empty when it stops for precision)."""
 
     elapsed_s: float
     measurement: Any
     targets_kg_m: tuple[float, float]
+    waiting_for: tuple[str, ...] = ()
+
+
+def waiting_for(m: Any, goal: tuple[float, float], settled: bool) -> tuple[str, ...]:
+    """Why a live run is not done: too few revolutions, a plane's interval above its goal,
+    balls not settled (each the operator's words)."""
+    out = []
+    if any(w.code == "short_window" for w in m.warnings):
+        revs = min(int(w.revolutions) for w in m.windows)
+        out.append(f"more revolutions ({revs} of {MIN_REVS})")
+    for i in range(2):
+        if m.radius95_kg_m[i] > goal[i]:
+            out.append(f"plane {i + 1}'s 95 % interval to shrink to its goal")
+    if not settled:
+        out.append("the ball balancer's balls to settle")
+    return tuple(out)
 
 
 def _next_check(
@@ -143,14 +160,10 @@ def measure_until_precise(
             continue
         last = m
         goal = targets(m.solution.U_kg_m)
+        why = waiting_for(m, goal, _settled(cfg, estimates.full))
         if on_progress:
-            on_progress(Progress(elapsed, m, goal))
-        short = any(w.code == "short_window" for w in m.warnings)
-        if (
-            not short
-            and all(m.radius95_kg_m[i] <= goal[i] for i in range(2))
-            and _settled(cfg, estimates.full)
-        ):
+            on_progress(Progress(elapsed, m, goal, why))
+        if not why:
             stopped_by = "precision"
             break
         next_check = _next_check(elapsed, m, goal, MIN_REVS, max_interval_s)

@@ -39,7 +39,7 @@ def _rotation_arrow() -> str:
         f'stroke="#222" stroke-width="3"/>'
         f'<polygon points="{tip[0]:.1f},{tip[1]:.1f} {wing1[0]:.1f},{wing1[1]:.1f} '
         f'{wing2[0]:.1f},{wing2[1]:.1f}" fill="#222"/>'
-        f'<text x="{lx:.1f}" y="{ly + 10:.1f}" font-size="15" text-anchor="end">rotation</text>'
+        f'<text x="{lx:.1f}" y="{ly + 10:.1f}" font-size="20" text-anchor="end">rotation</text>'
     )
 
 
@@ -66,14 +66,14 @@ def face_svg(
         Text above the face.
     """
     parts = [
-        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="-215 -200 430 430" '
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="-215 -200 430 400" '
         'role="img" font-family="sans-serif">',
         f"<title>{escape(title)} ({SEEN_FROM})</title>",
         f'<circle r="{R_FACE}" fill="#e8e8e8" stroke="#555" stroke-width="3"/>',
         '<circle r="28" fill="#bbb" stroke="#555" stroke-width="2"/>',
         # the reference mark: a triangle pointing at the face from outside, at the top
         f'<polygon points="0,{-R_FACE - 2} -11,{-R_FACE - 22} 11,{-R_FACE - 22}" fill="#c00"/>',
-        f'<text x="-16" y="{-R_FACE - 8}" font-size="15" text-anchor="end" fill="#c00">'
+        f'<text x="-16" y="{-R_FACE - 8}" font-size="20" text-anchor="end" fill="#c00">'
         "reference mark</text>",
         _rotation_arrow(),
     ]
@@ -83,7 +83,7 @@ def face_svg(
             lx, ly = _xy(position1_deg + 360.0 * k / positions, R_FACE * 0.91)
             parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="9" fill="#fff" stroke="#333"/>')
             parts.append(
-                f'<text x="{lx:.1f}" y="{ly + 6:.1f}" font-size="17" text-anchor="middle" '
+                f'<text x="{lx:.1f}" y="{ly + 6:.1f}" font-size="20" text-anchor="middle" '
                 f'font-weight="bold">{k + 1}</text>'
             )
     colour = "#0a5" if action == "add" else "#c60"
@@ -95,12 +95,9 @@ def face_svg(
             f'stroke-width="3" stroke-dasharray="6 4"/>'
             f'<circle cx="{x:.1f}" cy="{y:.1f}" r="13" fill="{colour}" stroke="#111" '
             'stroke-width="2"/>'
-            f'<text x="{tx:.1f}" y="{ty + 7:.1f}" font-size="20" font-weight="bold" '
+            f'<text x="{tx:.1f}" y="{ty + 7:.1f}" font-size="24" font-weight="bold" '
             f'fill="{colour}" stroke="#fff" stroke-width="4" paint-order="stroke" '
             f'text-anchor="middle">{escape(label)}</text>'
         )
-    parts.append(
-        f'<text x="0" y="{R_FACE + 62}" font-size="13" text-anchor="middle" fill="#444">'
-        f"{escape(SEEN_FROM)}</text></svg>"
-    )
+    parts.append("</svg>")  # which end it is seen from: the title, and the screen's line
     return "".join(parts)

@@ -73,10 +73,11 @@ def history_screen(station: Station) -> None:
             "history-export"
         )
     columns = [{"name": k, "label": k, "field": k, "align": "left"}
-               for k in ("run", "time", "serial", "rotor type", "verdict", "plane 1",
-                         "plane 2", "report", "note")]  # fmt: skip
-    table = (
+               for k in ("report", "run", "time", "serial", "rotor type", "verdict",
+                         "plane 1", "plane 2", "note")]  # fmt: skip
+    table = (  # the report first; long cells wrap, so the table fits a 1280 px screen
         ui.table(columns=columns, rows=[], row_key="run", selection="multiple")
+        .props("dense wrap-cells")
         .classes("w-full")
         .mark("history-table")
     )
@@ -133,10 +134,11 @@ def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
 
 
 def _local(iso: str) -> str:
-    """An archived start time (UTC) in the station's local time, to the second."""
+    """An archived start time (UTC) in the station's local time with its zone, to the
+    second (``2026-11-27 15:04:09 CET``)."""
 
     try:
-        return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S")
+        return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")
     except ValueError:
         return iso
 

@@ -155,7 +155,9 @@ def _show_warnings(column: Any, s: Any) -> None:
     """The run's warnings and the station's notes, each once, in words."""
     column.clear()
     with column:
-        msgs = [w.message for w in s.progress.measurement.warnings]
+        live = s.phase == "measuring"  # a short window: the line of what it waits for says it
+        msgs = [w.message for w in s.progress.measurement.warnings
+                if not (live and w.code == "short_window")]  # fmt: skip
         msgs += [w.message for w in (s.result.warnings if s.result else ())]
         for msg in dict.fromkeys(msgs):
             ui.label(f"⚠ {msg}").classes("text-h6 text-orange-10")
@@ -163,19 +165,34 @@ def _show_warnings(column: Any, s: Any) -> None:
             ui.label(msg).classes("text-h6 text-orange-10")
 
 
+class _PlaneView:
+    """One plane on the Measure screen: its polar plot, its estimate in words, and its
+    95 % interval against the goal on a bar (at a scale where both show: on the polar
+    plot they are smaller than the dot while the unbalance is large)."""
+
+    def __init__(self, plane: int) -> None:
+        self.plane = plane
+        with ui.column().classes("w-1/2 items-center"):
+            self.chart = ui.echart(polar_chart(plane, None, Display())).classes("w-full h-96")
+            self.text = ui.label().classes("text-h6").mark(f"plane{plane}-live")
+            bar = ui.linear_progress(value=0, show_value=False, size="14px")
+            self.bar = bar.props("color=primary track-color=grey-4").mark(f"plane{plane}-goal")
+            self.goal = ui.label().classes("text-body1").mark(f"plane{plane}-goal-text")
+
+    def show(self, p: Any, units: Display) -> None:
+        self.chart.options.clear()
+        self.chart.options.update(polar_chart(self.plane, p, units))
+        self.chart.update()
+        self.text.text = f"plane {self.plane}: {plane_status(p, units)}"
+        self.bar.value = min(1.0, p.goal_kg_m / max(p.radius95_kg_m, 1e-300))
+        self.goal.text = (f"95 % interval ± {units.number(p.radius95_kg_m * 1e6)}, goal ± "
+                          f"{units.number(p.goal_kg_m * 1e6)} {units.unbalance_unit}: "
+                          + ("reached" if p.precise else "not yet"))  # fmt: skip
+
+
 def measure_screen(station: Station) -> None:
     """Measure: speed, per plane the live polar plot, the supports, the warnings."""
-    head = ui.label().classes("big").mark("measure-head")
-    sub = ui.label().classes("text-h6").mark("measure-sub")
-    with ui.row().classes("w-full no-wrap gap-4"):
-        charts, texts = [], []
-        for i in (1, 2):
-            with ui.column().classes("w-1/2 items-center"):
-                charts.append(ui.echart(polar_chart(i, None, Display())).classes("w-full h-96"))
-                texts.append(ui.label().classes("text-h6").mark(f"plane{i}-live"))
-    note = ui.label(ANGLE_NOTE).classes("text-body1 text-grey-8")
-    warn = ui.column().mark("warnings")
-    with ui.row().classes("gap-4"):
+    with ui.row().classes("w-full items-center gap-4"):  # Stop first: on every screen size
         stop = ui.button("Stop", on_click=station.stop).props("size=xl color=negative")
         stop.mark("stop")
         onward = ui.button(
@@ -185,6 +202,12 @@ def measure_screen(station: Station) -> None:
             ),
         ).props("size=xl color=primary")
         onward.mark("onward")
+        head = ui.label().classes("big").mark("measure-head")
+    sub = ui.label().classes("text-h6").mark("measure-sub")
+    with ui.row().classes("w-full no-wrap gap-4"):
+        planes = [_PlaneView(i) for i in (1, 2)]
+    note = ui.label(ANGLE_NOTE).classes("text-body1 text-grey-8")
+    warn = ui.column().mark("warnings")
     seen = {"seq": -1}
 
     def redraw() -> None:
@@ -202,16 +225,16 @@ def measure_screen(station: Station) -> None:
         n = live_numbers(s.progress)
         verb = {"measuring": "measuring", "done": "measured"}.get(s.phase, "stopped")
         head.text = f"{n['rpm']:.0f} rpm   {verb} {n['elapsed_s']:.1f} s"
+        why = getattr(s.progress, "waiting_for", ())
         sub.text = (
             f"{s.kind} run of {s.job.serial or 'the rotor'}; vibration at the supports "
             f"{n['support1_m_s2']:.3f} and {n['support2_m_s2']:.3f} m/s²"
             + (f"; {s.waiting}" if s.waiting else "")
-        )
-        for i, p in enumerate(planes_live(s.progress, s.tolerance_kg_m)):
-            charts[i].options.clear()
-            charts[i].options.update(polar_chart(i + 1, p, units))
-            charts[i].update()
-            texts[i].text = f"plane {i + 1}: {plane_status(p, units)}"
+            + (f". Still measuring: waiting for {' and '.join(why)}"
+               if why and s.phase == "measuring" else "")
+        )  # fmt: skip
+        for view, p in zip(planes, planes_live(s.progress, s.tolerance_kg_m), strict=True):
+            view.show(p, units)
         _show_warnings(warn, s)
 
     note.set_visibility(True)
@@ -233,7 +256,7 @@ def correct_screen(station: Station) -> None:
         for ins in instructions(out):
             with ui.card().classes("w-1/2").mark(f"correct-plane{ins.plane}"):
                 ui.label(ins.headline).classes("text-h5")
-                with ui.row().classes("w-full no-wrap items-center"):
+                with ui.column().classes("w-full items-center"):  # the face at the card's width
                     svg = face_svg(
                         ins.marks,
                         positions=int(pos.get("count") or 0),
@@ -241,8 +264,8 @@ def correct_screen(station: Station) -> None:
                         action=out["correction_mode"],
                         title=f"plane {ins.plane}",
                     )
-                    ui.html(svg, sanitize=False).classes("w-1/2")
-                    with ui.column().classes("w-1/2 gap-1"):
+                    ui.html(svg, sanitize=False).classes("w-full").style("max-width: 30rem")
+                    with ui.column().classes("w-full gap-1"):
                         for what, where, stock in ins.lines:
                             ui.label(what).classes("big")
                             ui.label(where).classes("text-h5")

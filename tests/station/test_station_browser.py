@@ -25,6 +25,8 @@ from urllib.parse import urlsplit
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
+MIN_TEXT_PX = 16.0
+"""The smallest text the Correct screen may show [CSS px] (docs/operator.md)."""
 TOKEN = "station-test-token-1234"
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 DRIVER = shutil.which("chromedriver")
@@ -119,6 +121,27 @@ def _type(driver: Any, label: str, text: str) -> None:
     driver.find_element(By.CSS_SELECTOR, f'input[aria-label="{label}"]').send_keys(text)
 
 
+TEXT_SIZES = """
+const out = [];
+for (const el of document.querySelectorAll('.q-page *')) {
+  if (el.closest('svg') || el.offsetParent === null) continue;
+  if ([...el.childNodes].some(n => n.nodeType === 3 && n.textContent.trim()))
+    out.push([parseFloat(getComputedStyle(el).fontSize), el.textContent.trim().slice(0, 40)]);
+}
+for (const t of document.querySelectorAll('.q-page svg text')) {
+  out.push([parseFloat(t.getAttribute('font-size')) * t.getScreenCTM().a,
+            'face: ' + t.textContent]);
+}
+return out;
+"""
+"""Every text on the page with its rendered size [CSS px] (an SVG text's scaled by its
+drawing's transform to the screen)."""
+
+
+def _text_sizes(driver: Any) -> list[tuple[float, str]]:
+    return [(float(a), str(b)) for a, b in driver.execute_script(TEXT_SIZES)]
+
+
 def _evaluated(tmp_path: Path) -> dt.date:
     """A machine evaluation of the shipped rotor types' stand archived where ``served``
     archives (its figures as the demo's); its due date."""
@@ -186,6 +209,15 @@ def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
         _button(browser, "Go to the correction").click()
         _see(browser, "in hole")
         _shot(browser, tmp_path, "correct")
+        for width, height in ((1024, 768), (1280, 800)):  # readable at two metres
+            browser.set_window_size(width, height)
+            sizes = _text_sizes(browser)
+            smallest = min(sizes)
+            face = min(x for x in sizes if x[1].startswith("face: "))
+            print(f"Correct screen at {width} x {height}: smallest text {smallest}, on the "
+                  f"faces {face}")  # fmt: skip
+            assert smallest[0] >= MIN_TEXT_PX, (width, smallest)
+        browser.set_window_size(1400, 950)
         _button(browser, "Apply the correction (simulated stand)").click()
         _see(browser, "masses put on the simulated rotor")
         _button(browser, "Start the check run").click()
@@ -209,9 +241,24 @@ def test_a_rotor_balanced_through_the_screens_in_a_real_browser(
         _type(browser, "serial number", "D-1")
         _button(browser, "Search").click()
         _see(browser, "pass (check)")
-        _shot(browser, tmp_path, "history")
         rows = browser.find_elements(By.CSS_SELECTOR, "tbody tr")
         assert len(rows) == 2 and all("D-1" in r.text for r in rows)
+        browser.set_window_size(1280, 800)  # History on a 1280 px screen: no scrollbar
+        browser.refresh()
+        _type(browser, "serial number", "D-1")
+        _button(browser, "Search").click()
+        _see(browser, "pass (check)")
+        _shot(browser, tmp_path, "history")
+        heads = [h.text for h in browser.find_elements(By.CSS_SELECTOR, "thead th")]
+        assert [h for h in heads if h][:2] == ["report", "run"], heads  # the report first
+        wide, room = browser.execute_script(
+            "const m = document.querySelector('.q-table__middle');"
+            "return [m.scrollWidth, m.clientWidth];"
+        )
+        assert wide <= room, (wide, room)
+        stamp = dt.datetime.now().astimezone().strftime("%Z")
+        assert all(stamp in r.text for r in browser.find_elements(By.CSS_SELECTOR, "tbody tr"))
+        browser.set_window_size(1400, 950)
 
 
 @pytest.mark.realtime
@@ -307,6 +354,15 @@ def test_the_screens_work_from_the_keyboard_alone(browser: Any, tmp_path: Path) 
             _tab_to(browser, label).send_keys(text)
         _tab_to(browser, "Start measuring").send_keys(Keys.ENTER)
         _see(browser, "vibration at the supports")  # the first estimate: an answer to stop on
+        for width, height in ((1024, 768), (1280, 800)):  # STOP on screen at either size
+            browser.set_window_size(width, height)
+            top, bottom, inner = browser.execute_script(
+                "const b = [...document.querySelectorAll('button')].find("
+                "x => x.innerText.trim().toUpperCase() === 'STOP');"
+                "const r = b.getBoundingClientRect(); return [r.top, r.bottom, innerHeight];"
+            )
+            assert 0 <= top and bottom <= inner, (width, height, top, bottom, inner)
+        browser.set_window_size(1400, 950)
         _tab_to(browser, "Stop").send_keys(Keys.ENTER)
         _tab_to(browser, "Go to the correction").send_keys(Keys.ENTER)
         _see(browser, "in hole")
