@@ -43,7 +43,9 @@ def progress_line(p: Any, units: Display | None = None) -> str:
     )
     amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
     rpm = float(rad_s_to_rpm(m.omega_rad_s))
-    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}"
+    why = getattr(p, "waiting_for", ())
+    more = f"  (still measuring: waiting for {' and '.join(why)})" if why else ""
+    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}{more}"
 
 
 def panel(
@@ -111,6 +113,10 @@ def panel(
     parts: list[Any] = [head, Text(f"recording into {run_path} (Ctrl-C stops)", style="dim"), table]
     if progress is not None:
         parts.append(Text(f"1x at supports 1 and 2: {amps} m/s²\n{ANGLE_HELP}", style="dim"))
+        why = getattr(progress, "waiting_for", ())
+        if why:
+            parts.append(Text(f"still measuring: waiting for {' and '.join(why)}",
+                              style="yellow"))  # fmt: skip
     if waiting:
         parts.append(Text(f"waiting: {waiting}", style="yellow"))
     return Panel(Group(*parts), title="stand", title_align="left")
