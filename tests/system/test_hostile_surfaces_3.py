@@ -1,6 +1,8 @@
 """The third hostile matrix: the surfaces added in the month of the ball balancer and the
 rocker (their bounds against the whole), reprocess, the Q-DAS time zone and the tooling
-store, and the machine's own tests (evaluate, residual, capability).
+store, the machine's own tests (evaluate, residual, capability), and this month's plant
+surfaces (Q-DAS evaluations and idents, the config's archive for series, imports and the
+station).
 
 Every case ends in exit 2 with one line on stderr that starts ``stand: error:`` and names
 what and where (``says``).  No case may let a Python warning through, end in "internal
@@ -58,6 +60,40 @@ def _file(tmp: Path) -> str:
     return str(path)
 
 
+def _not_toml(tmp: Path) -> str:
+    path = tmp / "bad.toml"
+    path.write_text("x = [\n")
+    return str(path)
+
+
+def _long_serial(tmp: Path) -> list[str]:
+    run = tmp / "r.h5"
+    assert main(["simulate", "demo", "--out", str(run), "--serial", "S" * 41, "--config",
+                 str(ROOT / "examples" / "demo-stand.toml")]) == 0  # fmt: skip
+    assert main(["archive", "import", str(run), "--archive", _archive(tmp)]) == 0
+    return [
+        "export",
+        "qdas",
+        "--rotor-type",
+        "demo-auger",
+        "--archive",
+        _archive(tmp),
+        "-o",
+        str(tmp / "x.dfq"),
+    ]
+
+
+def _two_archives(tmp: Path) -> list[str]:
+    rotors = tmp / "rotors"
+    rotors.mkdir()
+    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    for k in (1, 2):
+        (rotors / f"type-{k}.toml").write_text(
+            text + f'\n[archive]\nurl = "sqlite:///{tmp}/a{k}.sqlite"\n'
+        )
+    return ["station", "--config-dir", str(rotors), "--no-browser", "--port", "1"]
+
+
 BALLS = ["autobalance", "--scene", "demo-balls", "--rpm", "900"]
 CASES: dict[str, tuple[Callable[[Path], list[str]], str]] = {
     "ball of 1e-300 g": (lambda t: [*BALLS, "--ball-g", "1e-300"], "[autobalancer.ball_g]"),
@@ -109,6 +145,22 @@ CASES: dict[str, tuple[Callable[[Path], list[str]], str]] = {
         lambda t: ["capability", "--scene", "demo", "--count", "24"], "--count"),
     "capability: a master without its angle": (
         lambda t: ["capability", "x.h5", "--master", "1:5000"], "PLANE:G_MM@DEG"),
+    "qdas: evaluations of an empty archive": (
+        lambda t: ["export", "qdas", "--evaluations", "--archive", _archive(t), "-o",
+                   str(t / "e.dfq")], "no archived machine evaluation"),
+    "qdas: evaluations and a rotor type": (
+        lambda t: ["export", "qdas", "--evaluations", "--rotor-type", "x", "-o",
+                   str(t / "e.dfq")], "not allowed with"),
+    "qdas: evaluations with --since": (
+        lambda t: ["export", "qdas", "--evaluations", "--since", "2026-01-01", "--archive",
+                   _archive(t), "-o", str(t / "e.dfq")], "--since"),
+    "qdas: a serial of 41 characters": (_long_serial, "K0014 (part ident) holds at most 40"),
+    "simulate --series: a config that is no TOML": (
+        lambda t: ["simulate", "demo", "--series", "1", "--config", _not_toml(t), "--out-dir",
+                   str(t / "d")], "not valid TOML"),
+    "archive import: a config that is no TOML": (
+        lambda t: ["archive", "import", "x.h5", "--config", _not_toml(t)], "not valid TOML"),
+    "station: rotor types naming two archives": (_two_archives, "different archives"),
 }  # fmt: skip
 
 
