@@ -100,11 +100,17 @@ class Station(ArchiveSide):
     @staticmethod
     def rotor_types_archive(config_dir: Path) -> str | None:
         """The ``[archive] url`` the rotor types in ``config_dir`` name (the same in each
-        that names one, else this is not one station's archive); None where none does."""
-        urls = {
-            str(cfg.archive.url) for p in sorted(Path(config_dir).glob("*.toml")) if p.is_file()
-            for cfg in (load_config(str(p))[0],) if cfg.archive is not None and cfg.archive.url
-        }  # fmt: skip
+        that names one, else this is not one station's archive); None where none does.  A
+        rotor type that does not load is left to the screen that chooses it (it says why
+        there): the station still starts for the others."""
+        urls = set()
+        for path in sorted(Path(config_dir).glob("*.toml")):
+            try:
+                cfg = load_config(str(path))[0]
+            except StandError:
+                continue
+            if cfg.archive is not None and cfg.archive.url:
+                urls.add(str(cfg.archive.url))
         if len(urls) > 1:
             raise UsageError(f"{config_dir}: the rotor types name different archives "
                              f"({', '.join(sorted(urls))}): one station archives in one "

@@ -428,3 +428,17 @@ def test_a_rotor_without_a_serial_is_not_started(station: Station) -> None:
         with pytest.raises(UsageError, match="serial number first"):
             station.start("demo-auger", "demo", blank)
     assert station.snapshot().phase == "idle"
+
+
+def test_the_station_archives_where_its_rotor_types_say(tmp_path: Path) -> None:
+    """The rotor types' one `[archive] url` is the station's; a type that does not load is
+    left to the screen that chooses it (the others still start); two urls are refused."""
+    text = (Path(__file__).parents[2] / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    url = f"sqlite:///{tmp_path / 'line.sqlite'}"
+    (tmp_path / "a.toml").write_text(text + f'\n[archive]\nurl = "{url}"\n')
+    (tmp_path / "b.toml").write_text(text)  # names none
+    (tmp_path / "broken.toml").write_text("x = [\n")
+    assert Station.rotor_types_archive(tmp_path) == url
+    (tmp_path / "c.toml").write_text(text + '\n[archive]\nurl = "sqlite:////elsewhere.sqlite"\n')
+    with pytest.raises(UsageError, match="different archives"):
+        Station.rotor_types_archive(tmp_path)
