@@ -113,13 +113,15 @@ def panel(
     parts: list[Any] = [head, Text(f"recording into {run_path} (Ctrl-C stops)", style="dim"), table]
     if progress is not None:
         parts.append(Text(f"1x at supports 1 and 2: {amps} m/s²\n{ANGLE_HELP}", style="dim"))
-        why = getattr(progress, "waiting_for", ())
-        if why:
-            parts.append(Text(f"still measuring: waiting for {' and '.join(why)}",
-                              style="yellow"))  # fmt: skip
-    if waiting:
-        parts.append(Text(f"waiting: {waiting}", style="yellow"))
+    parts += [Text(line, style="yellow") for line in _waits(progress, waiting)]
     return Panel(Group(*parts), title="stand", title_align="left")
+
+
+def _waits(progress: Any | None, waiting: str) -> list[str]:
+    """What the run waits for, in words: what the estimate still lacks, and the bus."""
+    why = getattr(progress, "waiting_for", ())
+    out = [f"still measuring: waiting for {' and '.join(why)}"] if why else []
+    return out + ([f"waiting: {waiting}"] if waiting else [])
 
 
 class LiveDisplay:

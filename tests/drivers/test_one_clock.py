@@ -102,10 +102,12 @@ def test_two_supports_fed_one_devices_samples_are_refused(tmp_path: Path) -> Non
 
 @pytest.mark.parametrize("stall_at_s", [0.05, 0.8, 1.85])
 def test_a_stall_then_a_burst_does_not_move_the_recorded_rate(stall_at_s: float) -> None:
-    """A host late by 0.1 s on a loaded machine, its samples then arriving in a burst, or
-    24 samples lost where no counter tells: the recorded rate stays the clock's (within
-    0.05 %, far inside the 1 % the check allows; a least-squares slope moved 0.65 % for a
-    stall at the start), and receive jitter of up to two sample periods averages out."""
+    """A host late by 0.1 s on a loaded machine, its samples then arriving in a burst:
+    the recorded rate stays the clock's within 0.05 %, far inside the 1 % the check allows
+    (a plain least-squares slope moved 0.65 % for a stall at the start); receive jitter of
+    two sample periods and frames delivered 20 ms at a time average out (a median of
+    short spans snapped to their lattice: +6 %); 24 samples lost without a counter stay
+    inside the check's 1 % (they have a warning of their own)."""
     from stand.drivers.checks import recorded_rate
 
     fs, k = 2000.0, np.arange(4000)
@@ -116,5 +118,7 @@ def test_a_stall_then_a_burst_does_not_move_the_recorded_rate(stall_at_s: float)
     jitter = np.random.default_rng(1).uniform(0, 1e-3, k.size)  # up to 2 sample periods
     assert recorded_rate(k, t + jitter) == pytest.approx(fs, rel=5e-4)
     assert recorded_rate(k, k / 2048.7) == pytest.approx(2048.7, rel=1e-9)  # another clock
+    batches = np.ceil(k / fs / 0.02) * 0.02 + jitter  # frames delivered 20 ms at a time
+    assert recorded_rate(k, batches) == pytest.approx(fs, rel=5e-4)
     gap = np.where(k >= int(stall_at_s * fs), (k + 24) / fs, k / fs)  # 24 samples lost, no
-    assert recorded_rate(k, gap) == pytest.approx(fs, rel=5e-4)  # counter to tell
+    assert recorded_rate(k, gap) == pytest.approx(fs, rel=9e-3)  # counter: inside the 1 %
