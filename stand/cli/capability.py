@@ -11,7 +11,7 @@ import numpy as np
 
 from stand.cli.common import add_force_argument
 from stand.cli.format import dump_json
-from stand.cli.progress import ProgressLine
+from stand.cli.panel import ProgressLine
 from stand.core import unbalance_from_polar, unbalance_to_polar
 from stand.core.capability import BAND, CAPABLE, MIN_RUNS, Capability, runs_needed
 from stand.errors import ConfigError, UsageError

@@ -8,14 +8,18 @@ solve (:func:`progress_line`).  :func:`measure_live_from_args` runs the live
 measurement the options of ``stand measure`` and ``stand balance`` ask for,
 with this display; :func:`scene_masses` the masses they put on a simulated rotor and
 :func:`archive_live` the archiving of their run (kept out of :mod:`stand.cli.common`, so
-that ``stand solve`` loads neither the simulator nor the database).
+that ``stand solve`` loads neither the simulator nor the database).  :class:`ProgressLine`
+is the same display's plain cousin for long offline work (a simulation, a series): a line
+on stderr now and then, none for a job done within a few seconds.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+import time
+from collections.abc import Callable
+from typing import Any, TextIO
 
 from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
 from stand.config import Config
@@ -256,3 +260,51 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
     said = publish_archived(result, run_id, cfg)
     if said and (not args.quiet or said.startswith("not")):
         print(said, file=sys.stderr)
+
+
+AFTER_S = 3.0
+"""No line before the work has run this long [s]."""
+EVERY_S = 3.0
+"""At most one line this often [s]."""
+
+
+class ProgressLine:
+    """Throttled progress lines ``"<what>: <how far> (<n> s)"`` on a stream.
+
+    Parameters
+    ----------
+    what
+        What runs (``"simulating demo-balls"``).
+    stream
+        Where the lines go (default stderr: stdout stays the answer).
+    clock
+        Seconds from any origin (default :func:`time.monotonic`).
+    """
+
+    def __init__(self, what: str, *, stream: TextIO | None = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:  # fmt: skip
+        self.what = what
+        self.stream = stream
+        self.clock = clock
+        self.start = clock()
+        self.last = -float("inf")
+        self.lines = 0
+
+    def say(self, how_far: str) -> None:
+        """Print ``how_far`` if the work has run :data:`AFTER_S` and no line came within
+        :data:`EVERY_S`."""
+        now = self.clock()
+        if now - self.start < AFTER_S or now - self.last < EVERY_S:
+            return
+        self.last = now
+        self.lines += 1
+        print(f"{self.what}: {how_far} ({now - self.start:.0f} s)",
+              file=self.stream or sys.stderr, flush=True)  # fmt: skip
+
+    def simulated(self, t_s: float, end_s: float) -> None:
+        """A simulation's physics time reached of its end [s] (a ``simulate`` progress)."""
+        self.say(f"{min(max(t_s, 0.0), end_s):.0f} of {end_s:.0f} s simulated")
+
+    def count(self, done: int, total: int, noun: str) -> None:
+        """``done`` of ``total`` things (``"rotor"``) finished."""
+        self.say(f"{noun} {done} of {total} done")

@@ -19,8 +19,7 @@ from stand.cli.common import (
     bus_kwargs,
     job_from,
 )
-from stand.cli.panel import scene_masses
-from stand.cli.progress import ProgressLine
+from stand.cli.panel import ProgressLine, scene_masses
 from stand.config import config_toml
 from stand.core import unbalance_from_polar
 from stand.drivers.bus import describe_bus, open_bus, play

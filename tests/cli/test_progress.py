@@ -1,4 +1,5 @@
-"""The progress line of long work (``stand.cli.progress``) and the integrators that feed it.
+"""The progress line of long work (``stand.cli.panel.ProgressLine``) and the integrators
+that feed it.
 
 The line must stay silent for a short job, never come closer than its interval, and say
 how far the work has come; the integrators must tell it the simulated time, increasing
@@ -14,7 +15,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from stand.cli.progress import AFTER_S, EVERY_S, ProgressLine
+from stand.cli.panel import AFTER_S, EVERY_S, ProgressLine
 from stand.core.balls import Balls, integrate_balls
 from stand.core.model import StandParameters
 from stand.core.transient import PROGRESS_EVERY, integrate

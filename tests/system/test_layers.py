@@ -200,9 +200,9 @@ def test_a_planted_cycle_and_an_upward_import_are_caught(tmp_path: Path) -> None
     assert wrong == ["stand/core/c.py:2 imports stand.cli"]
 
 
-CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel", "stand.cli.progress"}
-"""What a subcommand may import of the CLI: argument handling, formatting and progress
-lines, nothing that measures (that is the application layer's)."""
+CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel"}
+"""What a subcommand may import of the CLI: argument handling and formatting, nothing that
+measures (that is the application layer's)."""
 
 
 def test_no_subcommand_imports_another_cli_module() -> None:
@@ -214,7 +214,7 @@ def test_no_subcommand_imports_another_cli_module() -> None:
         others = {m for m in mods if m.startswith("stand.cli") and m not in CLI_SHARED}
         assert not others, f"stand/cli/{name}.py imports {sorted(others)}"
     helpers = {p.stem for p in (ROOT / "stand" / "cli").glob("*.py")} - set(SUBCOMMANDS)
-    assert helpers == {"__init__", "__main__", "common", "format", "panel", "progress"}, helpers
+    assert helpers == {"__init__", "__main__", "common", "format", "panel"}, helpers
 
 
 def imported_modules(path: Path) -> set[str]:
