@@ -36,27 +36,21 @@ def add_evaluation(
 
 def latest_evaluations(url: str, stand: str | None = None) -> list[dict[str, Any]]:
     """The latest evaluation of each kind and stand (of ``stand`` only, when given)."""
-    import sqlalchemy as sa
-
-    with Archive(url) as archive, archive.transaction() as conn:
-        q = sa.select(evaluations)
-        if stand is not None:
-            q = q.where(evaluations.c.stand_id == stand)
-        rows = conn.execute(q.order_by(evaluations.c.performed_at, evaluations.c.id)).all()
-        where = shown_url(conn)
     last: dict[tuple[Any, str], dict[str, Any]] = {}
-    for row in rows:
-        e = evaluation_row(row, where)
+    for e in evaluations_of(url, None, stand):  # oldest first: the latest wins
         last[(e["stand"], e["kind"])] = e
     return list(last.values())
 
 
-def evaluations_of(url: str, kind: str, stand: str | None = None) -> list[dict[str, Any]]:
-    """Every evaluation of ``kind`` (of ``stand`` only, when given), oldest first."""
+def evaluations_of(url: str, kind: str | None, stand: str | None = None) -> list[dict[str, Any]]:
+    """Every evaluation of ``kind`` (any kind: None; of ``stand`` only, when given), checked,
+    oldest first."""
     import sqlalchemy as sa
 
     with Archive(url) as archive, archive.transaction() as conn:
-        q = sa.select(evaluations).where(evaluations.c.kind == kind)
+        q = sa.select(evaluations)
+        if kind is not None:
+            q = q.where(evaluations.c.kind == kind)
         if stand is not None:
             q = q.where(evaluations.c.stand_id == stand)
         rows = conn.execute(q.order_by(evaluations.c.performed_at, evaluations.c.id)).all()
