@@ -39,6 +39,22 @@ class UsageError(StandError, ValueError):
     """A command-line argument is missing or malformed."""
 
 
+class JobOrderError(UsageError):
+    """A job order (or a command on one) the stand refuses (OPC 40001-3).
+
+    Parameters
+    ----------
+    message
+        Why, in one line.
+    bits
+        The ISA-95 ReturnStatus bits that say it (OPC 10031-4, Annex B).
+    """
+
+    def __init__(self, message: str, *, bits: int):
+        self.bits = bits
+        super().__init__(message)
+
+
 class MeasurementError(StandError, ValueError):
     """The data cannot give an unbalance (a node missing, no reference edges ...)."""
 

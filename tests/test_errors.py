@@ -12,6 +12,7 @@ from stand import errors
 
 SAMPLES = {
     "ConfigError": {"source": "cfg.toml", "key": "stand.C1"},
+    "JobOrderError": {"bits": 16},
     "ParameterError": {"key": "C1", "message": "must be > 0"},
     "PlanesTooCloseError": {"split_condition": 2e3, "limit": 1e3, "separation_m": 1e-4,
                             "static_unbalance_kg_m": 1e-3 + 2e-3j},

@@ -179,6 +179,7 @@ def history(url: str, f: Filters) -> list[dict[str, Any]]:
             "run_file": r.run_file,
             "file_sha256": r.file_sha256,
             "kind": r.kind,
+            "job": r.job_id,
         }
         for r in found
     ]
@@ -210,7 +211,7 @@ def _run_dict(r: Any, planes_: list[dict[str, Any]]) -> dict[str, Any]:
         "id": r.id, "start_time": r.start_time, "serial": r.serial, "order": r.order_no,
         "operator": r.operator, "rotor_type": r.rotor_type, "stand": r.stand_id, "rpm": r.rpm,
         "verdict": r.verdict, "checks_run": r.checks_run_id, "planes": planes_,
-        "run_file": r.run_file, "file_sha256": r.file_sha256, "kind": r.kind,
+        "run_file": r.run_file, "file_sha256": r.file_sha256, "kind": r.kind, "job": r.job_id,
     }  # fmt: skip
 
 

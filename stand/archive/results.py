@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from stand.archive.jobs import job_ran
 from stand.archive.schema import runs
 from stand.archive.store import Archive, default_url
 from stand.config import Config
@@ -92,6 +93,7 @@ def rows(
         "software": p.software,
         "result_json": json_text(out),
         "stand_id": p.stand_id or None,
+        "job_id": job.job_id,
     }
     urr = result.check.urr if result.check is not None else (None, None)
     own = {j.plane: j for j in result.judgements if j.plane is not None}
@@ -136,7 +138,13 @@ def add_result(archive: Archive, result: Result, *, config: str | None = None) -
         if checks is None:
             before = solve_recording(prev, config)
             checks = archive.add(*rows(before, file_digest(prev), None))
-    return archive.add(*rows(result, file_digest(run_file), checks))
+    run, planes = rows(result, file_digest(run_file), checks)
+    run_id = archive.add(run, planes)
+    job, stand = result.provenance.job.job_id, result.provenance.stand_id
+    if job and stand:  # the MES's job order it ran under: its state moves on
+        with archive.transaction() as conn:
+            job_ran(conn, stand, job, run_id, run["verdict"])
+    return run_id
 
 
 def result_of(row: Any) -> dict[str, Any]:

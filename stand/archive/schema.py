@@ -9,7 +9,8 @@ revisions ``stand reprocess`` makes: a named re-judgement (its config's
 digest, the software), a row per run it re-solved (its status, verdict and
 JSON) and one per plane, beside the originals, which are never changed; and
 the stand's own evaluations (ISO 21940-21's machine tests, the capability
-study) with their verdicts and due dates.  SI
+study) with their verdicts and due dates; and the job orders a line's MES sends, with
+their states.  SI
 units and complex parts in columns; the whole result as JSON beside them, so
 that a report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -32,6 +33,7 @@ from sqlalchemy import (
     String,
     Table,
     Text,
+    UniqueConstraint,
 )
 
 metadata = MetaData()
@@ -64,12 +66,14 @@ runs = Table(
     Column("stand_id", String(64)),  # the stand that recorded it (revision 0002)
     # production, or tooling: an index run of the tooling (revision 0005)
     Column("kind", String(12), nullable=False, server_default="production"),
+    Column("job_id", String(64)),  # the MES's job order it ran under (revision 0008)
 )
 Index("ix_runs_serial", runs.c.serial)
 Index("ix_runs_rotor_type_start", runs.c.rotor_type, runs.c.start_time)
 Index("ix_runs_order", runs.c.order_no)
 Index("ix_runs_start", runs.c.start_time)
 Index("ix_runs_stand", runs.c.stand_id, runs.c.start_time)
+Index("ix_runs_job", runs.c.stand_id, runs.c.job_id)
 
 
 def plane_values() -> list[Column[Any]]:
@@ -162,3 +166,24 @@ evaluations = Table(
 )  # revision 0007: the stand's own evaluations, kept with their due dates
 Index("ix_evaluations_stand", evaluations.c.stand_id, evaluations.c.kind,
       evaluations.c.performed_at)  # fmt: skip
+
+jobs = Table(
+    "jobs",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=True),
+    Column("stand_id", String(64), nullable=False),
+    Column("job_order_id", String(64), nullable=False),  # the MES's JobOrderID
+    Column("rotor_type", String(64), nullable=False),
+    Column("serial", String(64), nullable=False),
+    Column("order_no", String(64)),
+    Column("operator", String(64)),
+    Column("description", Text),
+    Column("state", String(16), nullable=False),  # AllowedToStart, Running, Ended, Aborted
+    Column("start_requested", Boolean, nullable=False),  # StoreAndStart or Start was called
+    Column("stored_at", String(40), nullable=False),  # ISO 8601, UTC
+    Column("started_at", String(40)),
+    Column("ended_at", String(40)),
+    Column("run_id", Integer, ForeignKey("runs.id")),  # the latest run under it
+    Column("verdict", String(12)),  # that run's
+    UniqueConstraint("stand_id", "job_order_id", name="uq_jobs_stand_job"),
+)  # revision 0008: the job orders the MES sends (OPC 40001-3), and where they are

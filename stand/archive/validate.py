@@ -31,11 +31,14 @@ SHA256 = re.compile(r"[0-9a-f]{64}")
 DATE = re.compile(r"\d{4}-\d{2}-\d{2}")
 EVALUATION_KINDS = frozenset({"machine", "capability"})
 EVALUATION_VERDICTS = frozenset({"pass", "fail", "not judged", "capable", "not capable"})
+JOB_STATES = ("AllowedToStart", "Running", "Ended", "Aborted")
+"""A job order's states (ISA95JobOrderReceiverObjectType's: NotAllowedToStart and
+Interrupted never happen here)."""
 MAX_UNBALANCE_KG_M = 1e3
 """No rotor a stand balances carries more (1 t at 1 m) [kg m]."""
 TEXT_COLUMNS = {"serial": 64, "order_no": 64, "operator": 64, "rotor_type": 64,
                 "stand_id": 64, "software": 64, "note": 4000, "matrix": 4000,
-                "confirmed_by": 64}  # fmt: skip
+                "confirmed_by": 64, "job_id": 64}  # fmt: skip
 
 
 class _Row:
@@ -233,4 +236,34 @@ def evaluation_row(row: Any, url: str) -> dict[str, Any]:
         "id": r.get("id"), "stand": r.get("stand_id"), "kind": r.get("kind"),
         "performed_at": r.get("performed_at"), "verdict": r.get("verdict"), "due": due,
         "simulated": bool(r.get("simulated")), "result": result,
+    }  # fmt: skip
+
+
+def job_row(row: Any, url: str) -> dict[str, Any]:
+    """A ``jobs`` row, checked, as a dict (``job_id``: the MES's JobOrderID)."""
+    r = _Row(row, "jobs", url, key="job_order_id", label="job")
+    r.number("id", 1, 2**63)
+    for column in ("stand_id", "job_order_id", "rotor_type", "serial"):
+        if not isinstance(r.get(column), str) or not r.get(column):
+            raise r.fail(column, f"{str(r.get(column))[:40]!r} is not a text")
+        r.text(column, 64)
+    for column in ("order_no", "operator", "verdict"):
+        r.text(column, 64)
+    r.text("description", 4000)
+    r.choice("state", frozenset(JOB_STATES))
+    r.flag("start_requested_raw" if r.has("start_requested_raw") else "start_requested")
+    r.time("stored_at")
+    for column in ("started_at", "ended_at"):
+        if r.get(column) is not None:
+            r.time(column)
+    r.number("run_id", 1, 2**63, none=True)
+    r.choice("verdict", VERDICTS, none=True)
+    return {
+        "job_id": r.get("job_order_id"), "stand": r.get("stand_id"),
+        "rotor_type": r.get("rotor_type"), "serial": r.get("serial"),
+        "order": r.get("order_no"), "operator": r.get("operator"),
+        "description": r.get("description"), "state": r.get("state"),
+        "start_requested": bool(r.get("start_requested")), "stored_at": r.get("stored_at"),
+        "started_at": r.get("started_at"), "ended_at": r.get("ended_at"),
+        "run_id": r.get("run_id"), "verdict": r.get("verdict"),
     }  # fmt: skip

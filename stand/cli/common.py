@@ -14,7 +14,7 @@ from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, p
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import UsageError
 from stand.files import output
-from stand.solve import Job
+from stand.solve import Job, job_field_problem
 from stand.solve.pipeline import SolveOptions, precision_targets
 
 ACCEPTANCE_EXIT = {"pass": 0, "fail": 1, "not judged": 3, "undecided": 3}
@@ -293,7 +293,7 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
     add_live_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_measure_arguments(p)
-    add_job_arguments(p)
+    add_job_arguments(p, live=True)
     add_archive_argument(p)
     p.add_argument("--no-archive", action="store_true", help="do not archive the run")
     add_bus_arguments(p)
@@ -332,13 +332,20 @@ def add_date_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def add_job_arguments(p: argparse.ArgumentParser) -> None:
+def add_job_arguments(p: argparse.ArgumentParser, *, live: bool = False) -> None:
     """``--serial``, ``--order``, ``--operator``, ``--note``: the job, recorded with the run."""
     g = p.add_argument_group("the job (recorded with the run and archived)")
     g.add_argument("--serial", metavar="SN", help="the rotor's serial number")
     g.add_argument("--order", metavar="ORDER", help="the order or batch it belongs to")
     g.add_argument("--operator", metavar="NAME", help="who balances it")
     g.add_argument("--note", metavar="TEXT", help="a free note")
+    if live:
+        g.add_argument(
+            "--job",
+            metavar="ID",
+            help="run under the MES's job order ID (sent over "
+            "OPC UA; stand jobs lists them): its serial, order and operator",
+        )
 
 
 def job_from(args: argparse.Namespace) -> Any:
@@ -347,13 +354,36 @@ def job_from(args: argparse.Namespace) -> Any:
     values = {}
     for name in JOB_FIELDS:
         value = getattr(args, name, None)
-        limit = 1000 if name == "note" else 64
-        if value is not None and (
-            not value.strip() or len(value) > limit or any(ord(c) < 32 for c in value)
-        ):
-            raise UsageError(f"--{name}: 1 to {limit} printable characters, got {value[:80]!r}")
+        problem = None if value is None else job_field_problem(name, value)
+        if problem is not None:
+            raise UsageError(f"--{problem}")
         values[name] = value
     return Job(**values)
+
+
+def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
+    """``--job ID``: the MES's job order of this stand (OPC 40001-3), now Running: the
+    run's serial, order and operator are the job's (UsageError when there is no such job
+    order waiting or running, when it is for another rotor type, or when the options name
+    the job's fields too)."""
+    from stand.archive import Archive, url_for  # SQLAlchemy: only when a job is named
+    from stand.archive.jobs import take_job
+
+    given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
+    if given:
+        raise UsageError(f"--job takes the serial, order and operator from the job order: "
+                         f"leave out {', '.join(given)}")  # fmt: skip
+    stand = cfg.stand.stand_id()
+    with Archive(url_for(getattr(args, "archive", None), cfg)) as archive:
+        job = take_job(archive, stand, args.job)
+    if job is None:
+        raise UsageError(f"--job {args.job[:64]!r}: stand {stand} has no such job order "
+                         "waiting or running (stand jobs lists them)")  # fmt: skip
+    if cfg.rotor.type and job["rotor_type"] != cfg.rotor.type:
+        raise UsageError(f"--job {args.job!r} is for rotor type {job['rotor_type']!r}, the "
+                         f"config is {cfg.rotor.type!r}")  # fmt: skip
+    return Job(serial=job["serial"], order=job["order"], operator=job["operator"],
+               note=getattr(args, "note", None), job_id=job["job_id"])  # fmt: skip
 
 
 def check_live_arguments(args: argparse.Namespace, command: str) -> None:

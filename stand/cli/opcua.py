@@ -12,7 +12,7 @@ from typing import Any
 
 from stand.archive import Archive, url_for
 from stand.cli.common import add_archive_argument
-from stand.config import default_stand_id, load_config
+from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.errors import UsageError
 from stand.plant import Access, ResultServer
 
@@ -27,6 +27,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--config", metavar="CFG", help="the stand's config: its [stand] id, archive")
     p.add_argument("--stand", metavar="ID", help="this stand's runs (default: the config's id)")
+    p.add_argument(
+        "--config-dir",
+        metavar="DIR",
+        help="the station's rotor types (its "
+        "*.toml): the job orders the MES may send (default: the --config's only)",
+    )
     add_archive_argument(p)
     p.add_argument("--user", help="the one user a client must log in as")
     p.add_argument("--password-file", metavar="FILE", help="the user's password (first line)")
@@ -61,6 +67,9 @@ def run(args: argparse.Namespace) -> int:
     stand = args.stand or (cfg.stand.stand_id() if cfg is not None else default_stand_id())
     url = url_for(args.archive, cfg)
     Archive(url).close()  # an archive that is no database: said now, not served on
+    if args.config_dir and not Path(args.config_dir).is_dir():
+        raise UsageError(f"--config-dir {args.config_dir}: not a folder")
+    one = [cfg.rotor.type or Path(args.config).stem] if cfg is not None else []
     server = ResultServer(
         url,
         stand,
@@ -68,6 +77,9 @@ def run(args: argparse.Namespace) -> int:
         args.port,
         read_access(args),
         cert_dir=Path(args.cert_dir) if args.cert_dir else None,
+        rotor_types=(lambda: rotor_types_in(Path(args.config_dir)))
+        if args.config_dir
+        else (lambda: one),
     )
 
     async def main() -> None:

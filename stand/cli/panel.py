@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
+from stand.cli.common import bus_kwargs, check_live_arguments, job_from, mes_job, run_path
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError
@@ -201,7 +201,7 @@ def measure_live_from_args(
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)
     path = run_path(args)
-    job = job_from(args)
+    job = mes_job(args, source.cfg) if getattr(args, "job", None) else job_from(args)
     show = LiveDisplay(source, path, quiet=args.quiet)
     with show:
         result, session = measure_live(

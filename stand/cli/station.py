@@ -76,7 +76,8 @@ def run(args: argparse.Namespace) -> int:
         def state() -> str:
             return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"
 
-        ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state)
+        ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state,
+                          rotor_types=station.rotor_types)  # fmt: skip
         ua.run_in_thread()
         print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
     where = f"http://{args.host}:{args.port}/" + (f"?token={token}" if token else "")

@@ -8,7 +8,7 @@ the key and the file.
 """
 
 from stand.config.matrix import SAME_SPEED, parse_matrix, read_matrix
-from stand.config.paths import data_folder
+from stand.config.paths import data_folder, rotor_types_in
 from stand.config.schema import (
     STRICT,
     Config,
@@ -32,5 +32,6 @@ __all__ = [
     "parse_matrix",
     "read_matrix",
     "read_toml",
+    "rotor_types_in",
     "validate",
 ]

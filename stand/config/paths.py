@@ -15,3 +15,9 @@ def data_folder() -> Path:
     """The user's data folder (``~/.local/share/stand`` on Linux): the default archive, the
     station's runs and the measured toolings."""
     return platformdirs.user_data_path("stand", appauthor=False)
+
+
+def rotor_types_in(folder: Path) -> list[str]:
+    """The rotor types of a station's folder: its configuration files (``*.toml``), by
+    name (the file's stem), sorted."""
+    return sorted(p.stem for p in Path(folder).glob("*.toml") if p.is_file())

@@ -27,9 +27,12 @@ from typing import Any
 
 from stand.archive import Archive
 from stand.archive.evaluations import evaluation_by_id, evaluation_ids
+from stand.archive.jobs import MAX_JOBS
 from stand.archive.query import latest, latest_id, newest_ids
 from stand.errors import ArchiveError, UsageError
 from stand.plant.ua_call import guarded
+from stand.plant.ua_job_control import JobOrders
+from stand.plant.ua_jobs import JOB_STATES, declare_job_types
 from stand.plant.ua_machine import Machine, build_machine
 from stand.plant.ua_model import (
     NAMESPACE,
@@ -78,12 +81,16 @@ class ResultServer:
     cert_dir
         Where the server's certificate and key are kept (made on first start); only
         beyond this machine, where the endpoint is encrypted.
+    rotor_types
+        The rotor types the stand can run now: the job orders it accepts
+        (:mod:`stand.plant.ua_job_control`); none given, it accepts none.
     """
 
     def __init__(self, archive_url: str, stand_id: str, host: str = "127.0.0.1",
                  port: int = 4840, access: Access | None = None,
                  state: Callable[[], str] | None = None,
-                 cert_dir: Path | None = None) -> None:  # fmt: skip
+                 cert_dir: Path | None = None,
+                 rotor_types: Callable[[], list[str]] | None = None) -> None:  # fmt: skip
         access = access or Access()
         check_bind(host, access)
         if cert_dir is not None:
@@ -96,6 +103,8 @@ class ResultServer:
         self._stop: asyncio.Event | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._archive: Archive | None = None
+        self.jobs = JobOrders(self._open, stand_id, rotor_types or list)
+        self._ns: Any = None  # the namespace indices, once built
 
     async def _build(self) -> tuple[Any, Machine, Any]:
         from asyncua import Server, ua
@@ -108,9 +117,10 @@ class ResultServer:
         app_uri = f"{NAMESPACE}:{self.stand_id}"
         await server.set_application_uri(app_uri)
         await apply_security(server, self.host, self.access, self.cert_dir, app_uri)
-        ns = await register(server)
+        ns = self._ns = await register(server)
         await declare_machinery(server, ns)
         await declare_result_types(server, ns)
+        await declare_job_types(server, ns)
         await server.load_data_type_definitions()
         await declare_result_objects(server, ns)
         maybe = (ua.VariantType.ExtensionObject, ua.VariantType.Null)  # null: none given
@@ -122,11 +132,54 @@ class ResultServer:
                 "GetResultIdListFiltered",
                 [maybe, maybe, ua.VariantType.UInt32, ua.VariantType.Int32],
                 self._id_list),
+            **self._job_calls(),
         }  # fmt: skip
         machine = await build_machine(server, ns, self.stand_id, calls)
         events = await server.get_event_generator(ua.NodeId(OWN_EVENT_TYPE, ns.own),
                                                   machine.management)  # fmt: skip
         return server, machine, events
+
+    def _job_calls(self) -> dict[str, Any]:
+        """The job management methods, each checked by :func:`guarded`."""
+        from asyncua import ua
+
+        def maybe(kind: Any) -> tuple[Any, Any]:
+            return (kind, ua.VariantType.Null)  # null: none given
+
+        text, ext = maybe(ua.VariantType.LocalizedText), ua.VariantType.ExtensionObject
+        string = maybe(ua.VariantType.String)
+        j = self.jobs
+        return {
+            "Store": guarded("Store", [ext, text], j.store),
+            "StoreAndStart": guarded("StoreAndStart", [ext, text], j.store_and_start),
+            **{name: guarded(name, [string, text], j.command(name))
+               for name in ("Start", "Abort", "Cancel", "Clear")},
+            "RequestJobResponseByJobOrderID": guarded(
+                "RequestJobResponseByJobOrderID", [string], j.response_by_id),
+            "RequestJobResponseByJobOrderState": guarded(
+                "RequestJobResponseByJobOrderState", [maybe(ext)], j.responses_by_state),
+        }  # fmt: skip
+
+    async def _write_jobs(self, machine: Machine, seen: Any) -> Any:
+        """JobOrderControl's lists and state, written when they changed; what was written."""
+        from asyncua import ua
+
+        jobs, types = self.jobs.job_list(), self.jobs.rotor_types()
+        now = (repr(jobs), tuple(types))
+        if now == seen:
+            return seen
+        n = machine.jobs
+        states = [j.State[0].StateText.Text for j in jobs]
+        current = next((s for s in ("Running", "AllowedToStart") if s in states), "")
+        await n["JobOrderList"].write_value(ua.Variant(jobs, ua.VariantType.ExtensionObject))
+        masters = [ua.ISA95WorkMasterDataType(ID=t) for t in types]
+        await n["WorkMaster"].write_value(ua.Variant(masters, ua.VariantType.ExtensionObject))
+        await n["MaterialDefinitionID"].write_value(ua.Variant(types, ua.VariantType.String))
+        await n["MaxDownloadableJobOrders"].write_value(ua.Variant(MAX_JOBS, ua.VariantType.UInt16))
+        await n["CurrentState"].write_value(ua.LocalizedText(current))
+        state_id = ua.NodeId(JOB_STATES[current][0], self._ns.isa95) if current else ua.NodeId()
+        await n["CurrentState/Id"].write_value(ua.Variant(state_id, ua.VariantType.NodeId))
+        return now
 
     def _open(self) -> Archive:
         self._archive = self._archive or Archive(self.archive_url)
@@ -199,6 +252,7 @@ class ResultServer:
         seen: int | None = -1
         evaluated: set[int] | None = None  # the evaluations known: a new one is an event
         said = ""  # the archive's last error, said once on stderr
+        jobs_seen: Any = None
         assert self._stop is not None
         while not self._stop.is_set():
             state = "NotExecuting"
@@ -209,6 +263,7 @@ class ResultServer:
                     await self._publish(machine, events, run, fire=seen != -1 and run is not None)
                     seen = now
                 evaluated = await self._new_evaluations(machine, events, evaluated)
+                jobs_seen = await self._write_jobs(machine, jobs_seen)
             except ArchiveError as exc:
                 state = "OutOfService"
                 if str(exc) != said:

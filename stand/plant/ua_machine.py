@@ -23,6 +23,16 @@ from dataclasses import dataclass
 from typing import Any
 
 from stand import __version__
+from stand.plant.ua_jobs import (
+    PROVIDER_METHODS,
+    PROVIDER_TYPE,
+    RECEIVER_METHODS,
+    RECEIVER_TYPE,
+    receiver_children,
+)
+from stand.plant.ua_jobs import (
+    method_arguments as job_method_arguments,
+)
 from stand.plant.ua_model import (
     MACHINE_IDENTIFICATION_TYPE,
     MACHINERY_ITEM_STATE_TYPE,
@@ -56,6 +66,8 @@ class Machine:
     methods: dict[str, Any]
     notifiers: tuple[Any, ...]
     """ResultManagement, the machine, Machines, Server: who emits a result event."""
+    jobs: dict[str, Any]
+    """JobOrderControl's variables by name (CurrentState, its Id, JobOrderList, ...)."""
 
 
 def _id(ns: Namespaces, stand: str, path: str) -> Any:
@@ -164,6 +176,44 @@ async def build_machine(server: Any, ns: Namespaces, stand: str, calls: dict[str
         await add_reference(server, blocks.nodeid, ua.ObjectIds.HasAddIn, target, obj)
     for source, target in ((machines, node.nodeid), (node.nodeid, rm.nodeid)):
         await add_reference(server, source, ua.ObjectIds.HasNotifier, target, obj)
+    jobs = await _job_management(server, ns, stand, node.nodeid, calls)
+    await add_reference(server, blocks.nodeid, ua.ObjectIds.HasAddIn,
+                        _id(ns, stand, "JobManagement"), obj)  # fmt: skip
     chain = (rm.nodeid, node.nodeid, machines, ua.NodeId(ua.ObjectIds.Server))
     states = {name: ua.NodeId(ids[0], ns.machinery) for name, ids in STATES.items()}
-    return Machine(node, current, state_id, states, rm, latest, methods, chain)
+    return Machine(node, current, state_id, states, rm, latest, methods, chain, jobs)
+
+
+async def _job_management(server: Any, ns: Namespaces, stand: str, parent: Any,
+                          calls: dict[str, Any]) -> dict[str, Any]:  # fmt: skip
+    """The machine's JobManagement add-in (OPC 40001-3): JobOrderControl with its lists and
+    methods, JobOrderResults with its two; JobOrderControl's variables by name."""
+    from asyncua import ua
+
+    obj = ua.NodeClass.Object
+    jm = await add_node(server, obj, _id(ns, stand, "JobManagement"),
+                        ua.QualifiedName("JobManagement", ns.jobs), parent, ua.ObjectIds.HasAddIn,
+                        ua.NodeId(1003, ns.jobs))  # fmt: skip
+    parts = {}
+    for name, typedef, methods in (
+        ("JobOrderControl", RECEIVER_TYPE, RECEIVER_METHODS),
+        ("JobOrderResults", PROVIDER_TYPE, PROVIDER_METHODS),
+    ):
+        path = f"JobManagement/{name}"
+        part = await add_node(server, obj, _id(ns, stand, path), ua.QualifiedName(name, ns.jobs),
+                              jm.nodeid, ua.ObjectIds.HasComponent,
+                              ua.NodeId(typedef, ns.isa95))  # fmt: skip
+        parts[name] = part
+        for method in methods:
+            m = await add_node(server, ua.NodeClass.Method, _id(ns, stand, f"{path}/{method}"),
+                               ua.QualifiedName(method, ns.isa95), part.nodeid,
+                               ua.ObjectIds.HasComponent)  # fmt: skip
+            ids = (_id(ns, stand, f"{path}/{method}/InputArguments"),
+                   _id(ns, stand, f"{path}/{method}/OutputArguments"))  # fmt: skip
+            await arguments(server, m.nodeid, ids, *job_method_arguments(ns)[method])
+            server.link_method(m, calls[method])
+    control = "JobManagement/JobOrderControl"
+    return await receiver_children(
+        server, ns, parts["JobOrderControl"].nodeid,
+        lambda name: _id(ns, stand, f"{control}/{name}"), stand=stand,
+    )  # fmt: skip

@@ -14,6 +14,7 @@ A client that knows the specifications finds everything by these ids and names.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from stand.plant.qdas_evaluations import FIGURES
@@ -29,6 +30,8 @@ from stand.plant.ua_nodes import (
 DI_URI = "http://opcfoundation.org/UA/DI/"
 MACHINERY_URI = "http://opcfoundation.org/UA/Machinery/"
 RESULT_URI = "http://opcfoundation.org/UA/Machinery/Result/"
+ISA95_URI = "http://opcfoundation.org/UA/ISA95-JOBCONTROL_V2/"
+JOBS_URI = "http://opcfoundation.org/UA/Machinery/Jobs/"
 NAMESPACE = "urn:rotor-stand:balancing-stand"
 """The stand's own namespace: its result content and event type."""
 
@@ -65,12 +68,16 @@ class Namespaces:
     machinery: int
     result: int
     own: int
+    isa95: int
+    jobs: int
 
 
 async def register(server: Any) -> Namespaces:
-    """Register the namespaces, in the order DI, Machinery, Machinery Result, the stand's."""
+    """Register the namespaces, in the order DI, Machinery, Machinery Result, the stand's,
+    ISA-95 Job Control, Machinery Jobs."""
     return Namespaces(*[await server.register_namespace(u)
-                        for u in (DI_URI, MACHINERY_URI, RESULT_URI, NAMESPACE)])  # fmt: skip
+                        for u in (DI_URI, MACHINERY_URI, RESULT_URI, NAMESPACE, ISA95_URI,
+                                  JOBS_URI)])  # fmt: skip
 
 
 async def _object_type(server: Any, ns: int, number: int, name: str, parent: Any,
@@ -127,7 +134,7 @@ async def declare_machinery(server: Any, ns: Namespaces) -> None:
                         ua.NodeId(MACHINES, ns.machinery), ua.NodeClass.Object)  # fmt: skip
 
 
-def _field(ua: Any, name: str, dtype: Any, *, optional: bool = False, array: bool = False,
+def structure_field(ua: Any, name: str, dtype: Any, *, optional: bool = False, array: bool = False,
            description: str = "") -> Any:  # fmt: skip
     f = ua.StructureField()
     f.Name, f.DataType, f.IsOptional = name, dtype, optional
@@ -138,7 +145,7 @@ def _field(ua: Any, name: str, dtype: Any, *, optional: bool = False, array: boo
     return f
 
 
-async def _structure(server: Any, ns: int, ids: tuple[int, int], name: str,
+async def structure(server: Any, ns: int, ids: tuple[int, int], name: str,
                      fields: list[Any]) -> None:  # fmt: skip
     """A structure data type with its DefaultBinary encoding and its definition."""
     from asyncua import ua
@@ -186,13 +193,13 @@ async def declare_result_types(server: Any, ns: Namespaces) -> None:
     await add_property(server, enum.nodeid, ua.NodeId(6001, r), ua.QualifiedName("EnumValues", 0),
                        ua.Variant(values, ua.VariantType.ExtensionObject))  # fmt: skip
     trimmed, utc = ua.NodeId(ua.ObjectIds.TrimmedString), ua.NodeId(ua.ObjectIds.UtcTime)
-    await _structure(server, r, PROCESSING_TIMES, "ProcessingTimesDataType", [
-        _field(ua, "StartTime", utc), _field(ua, "EndTime", utc),
-        _field(ua, "AcquisitionDuration", ua.NodeId(ua.ObjectIds.Duration), optional=True),
-        _field(ua, "ProcessingDuration", ua.NodeId(ua.ObjectIds.Duration), optional=True),
+    await structure(server, r, PROCESSING_TIMES, "ProcessingTimesDataType", [
+        structure_field(ua, "StartTime", utc), structure_field(ua, "EndTime", utc),
+        structure_field(ua, "AcquisitionDuration", ua.NodeId(ua.ObjectIds.Duration), optional=True),
+        structure_field(ua, "ProcessingDuration", ua.NodeId(ua.ObjectIds.Duration), optional=True),
     ])  # fmt: skip
     boolean, int32 = ua.NodeId(ua.ObjectIds.Boolean), ua.NodeId(ua.ObjectIds.Int32)
-    meta = [_field(ua, "ResultId", trimmed)]
+    meta = [structure_field(ua, "ResultId", trimmed)]
     for name, dtype, array in (
         ("HasTransferableDataOnFile", boolean, False), ("IsPartial", boolean, False),
         ("IsSimulated", boolean, False), ("ResultState", int32, False),
@@ -208,11 +215,11 @@ async def declare_result_types(server: Any, ns: Namespaces) -> None:
         ("ResultEvaluationDetails", ua.NodeId(ua.ObjectIds.LocalizedText), False),
         ("FileFormat", ua.NodeId(ua.ObjectIds.String), True),
     ):  # fmt: skip
-        meta.append(_field(ua, name, dtype, optional=True, array=array))
-    await _structure(server, r, RESULT_META_DATA, "ResultMetaDataType", meta)
-    await _structure(server, r, RESULT_DATA, "ResultDataType", [
-        _field(ua, "ResultMetaData", ua.NodeId(RESULT_META_DATA[0], r)),
-        _field(ua, "ResultContent", ua.NodeId(ua.ObjectIds.BaseDataType), array=True),
+        meta.append(structure_field(ua, name, dtype, optional=True, array=array))
+    await structure(server, r, RESULT_META_DATA, "ResultMetaDataType", meta)
+    await structure(server, r, RESULT_DATA, "ResultDataType", [
+        structure_field(ua, "ResultMetaData", ua.NodeId(RESULT_META_DATA[0], r)),
+        structure_field(ua, "ResultContent", ua.NodeId(ua.ObjectIds.BaseDataType), array=True),
     ])  # fmt: skip
     await _declare_content(server, ns)
 
@@ -221,33 +228,34 @@ async def _declare_content(server: Any, ns: Namespaces) -> None:
     """The stand's result content: per plane the unbalances, permissible and pass."""
     from asyncua import ua
 
+    field = partial(structure_field, ua)
     dbl, boolean = ua.NodeId(ua.ObjectIds.Double), ua.NodeId(ua.ObjectIds.Boolean)
     string = ua.NodeId(ua.ObjectIds.String)
-    await _structure(server, ns.own, OWN_PLANE, "BalancingPlaneDataType", [
-        _field(ua, "Plane", ua.NodeId(ua.ObjectIds.Int32), description="correction plane 1 or 2"),
-        _field(ua, "InitialUnbalance_g_mm", dbl, description="before correction [g mm]"),
-        _field(ua, "InitialAngle_deg", dbl, description="from the reference mark, against "
+    await structure(server, ns.own, OWN_PLANE, "BalancingPlaneDataType", [
+        field("Plane", ua.NodeId(ua.ObjectIds.Int32), description="correction plane 1 or 2"),
+        field("InitialUnbalance_g_mm", dbl, description="before correction [g mm]"),
+        field("InitialAngle_deg", dbl, description="from the reference mark, against "
                "the direction of rotation [deg]"),
-        _field(ua, "ResidualUnbalance_g_mm", dbl, description="this run's [g mm]"),
-        _field(ua, "ResidualAngle_deg", dbl, description="this run's [deg]"),
-        _field(ua, "Uncertainty95_g_mm", dbl, description="radius of the 95 % circle [g mm]"),
-        _field(ua, "Permissible_g_mm", dbl, optional=True, description="ISO 21940 [g mm]"),
-        _field(ua, "Pass", boolean, optional=True, description="within the permissible"),
-        _field(ua, "Urr", dbl, optional=True, description="unbalance reduction ratio"),
+        field("ResidualUnbalance_g_mm", dbl, description="this run's [g mm]"),
+        field("ResidualAngle_deg", dbl, description="this run's [deg]"),
+        field("Uncertainty95_g_mm", dbl, description="radius of the 95 % circle [g mm]"),
+        field("Permissible_g_mm", dbl, optional=True, description="ISO 21940 [g mm]"),
+        field("Pass", boolean, optional=True, description="within the permissible"),
+        field("Urr", dbl, optional=True, description="unbalance reduction ratio"),
     ])  # fmt: skip
-    await _structure(server, ns.own, OWN_RESULT, "BalancingResultDataType", [
-        _field(ua, "RotorType", string), _field(ua, "Verdict", string,
+    await structure(server, ns.own, OWN_RESULT, "BalancingResultDataType", [
+        field("RotorType", string), field("Verdict", string,
                                                 description="pass, fail or none"),
-        _field(ua, "RunFileSha256", string),
-        _field(ua, "ChecksResultId", ua.NodeId(ua.ObjectIds.TrimmedString), optional=True,
+        field("RunFileSha256", string),
+        field("ChecksResultId", ua.NodeId(ua.ObjectIds.TrimmedString), optional=True,
                description="the result this check run checks"),
-        _field(ua, "Planes", ua.NodeId(OWN_PLANE[0], ns.own), array=True),
+        field("Planes", ua.NodeId(OWN_PLANE[0], ns.own), array=True),
     ])  # fmt: skip
-    await _structure(server, ns.own, OWN_EVALUATION, "MachineEvaluationDataType", [
-        _field(ua, "Standard", string, description="ISO 21940-21 (machine tests)"),
-        _field(ua, "Verdict", string, description="pass, fail or not judged"),
-        _field(ua, "Due", string, optional=True, description="the next one, YYYY-MM-DD"),
-        *(_field(ua, f.field, dbl, optional=True, description=f"{f.name} [{f.unit}]")
+    await structure(server, ns.own, OWN_EVALUATION, "MachineEvaluationDataType", [
+        field("Standard", string, description="ISO 21940-21 (machine tests)"),
+        field("Verdict", string, description="pass, fail or not judged"),
+        field("Due", string, optional=True, description="the next one, YYYY-MM-DD"),
+        *(field(f.field, dbl, optional=True, description=f"{f.name} [{f.unit}]")
           for f in FIGURES),
     ])  # fmt: skip
 

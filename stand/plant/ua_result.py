@@ -76,7 +76,7 @@ def result_data(run: dict[str, Any]) -> Any:
         ResultState=RESULT_STATE_COMPLETED,
         PartId=run["serial"] or None,
         ProductId=run["rotor_type"] or None,
-        JobId=run["order"] or None,
+        JobId=run.get("job") or run["order"] or None,  # the MES's job order, else the order
         CreationTime=start,
         ProcessingTimes=times,
         ResultEvaluation=ua.ResultEvaluationEnum(EVALUATION[run["verdict"]]),

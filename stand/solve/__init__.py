@@ -17,16 +17,18 @@ from stand.solve.pipeline import (
     measure_streams,
 )
 from stand.solve.recordings import measure_recording, solve_recording, stored_streams
-from stand.solve.result import Job, Provenance, Result, json_text
+from stand.solve.result import JOB_LIMITS, Job, Provenance, Result, job_field_problem, json_text
 from stand.solve.result_json import to_json
 
 __all__ = [
+    "JOB_LIMITS",
     "ConfigText",
     "Job",
     "Provenance",
     "Result",
     "SolveOptions",
     "build_result",
+    "job_field_problem",
     "json_text",
     "load_config_text",
     "measure_recording",

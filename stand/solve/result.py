@@ -29,6 +29,22 @@ RESULT_VERSION = 2
 """Version of the JSON form; bumped when a key changes meaning."""
 
 
+JOB_LIMITS = {"serial": 64, "order": 64, "operator": 64, "note": 1000, "job_id": 64}
+"""The longest text each field of a :class:`Job` takes [characters]."""
+
+
+def job_field_problem(name: str, value: object) -> str | None:
+    """Why ``value`` is no usable ``name`` of a job (None: it is): 1 to the field's
+    :data:`JOB_LIMITS` printable characters, not only blanks.  The one rule of the CLI's
+    options, the station's form and the MES's job orders."""
+    limit = JOB_LIMITS[name]
+    if not isinstance(value, str):
+        return f"{name}: a text of 1 to {limit} characters, got {type(value).__name__}"
+    if not value.strip() or len(value) > limit or any(ord(c) < 32 or c == "\x7f" for c in value):
+        return f"{name}: 1 to {limit} printable characters, got {value[:80]!r}"
+    return None
+
+
 @dataclass(frozen=True)
 class Job:
     """What a run was made for: the rotor's serial number, the order, who balanced it."""
@@ -37,6 +53,8 @@ class Job:
     order: str | None = None
     operator: str | None = None
     note: str | None = None
+    job_id: str | None = None
+    """The MES's job order it was run under (OPC 40001-3 JobOrderID), if any."""
 
     def __bool__(self) -> bool:
         return any(asdict(self).values())

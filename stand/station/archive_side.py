@@ -10,12 +10,14 @@ which holds the folders, the archive's URL and the state these methods read.
 
 from __future__ import annotations
 
+import logging
 import threading
 from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, correction_rows, file_digest
 from stand.archive.evaluations import evaluations_due
+from stand.archive.jobs import end_job, jobs_of, take_job
 from stand.archive.query import Filters, history, run_file
 from stand.config import load_config
 from stand.errors import StandError, UsageError
@@ -25,6 +27,8 @@ from stand.plant import export_qdas
 from stand.report import render_speeds, write_pdf
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
+
+log = logging.getLogger(__name__)
 
 
 class ArchiveSide:
@@ -39,6 +43,40 @@ class ArchiveSide:
     def stand_id(self) -> str:
         """The station's stand id (:meth:`stand.station.service.Station.stand_id`)."""
         raise NotImplementedError
+
+    def waiting_job(self) -> dict[str, Any] | None:
+        """The MES's next job order for this stand (OPC 40001-3): one it asked to start
+        first, else the oldest waiting; None when none waits or the archive does not
+        answer (the station never waits for a job: the form is the operator's too)."""
+        try:
+            with Archive(self.archive_url) as a:
+                waiting = jobs_of(a, self.stand_id(), ("AllowedToStart",))
+        except StandError:
+            return None
+        return next((j for j in waiting if j["start_requested"]), waiting[0] if waiting else None)
+
+    def _take_job(self, job_id: str, rotor_type: str) -> None:
+        """The job order the operator starts: Running (UsageError when the MES aborted or
+        cleared it meanwhile, or it is for another rotor type)."""
+        with Archive(self.archive_url) as a:
+            job = take_job(a, self.stand_id(), job_id)
+        if job is None:
+            raise UsageError(
+                f"job order {job_id} is no longer waiting (the MES aborted or "
+                "cleared it): enter the rotor by hand or wait for the next"
+            )
+        if job["rotor_type"] != rotor_type:
+            raise UsageError(f"job order {job_id} is for rotor type {job['rotor_type']}, "
+                             f"not {rotor_type}")  # fmt: skip
+
+    def _end_job(self, job_id: str) -> None:
+        """The operator leaves the rotor of a job order: Ended (a failure is logged: the
+        MES sees the job Running and may abort it)."""
+        try:
+            with Archive(self.archive_url) as a:
+                end_job(a, self.stand_id(), job_id)
+        except StandError as exc:
+            log.warning("job order %s not ended: %s", job_id, exc)
 
     def _datum(self, before: Any, result: Any) -> str:
         """A check after a confirmed correction into the archive as a calibration datum;

@@ -9,6 +9,7 @@ comes from :class:`stand.station.service.Station`.
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Callable
 from typing import Any, Literal
 
 from nicegui import app, ui
@@ -26,6 +27,21 @@ Kind = Literal["positive", "negative", "warning"]
 def notify(text: str, kind: Kind, *, multi_line: bool = False, timeout: int = 5000) -> None:
     """A note on the screen, at :data:`TOAST`."""
     ui.notify(text, type=kind, position=TOAST, multi_line=multi_line, timeout=timeout)
+
+
+def guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], None]:
+    """Run ``action``; an error the station raises on purpose is said in a notification."""
+
+    def run() -> None:
+        try:
+            action()
+        except StandError as exc:
+            notify(str(exc), "negative", multi_line=True, timeout=8000)
+            return
+        if then:
+            ui.navigate.to(then)
+
+    return run
 
 
 def _health_panel(station: Station) -> None:

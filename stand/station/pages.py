@@ -9,19 +9,17 @@ read from two metres and worked with a keyboard or a finger.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 from nicegui import app, ui
 
-from stand.errors import StandError
 from stand.plant import TokenGate
 from stand.report import Display
-from stand.solve import Job, to_json
+from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
-from stand.station.history import add_routes, history_screen, notify
+from stand.station.history import add_routes, guard, history_screen, notify
 from stand.station.service import Station
-from stand.station.snapshot import BUS
+from stand.station.start import start_screen
 from stand.station.views import (
     ANGLE_NOTE,
     check_rows,
@@ -61,21 +59,6 @@ def _out(result: Any) -> dict[str, Any] | None:
     return None if result is None else to_json(result)
 
 
-def _guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], None]:
-    """Run ``action``; an error the station raises on purpose is said in a notification."""
-
-    def run() -> None:
-        try:
-            action()
-        except StandError as exc:
-            notify(str(exc), "negative", multi_line=True, timeout=8000)
-            return
-        if then:
-            ui.navigate.to(then)
-
-    return run
-
-
 def frame(station: Station) -> None:
     """The page frame: the header with the screens, then the screen the address names."""
     ui.add_head_html(STYLE)
@@ -106,37 +89,6 @@ def frame(station: Station) -> None:
         "/check": lambda: check_screen(station),
         "/history": lambda: history_screen(station),
     }).classes("w-full q-pa-md")  # fmt: skip
-
-
-def start_screen(station: Station) -> None:
-    """Start: the rotor type, the job, the source."""
-    types = station.rotor_types()
-    sources = {src: ("the stand (CAN bus)" if src == BUS else f"simulated: {src}")
-               for src in station.sources()}  # fmt: skip
-    ui.label("New rotor").classes("big")
-    with ui.column().classes("w-full max-w-xl gap-4"):
-        rotor = ui.select(types, label="rotor type", value=types[0] if types else None)
-        rotor.classes("w-full").mark("rotor-type")
-        serial = ui.input("serial number").classes("w-full").mark("serial")
-        order = ui.input("order").classes("w-full").mark("order")
-        operator = ui.input("operator").classes("w-full").mark("operator")
-        default = "demo" if "demo" in sources else BUS
-        source = ui.select(sources, label="source", value=default).classes("w-full")
-        source.mark("source")
-
-        def go() -> None:
-            job = Job(
-                serial=serial.value or None,
-                order=order.value or None,
-                operator=operator.value or None,
-            )
-            station.start(str(rotor.value), str(source.value), job)
-
-        ui.button("Start measuring", on_click=_guard(go, "/measure")).props(
-            "size=xl color=primary"
-        ).mark("start")
-    if not types:
-        ui.label(f"No rotor types: put a configuration (.toml) in {station.config_dir}")
 
 
 def _waiting(s: Any, head: str, sub: str) -> tuple[str, str]:
@@ -278,7 +230,7 @@ def correct_screen(station: Station) -> None:
                 masses = station.apply_correction()
                 notify(f"{len(masses)} masses put on the simulated rotor", "positive")
 
-            ui.button("Apply the correction (simulated stand)", on_click=_guard(apply)).props(
+            ui.button("Apply the correction (simulated stand)", on_click=guard(apply)).props(
                 "size=xl color=secondary"
             ).mark("apply")
         elif s.phase == "done":
@@ -287,10 +239,10 @@ def correct_screen(station: Station) -> None:
                 station.confirm_applied()
                 notify("confirmed: the check will calibrate the stand too", "positive")
 
-            ui.button("Applied as shown", on_click=_guard(confirm)).props(
+            ui.button("Applied as shown", on_click=guard(confirm)).props(
                 "size=xl color=secondary"
             ).mark("applied")
-        ui.button("Start the check run", on_click=_guard(station.check, "/measure")).props(
+        ui.button("Start the check run", on_click=guard(station.check, "/measure")).props(
             "size=xl color=primary"
         ).mark("check-run")
 
@@ -336,7 +288,7 @@ def check_screen(station: Station) -> None:
         def next_rotor() -> None:
             station.next_rotor()
 
-        ui.button("Next rotor", on_click=_guard(next_rotor, "/")).props("size=xl").mark("next")
+        ui.button("Next rotor", on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
 
 
 def _certificate_links(station: Station, result: Any) -> None:

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import archive_result, drift_rows
-from stand.config import default_stand_id, load_config
+from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.files import output
@@ -95,7 +95,7 @@ class Station(ArchiveSide):
     # -- what there is to choose -------------------------------------------------------------
     def rotor_types(self) -> list[str]:
         """The rotor types: the configuration files in ``config_dir``, by name."""
-        return sorted(p.stem for p in self.config_dir.glob("*.toml") if p.is_file())
+        return rotor_types_in(self.config_dir)
 
     @staticmethod
     def rotor_types_archive(config_dir: Path) -> str | None:
@@ -175,6 +175,8 @@ class Station(ArchiveSide):
                 "enter the rotor's serial number first (type it or scan it): without one "
                 "the rotor is anonymous in the archive, Q-DAS and OPC UA"
             )
+        if job.job_id and self._state.phase != "measuring":
+            self._take_job(job.job_id, rotor_type)
         self._launch(
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )
@@ -259,7 +261,10 @@ class Station(ArchiveSide):
         with self._lock:
             if self._state.phase == "measuring":
                 raise StationBusyError("stop the measurement first", running="a run")
+            job = self._state.job.job_id
             self._state = Snapshot(seq=self._state.seq + 1)
+        if job:
+            self._end_job(job)
 
     # -- the measuring thread ------------------------------------------------------------
     def _measure(

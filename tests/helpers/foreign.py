@@ -42,19 +42,20 @@ def ajv(schema: Path, documents: list[Any], folder: Path) -> dict[str, Any]:
 
 
 class NodeUaClient:
-    """``tests/js/ua_client.js`` (node-opcua) running against an endpoint: its JSON lines
+    """A node-opcua client of ``tests/js`` (``script``: ``ua_client.js``, ``ua_jobs.js``)
+    running against an endpoint with its arguments ``args``: its JSON lines
     read as they come (node-opcua's own log lines, which it writes to stdout too, skipped).
 
     ``prefix`` runs it inside something else (``ip netns exec NS``)."""
 
-    def __init__(self, endpoint: str, serial: str, events: int, *extra: str,
-                 prefix: tuple[str, ...] = ()) -> None:  # fmt: skip
+    def __init__(self, endpoint: str, *args: object, prefix: tuple[str, ...] = (),
+                 script: str = "ua_client.js") -> None:  # fmt: skip
         import queue
         import threading
 
         node = node_with("node-opcua-client")
         self.proc = subprocess.Popen(
-            [*prefix, node, str(JS / "ua_client.js"), endpoint, serial, str(events), *extra],
+            [*prefix, node, str(JS / script), endpoint, *map(str, args)],
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
         )  # fmt: skip
         self.lines: queue.Queue[dict[str, Any]] = queue.Queue()

@@ -16,7 +16,7 @@
 const {
   OPCUAClient, MessageSecurityMode, SecurityPolicy, AttributeIds, ClientSubscription,
   ClientMonitoredItem, TimestampsToReturn, DataType, VariantArrayType, ContentFilter,
-  EventFilter, SimpleAttributeOperand, BrowseDirection, UserTokenType,
+  EventFilter, SimpleAttributeOperand, UserTokenType,
   promoteOpaqueStructure,
 } = require("node-opcua-client");
 const { ofType } = require("node-opcua-service-filter");
@@ -25,51 +25,16 @@ const DI = "http://opcfoundation.org/UA/DI/";
 const MACHINERY = "http://opcfoundation.org/UA/Machinery/";
 const RESULT = "http://opcfoundation.org/UA/Machinery/Result/";
 // From the Foundation's NodeIds lists
-const MACHINES = 1001, MACHINE_IDENTIFICATION_TYPE = 1012, ITEM_STATE_TYPE = 1002;
+const ITEM_STATE_TYPE = 1002;
 const RESULT_MANAGEMENT_TYPE = 1004, RESULT_READY_EVENT_TYPE = 1002, RESULT_EVALUATION = 3002;
 const GET_RESULT_BY_ID = "GetResultById", GET_RESULT_ID_LIST_FILTERED = "GetResultIdListFiltered";
 const GET_LATEST_RESULT = "GetLatestResult";
-const SERVER = "ns=0;i=2253", ORGANIZES = "ns=0;i=35", HAS_ADD_IN = "ns=0;i=17604";
-const HAS_COMPONENT = "ns=0;i=47", HAS_PROPERTY = "ns=0;i=46";
+const SERVER = "ns=0;i=2253";
+
+const { children, child, value, findMachine, HAS_ADD_IN } = require("./ua_find.js");
 
 const [endpoint, serial, eventsWanted, user, password] = process.argv.slice(2);
 const say = (obj) => process.stdout.write(JSON.stringify(obj) + "\n");
-
-async function children(session, nodeId, ref) {
-  const r = await session.browse({
-    nodeId, referenceTypeId: ref, browseDirection: BrowseDirection.Forward,
-    includeSubtypes: true, resultMask: 63,
-  });
-  return r.references || [];
-}
-
-async function child(session, nodeId, ns, name) {
-  for (const ref of [HAS_COMPONENT, HAS_PROPERTY, HAS_ADD_IN]) {
-    const found = (await children(session, nodeId, ref)).find(
-      (c) => c.browseName.name === name && c.browseName.namespaceIndex === ns);
-    if (found) return found.nodeId;
-  }
-  throw new Error(`no ${ns}:${name} under ${nodeId.toString()}`);
-}
-
-async function value(session, nodeId) {
-  const dv = await session.read({ nodeId, attributeId: AttributeIds.Value });
-  return dv.value.value;
-}
-
-async function findMachine(session, ns) {
-  const machines = `ns=${ns.m};i=${MACHINES}`;
-  for (const m of await children(session, machines, ORGANIZES)) {
-    let ident;
-    try { ident = await child(session, m.nodeId, ns.di, "Identification"); } catch { continue; }
-    const type = await children(session, ident, "ns=0;i=40");
-    if (!type.length || type[0].nodeId.toString() !== `ns=${ns.m};i=${MACHINE_IDENTIFICATION_TYPE}`) continue;
-    if (await value(session, await child(session, ident, ns.di, "SerialNumber")) === serial) {
-      return { machine: m.nodeId, ident };
-    }
-  }
-  throw new Error(`no machine ${serial} in Machines`);
-}
 
 async function typedChild(session, nodeId, typeId) {
   for (const c of await children(session, nodeId, HAS_ADD_IN)) {
@@ -128,7 +93,7 @@ async function main() {
     ? { type: UserTokenType.UserName, userName: user, password } : undefined);
   const uris = await session.readNamespaceArray();
   const ns = { di: uris.indexOf(DI), m: uris.indexOf(MACHINERY), r: uris.indexOf(RESULT) };
-  const { machine, ident } = await findMachine(session, ns);
+  const { machine, ident } = await findMachine(session, ns, serial);
   const identification = {};
   for (const name of ["Manufacturer", "SerialNumber", "ProductInstanceUri", "Model", "SoftwareRevision"]) {
     const v = await value(session, await child(session, ident, ns.di, name));

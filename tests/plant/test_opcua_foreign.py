@@ -12,6 +12,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import time
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -58,14 +59,18 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
 
 @contextmanager
 def serving(url: str, stand: str, host: str = "127.0.0.1", access: Any = None,
-            certs: Path | None = None) -> Iterator[str]:  # fmt: skip
-    """A result server of ``stand`` on ``url``; its endpoint."""
+            certs: Path | None = None, rotor_types: list[str] | None = None
+            ) -> Iterator[str]:  # fmt: skip
+    """A result server of ``stand`` on ``url`` (taking job orders for ``rotor_types``);
+    its endpoint."""
     from stand.archive import Archive
     from stand.plant import ResultServer
 
     Archive(url).close()
     port = _port()
-    kwargs = {} if certs is None else {"cert_dir": certs}
+    kwargs: dict[str, Any] = {} if certs is None else {"cert_dir": certs}
+    if rotor_types is not None:
+        kwargs["rotor_types"] = lambda: rotor_types
     server = ResultServer(url, stand, host, port, access, **kwargs)
     server.run_in_thread()
     try:
@@ -186,3 +191,47 @@ def test_node_opcua_over_the_encrypted_endpoint_from_another_host(
                 wrong.close()
     assert ready["identification"]["SerialNumber"] == "stand-7"
     assert calls["latest"]["result"]["partId"] == "UA-0" and calls["list"]["error"] == 0
+
+
+def mes_round_trip(url: str, folder: Path, job_id: str) -> tuple[dict[str, Any], dict[str, Any],
+                                                                   int, float]:  # fmt: skip
+    """node-opcua as the MES (``tests/js/ua_jobs.js``) against a server of this host's
+    stand taking the rotor type ``demo``: the job order stored, ``stand balance --scene demo
+    --job`` run under it here; the client's lines ``stored`` and ``done``, the balance's
+    exit code and how long it took [s]."""
+    from stand.config import default_stand_id
+
+    stand = default_stand_id()
+    with serving(url, stand, rotor_types=["demo"]) as endpoint:
+        client = NodeUaClient(endpoint, stand, "demo", job_id, script="ua_jobs.js")
+        try:
+            stored = client.next()["stored"]
+            began = time.monotonic()
+            code = main(["balance", "--scene", "demo", "--job", job_id, "--archive", url,
+                         "--out", str(folder / f"{job_id}.h5"), "--quiet"])  # fmt: skip
+            took = time.monotonic() - began
+            done = client.next()["done"]
+        finally:
+            client.close()
+    return stored, done, code, took
+
+
+def test_a_mes_in_node_opcua_sends_a_job_and_reads_its_result(tmp_path: Path) -> None:
+    """OPC 40001-3 from another implementation: the job order stored, three refused as
+    ISA-95 says, the run made under it (``stand balance --job``), its response's ResultId
+    giving the result whose JobId is the job's.  The round trip: Store -> the result
+    readable, with the run's physics (2 s of revolutions) inside it."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    stored, done, code, took = mes_round_trip(url, tmp_path, "MES-1")
+    assert code == 0 and stored["masters"] == ["demo"] and stored["status"] == 1
+    assert stored["refused"] == {"duplicate": 16 | 1 << 32, "unknownRotorType": 16,
+                                 "serialTooLong": 1 << 32}  # fmt: skip
+    result, response = done["result"], done["response"]
+    assert result == {"error": 0, "jobId": "MES-1", "partId": "SN-MES-1",
+                      "resultId": response["data"]["ResultId"]}  # fmt: skip
+    ended = response["data"]["Verdict"] == "pass"
+    assert response["state"] == done["jobs"]["MES-1"] == ("Ended" if ended else "Running")
+    print(
+        f"job round trip (Store -> result readable): {done['roundTripS']:.2f} s, the "
+        f"balance {took:.2f} s of it; Store answered in {1000 * stored['callS']:.0f} ms"
+    )

@@ -1,6 +1,7 @@
 """The OPC UA server's address space compared node by node with the OPC Foundation's
-nodesets (DI, Machinery, Machinery Result: the XML the Foundation publishes, as the npm
-package node-opcua-nodesets carries it; nothing of it is committed here).
+nodesets (DI, Machinery, Machinery Result, ISA-95 Job Control, Machinery Jobs: the XML the
+Foundation publishes, as the npm package node-opcua-nodesets carries it; nothing of it is
+committed here).
 
 For every node the server serves in the Foundation's namespaces: the nodeset has it under
 the same NodeId, with the same NodeClass, BrowseName, IsAbstract, parent (by the same
@@ -23,7 +24,9 @@ NODESETS = ROOT / "tests" / "js" / "node_modules" / "node-opcua-nodesets" / "nod
 UA = "http://opcfoundation.org/UA/"
 FILES = {f"{UA}DI/": "Opc.Ua.Di.NodeSet2.xml",
          f"{UA}Machinery/": "Opc.Ua.Machinery.NodeSet2.xml",
-         f"{UA}Machinery/Result/": "Opc.Ua.Machinery_Result.NodeSet2.xml"}  # fmt: skip
+         f"{UA}Machinery/Result/": "Opc.Ua.Machinery_Result.NodeSet2.xml",
+         f"{UA}ISA95-JOBCONTROL_V2/": "opc.ua.isa95-jobcontrol.nodeset2.xml",
+         f"{UA}Machinery/Jobs/": "Opc.Ua.Machinery.Jobs.Nodeset2.xml"}  # fmt: skip
 XS = {"u": "http://opcfoundation.org/UA/2011/03/UANodeSet.xsd"}
 ALIASES_0 = {"HasComponent": 47, "HasProperty": 46, "HasSubtype": 45, "Organizes": 35,
              "HasTypeDefinition": 40, "HasModellingRule": 37, "HasEncoding": 38,
@@ -43,7 +46,7 @@ def _key(nodeid: str, uris: list[str]) -> tuple[str, int]:
 
 
 def foundation() -> dict[tuple[str, int], dict[str, Any]]:
-    """Every node of the three nodesets: class, browse name, IsAbstract, parent (reference
+    """Every node of the nodesets: class, browse name, IsAbstract, parent (reference
     type, parent), type definition, modelling rule, data type, children."""
     nodes: dict[tuple[str, int], dict[str, Any]] = {}
     for name in FILES.values():

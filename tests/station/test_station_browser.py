@@ -368,3 +368,47 @@ def test_the_screens_work_from_the_keyboard_alone(browser: Any, tmp_path: Path) 
         _see(browser, "in hole")
         _tab_to(browser, "Start").send_keys(Keys.ENTER)  # the Start screen, from the top bar
         _see(browser, "New rotor")
+
+
+@pytest.mark.realtime
+def test_the_mes_job_fills_start_and_a_started_one_starts(browser: Any, tmp_path: Path) -> None:
+    """A job order sent over OPC UA (asyncua as the MES) fills the Start screen within the
+    screen's poll; one sent with StoreAndStart starts by itself; the run is archived under
+    the job and the job is Running (or Ended, had the run passed)."""
+    sys.path.insert(0, str(ROOT / "tests" / "helpers"))
+    from mes import send_job
+
+    from stand.archive import Archive
+    from stand.archive.jobs import jobs_of
+    from stand.archive.query import Filters, history
+    from stand.config import load_config
+
+    rotors = ROOT / "stand" / "data" / "rotors"
+    stand = load_config(str(rotors / "demo-auger.toml"))[0].stand.stand_id()
+    port = _free_port()
+    with served(tmp_path, "--opcua", "--opcua-port", str(port)) as base:
+        endpoint = f"opc.tcp://127.0.0.1:{port}/stand/"
+        browser.get(base + "/")
+        _see(browser, "New rotor")
+        assert send_job(endpoint, "MES-7", "demo-auger-drilled", "SN-7", operator="ana") == 1
+        _see(browser, "job order MES-7 from the MES")
+        values = browser.execute_script(
+            "return ['serial number', 'operator'].map(l => "
+            'document.querySelector(`input[aria-label="${l}"]`).value)'
+        )
+        assert values == ["SN-7", "ana"]
+        _see(browser, "demo-auger-drilled")
+        _shot(browser, tmp_path, "start-job")
+        assert send_job(endpoint, "MES-8", "demo-auger", "SN-8", start=True) == 1
+        _see(browser, "measuring SN-8")  # started by itself: the MES asked for it
+        _button(browser, "Go to the correction", 60).click()
+        url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+        end = time.monotonic() + 60  # filed after the answer is shown: a hang guard
+        while not (found := history(url, Filters(serial="SN-8"))) and time.monotonic() < end:
+            time.sleep(0.2)
+    with Archive(url) as archive:
+        states = {j["job_id"]: j for j in jobs_of(archive, stand)}
+    (run,) = found
+    assert run["job"] == "MES-8" and states["MES-8"]["run_id"] == run["id"]
+    assert states["MES-8"]["state"] == ("Ended" if run["verdict"] == "pass" else "Running")
+    assert states["MES-7"]["state"] == "AllowedToStart"  # shown, never started

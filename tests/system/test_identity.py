@@ -27,7 +27,7 @@ WALKED = {"balance", "measure", "simulate", "archive", "evaluate", "autobalance"
 """The commands that archive, each walked below."""
 READ_ONLY = {"history", "stats", "health", "reprocess"}
 """Commands that read the archive and take no config (``--archive``, else the default)."""
-READS_WITH_CONFIG = {"opcua", "calibrate", "export"}
+READS_WITH_CONFIG = {"opcua", "calibrate", "export", "jobs"}
 """Commands that read the archive their config names and write nothing into it."""
 
 

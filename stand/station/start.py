@@ -1,0 +1,84 @@
+"""The Start screen: the rotor type, the job, the source; and the MES's job orders.
+
+A job order the MES sent (OPC 40001-3, :mod:`stand.plant.ua_job_control`) fills the form
+within :data:`JOB_POLL_S`: the rotor type, serial, order and operator, with a line saying
+which job order it is; the operator starts it (the run is archived under it).  One the
+MES asked to start (StoreAndStart, Start) starts by itself while the station is idle on
+this screen.  The form stays the operator's: with no job order, or when the MES aborts
+the one shown, the operator types or scans the rotor as always.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from nicegui import ui
+
+from stand.solve import Job
+from stand.station.history import guard
+from stand.station.service import Station
+from stand.station.snapshot import BUS
+
+JOB_POLL_S = 1.0
+"""How often the Start screen looks for a job order from the MES [s]."""
+
+
+class _Form:
+    """The Start screen's fields, and the job order they were filled from (if any)."""
+
+    def __init__(self, station: Station) -> None:
+        types = station.rotor_types()
+        sources = {src: ("the stand (CAN bus)" if src == BUS else f"simulated: {src}")
+                   for src in station.sources()}  # fmt: skip
+        self.station, self.job_id = station, ""
+        self.rotor = ui.select(types, label="rotor type", value=types[0] if types else None)
+        self.rotor.classes("w-full").mark("rotor-type")
+        self.serial = ui.input("serial number").classes("w-full").mark("serial")
+        self.order = ui.input("order").classes("w-full").mark("order")
+        self.operator = ui.input("operator").classes("w-full").mark("operator")
+        default = "demo" if "demo" in sources else BUS
+        self.source = ui.select(sources, label="source", value=default).classes("w-full")
+        self.source.mark("source")
+        self.job_line = ui.label().classes("text-h6").mark("job-order")
+
+    def go(self) -> None:
+        job = Job(serial=self.serial.value or None, order=self.order.value or None,
+                  operator=self.operator.value or None, job_id=self.job_id or None)  # fmt: skip
+        self.station.start(str(self.rotor.value), str(self.source.value), job)
+
+    def fill(self, job: dict[str, Any] | None) -> None:
+        """Show the MES's job order (None: no job order waits: the form is left as it is)."""
+        if job is None:
+            if self.job_id:
+                self.job_id, self.job_line.text = "", ""
+            return
+        if job["job_id"] == self.job_id:
+            return
+        self.job_id = job["job_id"]
+        if job["rotor_type"] in (self.rotor.options or []):
+            self.rotor.value = job["rotor_type"]
+        self.serial.value = job["serial"]
+        self.order.value = job["order"] or ""
+        self.operator.value = job["operator"] or self.operator.value
+        self.job_line.text = (f"job order {job['job_id']} from the MES: {job['rotor_type']}, "
+                              f"serial {job['serial']}")  # fmt: skip
+
+
+def start_screen(station: Station) -> None:
+    """Start: the rotor type, the job, the source."""
+    ui.label("New rotor").classes("big")
+    with ui.column().classes("w-full max-w-xl gap-4"):
+        form = _Form(station)
+        start = guard(form.go, "/measure")
+        form.serial.on("keydown.enter", start)  # a bar-code scanner types, then Enter
+        ui.button("Start measuring", on_click=start).props("size=xl color=primary").mark("start")
+
+    def look() -> None:
+        job = station.waiting_job()
+        form.fill(job)
+        if job is not None and job["start_requested"] and station.snapshot().phase != "measuring":
+            start()  # the MES asked to start it: the station is idle on Start
+
+    ui.timer(JOB_POLL_S, look)
+    if not form.rotor.options:
+        ui.label(f"No rotor types: put a configuration (.toml) in {station.config_dir}")
