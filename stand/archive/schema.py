@@ -10,7 +10,7 @@ digest, the software), a row per run it re-solved (its status, verdict and
 JSON) and one per plane, beside the originals, which are never changed; and
 the stand's own evaluations (ISO 21940-21's machine tests, the capability
 study) with their verdicts and due dates; and the job orders a line's MES sends, with
-their states.  SI
+their states; the audit trail and the accounts.  SI
 units and complex parts in columns; the whole result as JSON beside them, so
 that a report can be made again without the run file.  Changes go through a
 migration in ``migrations/versions`` (Alembic), never by editing a table
@@ -187,3 +187,31 @@ jobs = Table(
     Column("verdict", String(12)),  # that run's
     UniqueConstraint("stand_id", "job_order_id", name="uq_jobs_stand_job"),
 )  # revision 0008: the job orders the MES sends (OPC 40001-3), and where they are
+
+audit = Table(
+    "audit",
+    metadata,
+    Column("id", Integer, primary_key=True, autoincrement=False),  # 1, 2, 3 ... no gaps
+    Column("at_utc", String(40), nullable=False),  # ISO 8601, UTC
+    Column("zone", String(64), nullable=False),  # the local zone then: "CET +01:00"
+    Column("who", String(64), nullable=False),  # an account, or os:USER
+    Column("action", String(16), nullable=False),  # config, calibration, matrix, ...
+    Column("subject", Text, nullable=False),  # what changed, in words
+    Column("old_sha256", String(64)),  # before (None: it did not exist)
+    Column("new_sha256", String(64)),  # after (None: removed)
+    Column("reason", Text),  # as typed (None: none given)
+    Column("previous_sha256", String(64), nullable=False),  # the entry before's hash
+    Column("entry_sha256", String(64), nullable=False),  # this entry's (stand.archive.audit)
+)  # revision 0009: the audit trail, append-only and hash-chained
+
+accounts = Table(
+    "accounts",
+    metadata,
+    Column("name", String(64), primary_key=True),
+    Column("role", String(16), nullable=False),  # operator, setter, engineer, administrator
+    Column("password_hash", Text, nullable=False),  # argon2id
+    Column("badge_sha256", String(64)),  # a badge's bar code, hashed
+    Column("active", Boolean, nullable=False),
+    Column("created_at", String(40), nullable=False),
+    Column("changed_at", String(40), nullable=False),
+)  # revision 0009: the people who work the stand (stand.archive.accounts)

@@ -267,3 +267,34 @@ def job_row(row: Any, url: str) -> dict[str, Any]:
         "started_at": r.get("started_at"), "ended_at": r.get("ended_at"),
         "run_id": r.get("run_id"), "verdict": r.get("verdict"),
     }  # fmt: skip
+
+
+def audit_row(row: Any, url: str) -> dict[str, Any]:
+    """An ``audit`` row, checked that it can be shown (whether it is the row that was
+    written is the hash chain's to say: :func:`stand.archive.audit.verify_journal`)."""
+    r = _Row(row, "audit", url, label="audit row")
+    r.number("id", -(2**63), 2**63)
+    for column in ("at_utc", "zone", "who", "action", "subject", "previous_sha256",
+                   "entry_sha256"):  # fmt: skip
+        if not isinstance(r.get(column), str):
+            raise r.fail(column, f"{str(r.get(column))[:40]!r} is not a text")
+    for column in ("old_sha256", "new_sha256", "reason"):
+        r.text(column, 4000)
+    return dict(r.m)
+
+
+def account_row(row: Any, url: str, roles: tuple[str, ...]) -> dict[str, Any]:
+    """An ``accounts`` row, checked (one of ``roles``, a name, a hash, a flag)."""
+    r = _Row(row, "accounts", url, key="name", label="account")
+    name = r.get("name")
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._@-]{0,63}", name):
+        raise r.fail("name", f"{str(name)[:40]!r} is not an account name")
+    r.choice("role", frozenset(roles))
+    if not isinstance(r.get("password_hash"), str) or not r.get("password_hash"):
+        raise r.fail("password_hash", "not a password hash")
+    if r.get("badge_sha256") is not None:
+        r.digest("badge_sha256")
+    r.flag("active_raw" if r.has("active_raw") else "active")
+    r.time("created_at")
+    r.time("changed_at")
+    return dict(r.m)

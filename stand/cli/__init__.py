@@ -62,6 +62,9 @@ SUBCOMMANDS: dict[str, str] = {
     "station": "the operator station: a web screen at the stand (measure, correct, check)",
     "opcua": "the OPC UA result server: identification, state and latest result for the MES",
     "jobs": "the job orders the MES sent over OPC UA (OPC 40001-3): their rotors and states",
+    "users": "the station's accounts and their roles (operator, setter, engineer, administrator)",
+    "audit": "the audit trail of every change (configs, calibrations, matrices, toolings, "
+    "accounts, evaluations): list it, verify its hash chain",
     "reprocess": "re-judge archived runs with a corrected config: what changed, the recall list",
     "health": "is the stand still as calibrated? drift alarms from the corrected rotors",
     "autobalance": "a ball balancer on the rotor: the speeds where it balances, what it leaves",

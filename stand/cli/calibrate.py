@@ -13,9 +13,15 @@ import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
 from stand.archive import correction_rows, url_for
+from stand.archive.audit import Change, file_sha256, record, sha256_of
 from stand.archive.query import serials_by_digest
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
-from stand.cli.common import add_archive_argument, add_force_argument, write_text_output
+from stand.cli.common import (
+    add_archive_argument,
+    add_force_argument,
+    add_reason_argument,
+    write_text_output,
+)
 from stand.cli.format import dump_json
 from stand.config import Config
 from stand.config.edit import updated_toml
@@ -90,6 +96,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--stand", metavar="ID", help="with --from-archive: this stand's data")
     g.add_argument("--rotor-type", metavar="TYPE", help="with --from-archive: this type's data")
     add_archive_argument(g)
+    add_reason_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -242,13 +249,21 @@ def _write(
         )
     )
     original, _ = read_toml(args.config)  # the user's file: its comments are kept
-    write_text_output(
-        args.out,
-        "\n".join(header) + "\n" + updated_toml(original, cfg),
-        force=args.force,
-        inputs=[args.config, args.runs],
-    )
+    text = "\n".join(header) + "\n" + updated_toml(original, cfg)
+    _journaled(args, cfg, args.out, text, [args.config, args.runs])
     return header
+
+
+def _journaled(args: argparse.Namespace, cfg: Config, path: str, text: str,
+               inputs: list[str]) -> None:  # fmt: skip
+    """Write the calibration, and one entry in the audit trail: the calibration's SHA-256
+    before (the file replaced, else the config it came from) and after."""
+    old = file_sha256(path) or file_sha256(args.config)
+    write_text_output(path, text, force=args.force, inputs=inputs)
+    if path != "-":
+        record(url_for(args.archive, cfg), Change(
+            "calibration", f"{Path(path).name} (from {Path(args.config).name})", old,
+            sha256_of(text), args.reason))  # fmt: skip
 
 
 FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
@@ -328,7 +343,7 @@ def _from_archive(args: argparse.Namespace) -> int:
         return 0
     original, _ = read_toml(args.config)
     header, text = _refitted_config(cfg, r, original)
-    write_text_output(out_path, text, force=args.force, inputs=[args.config])
+    _journaled(args, cfg, out_path, text, [args.config])
     diff = list(
         difflib.unified_diff(
             original.splitlines(), text.splitlines(), args.config, out_path, lineterm="", n=0

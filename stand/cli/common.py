@@ -322,6 +322,11 @@ def add_revision_argument(p: argparse.ArgumentParser) -> None:
 JOB_FIELDS = ("serial", "order", "operator", "note")
 
 
+def add_reason_argument(p: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+    """``--reason TEXT``: why a change is made, for the audit trail (``stand audit``)."""
+    p.add_argument("--reason", metavar="TEXT", help="why: recorded in the audit trail")
+
+
 def add_date_arguments(p: argparse.ArgumentParser) -> None:
     """``--since`` and ``--until``: the archive's runs of these days (UTC), inclusive."""
     p.add_argument(
@@ -359,31 +364,6 @@ def job_from(args: argparse.Namespace) -> Any:
             raise UsageError(f"--{problem}")
         values[name] = value
     return Job(**values)
-
-
-def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
-    """``--job ID``: the MES's job order of this stand (OPC 40001-3), now Running: the
-    run's serial, order and operator are the job's (UsageError when there is no such job
-    order waiting or running, when it is for another rotor type, or when the options name
-    the job's fields too)."""
-    from stand.archive import Archive, url_for  # SQLAlchemy: only when a job is named
-    from stand.archive.jobs import take_job
-
-    given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
-    if given:
-        raise UsageError(f"--job takes the serial, order and operator from the job order: "
-                         f"leave out {', '.join(given)}")  # fmt: skip
-    stand = cfg.stand.stand_id()
-    with Archive(url_for(getattr(args, "archive", None), cfg)) as archive:
-        job = take_job(archive, stand, args.job)
-    if job is None:
-        raise UsageError(f"--job {args.job[:64]!r}: stand {stand} has no such job order "
-                         "waiting or running (stand jobs lists them)")  # fmt: skip
-    if cfg.rotor.type and job["rotor_type"] != cfg.rotor.type:
-        raise UsageError(f"--job {args.job!r} is for rotor type {job['rotor_type']!r}, the "
-                         f"config is {cfg.rotor.type!r}")  # fmt: skip
-    return Job(serial=job["serial"], order=job["order"], operator=job["operator"],
-               note=getattr(args, "note", None), job_id=job["job_id"])  # fmt: skip
 
 
 def check_live_arguments(args: argparse.Namespace, command: str) -> None:

@@ -9,11 +9,13 @@ from typing import Any
 
 from stand import __version__
 from stand.archive import url_for
+from stand.archive.audit import Change, record, sha256_of
 from stand.archive.evaluations import add_evaluation
 from stand.cli.common import (
     ACCEPTANCE_EXIT,
     add_archive_argument,
     add_force_argument,
+    add_reason_argument,
     write_text_output,
 )
 from stand.cli.format import dump_json
@@ -24,6 +26,7 @@ from stand.health.due import due_date
 from stand.health.evaluate import DEFAULT_URR_CLAIM, Evaluation, evaluate_runs
 from stand.health.proving import file_runs, scene_runs
 from stand.sim import load_scene
+from stand.solve import json_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -61,6 +64,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pdf", metavar="FILE.pdf", help="the certificate as PDF (Chromium)")
     add_force_argument(p, "--report and --pdf")
     add_archive_argument(p)
+    add_reason_argument(p)
     p.add_argument(
         "--no-archive",
         action="store_true",
@@ -116,6 +120,8 @@ def _archive(
     eid, where = add_evaluation(url, "machine", cfg.stand.stand_id(), out["verdict"], out,
                          simulated=simulated, software=f"stand {__version__}", due=due,
                          performed_at=now)  # fmt: skip
+    record(url, Change("evaluation", f"machine evaluation E{eid} ({out['verdict']})", None,
+                       sha256_of(json_text(out)), args.reason))  # fmt: skip
     return {"id": eid, "archive": where, "performed_at": now.isoformat(),
             "due": due.isoformat(), "simulated": simulated}  # fmt: skip
 

@@ -8,6 +8,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
+from stand.archive import url_for
+from stand.archive.audit import Change, file_sha256, record, sha256_of
 from stand.calib.influence import (
     TRIAL_CHANGE,
     Trial,
@@ -16,7 +18,12 @@ from stand.calib.influence import (
     phasors,
     suggested_trials,
 )
-from stand.cli.common import add_force_argument, write_text_output
+from stand.cli.common import (
+    add_archive_argument,
+    add_force_argument,
+    add_reason_argument,
+    write_text_output,
+)
 from stand.cli.format import dump_json, print_warnings, show
 from stand.config import STRICT, Config, read_toml, validate
 from stand.config.matrix import Pair, matrix_document, parse_matrix, read_matrix
@@ -92,6 +99,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="store the influence matrix (permanent calibration of a rotor type)",
     )
     add_force_argument(p, "--save")
+    add_reason_argument(p)
+    add_archive_argument(p)
     p.add_argument(
         "--matrix",
         metavar="MATRIX.json",
@@ -215,7 +224,7 @@ def _measured_matrix(
     )
     doc_text = json_text(doc)
     if args.save:
-        write_text_output(args.save, doc_text, force=args.force, inputs=[args.runs, *doc["runs"]])
+        _journaled_save(args, cfg, doc_text, [args.runs, *doc["runs"]])
     print_warnings(notes)
     return parse_matrix(doc_text, args.save or "(the trial runs)")
 
@@ -318,7 +327,17 @@ def _save(args: argparse.Namespace, result: Any, cfg: Config, entries: list[Any]
         runs=[f for files, *_ in entries if files for f in files],
     )
     doc["speeds_rpm"] = [r.speed_rpm for r in result.readings]
-    write_text_output(args.save, json_text(doc), force=args.force, inputs=[args.runs])
+    _journaled_save(args, cfg, json_text(doc), [args.runs])
+
+
+def _journaled_save(args: argparse.Namespace, cfg: Config | None, text: str,
+                    inputs: list[str]) -> None:  # fmt: skip
+    """``--save``: the matrix written, and one entry in the audit trail."""
+    old = file_sha256(args.save)
+    write_text_output(args.save, text, force=args.force, inputs=inputs)
+    if args.save != "-":
+        record(url_for(args.archive, cfg), Change("matrix", Path(args.save).name, old,
+                                                  sha256_of(text), args.reason))  # fmt: skip
 
 
 def _print(out: dict[str, Any]) -> None:

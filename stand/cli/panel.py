@@ -21,14 +21,15 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from stand.cli.common import bus_kwargs, check_live_arguments, job_from, mes_job, run_path
+from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.errors import ArchiveError
+from stand.errors import ArchiveError, UsageError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.live import live_source, measure_live
 from stand.report import Display
 from stand.sim import Mass
+from stand.solve import Job
 from stand.solve.recordings import correction_masses
 from stand.solve.verdict import tolerance_of
 
@@ -183,6 +184,31 @@ class LiveDisplay:
         if self.live is not None:
             return self._redraw()
         self._say(f"  {elapsed:5.1f} s  waiting: {why}")
+
+
+def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
+    """``--job ID``: the MES's job order of this stand (OPC 40001-3), now Running: the
+    run's serial, order and operator are the job's (UsageError when there is no such job
+    order waiting or running, when it is for another rotor type, or when the options name
+    the job's fields too)."""
+    from stand.archive import Archive, url_for  # SQLAlchemy: only when a job is named
+    from stand.archive.jobs import take_job
+
+    given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
+    if given:
+        raise UsageError(f"--job takes the serial, order and operator from the job order: "
+                         f"leave out {', '.join(given)}")  # fmt: skip
+    stand = cfg.stand.stand_id()
+    with Archive(url_for(getattr(args, "archive", None), cfg)) as archive:
+        job = take_job(archive, stand, args.job)
+    if job is None:
+        raise UsageError(f"--job {args.job[:64]!r}: stand {stand} has no such job order "
+                         "waiting or running (stand jobs lists them)")  # fmt: skip
+    if cfg.rotor.type and job["rotor_type"] != cfg.rotor.type:
+        raise UsageError(f"--job {args.job!r} is for rotor type {job['rotor_type']!r}, the "
+                         f"config is {cfg.rotor.type!r}")  # fmt: skip
+    return Job(serial=job["serial"], order=job["order"], operator=job["operator"],
+               note=getattr(args, "note", None), job_id=job["job_id"])  # fmt: skip
 
 
 def measure_live_from_args(

@@ -8,14 +8,15 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, file_digest, url_for
-from stand.cli.common import add_archive_argument
+from stand.archive.audit import Change, file_sha256, record
+from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
 from stand.errors import ArchiveError, UsageError
 from stand.solve.index_runs import measure_tooling
-from stand.solve.tooling import folder, save_tooling, stored_toolings
+from stand.solve.tooling import folder, save_tooling, stored_toolings, tooling_file
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,6 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--force", action="store_true", help="replace a tooling measured before")
     add_archive_argument(p)
+    add_reason_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -65,7 +67,11 @@ def _measure(args: argparse.Namespace) -> int:
     if len(args.runs) != 2:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
     tooling, U_r, cov_r, cfg = measure_tooling(args.runs[0], args.runs[1], args.config, args.name)
-    path = save_tooling(tooling, _where(args, cfg), force=args.force)
+    where = _where(args, cfg)
+    old = file_sha256(tooling_file(tooling.name, where))
+    path = save_tooling(tooling, where, force=args.force)
+    record(url_for(args.archive, cfg), Change("tooling", f"tooling {tooling.name} ({path.name})",
+                                              old, file_sha256(path), args.reason))  # fmt: skip
     marked: list[int] | None = None
     try:
         with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production

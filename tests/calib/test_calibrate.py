@@ -93,11 +93,21 @@ def test_calibrate_recovers_the_stand_within_its_standard_errors(
                 "--out",
                 str(out),
                 "--json",
+                "--archive",
+                f"sqlite:///{tmp_path / 'a.sqlite'}",
+                "--reason",
+                "yearly calibration",
             ]
         )
         == 0
     )
     res = json.loads(capsys.readouterr().out)
+    from stand.archive.audit import entries, file_sha256
+
+    (entry,) = entries(f"sqlite:///{tmp_path / 'a.sqlite'}")  # one audit entry: old -> new
+    assert (entry["action"], entry["reason"]) == ("calibration", "yearly calibration")
+    assert entry["old_sha256"] == file_sha256(tmp_path / "start.toml")
+    assert entry["new_sha256"] == file_sha256(out)
     v, se = res["values"], res["std_errors"]
     for name, truth in TRUE.items():
         # 4 standard errors: a 1-in-16,000 miss per parameter if the errors are right

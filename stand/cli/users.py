@@ -1,0 +1,103 @@
+"""The station's accounts: who may measure, load, calibrate, manage accounts
+(:mod:`stand.archive.accounts`); each change journaled (``stand audit``)."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from stand.archive import url_for
+from stand.archive.accounts import ROLES, accounts_of, add_account, set_account
+from stand.archive.audit import Change, record, sha256_of
+from stand.cli.common import add_archive_argument, add_reason_argument
+from stand.cli.format import dump_json
+from stand.config import load_config
+from stand.errors import UsageError
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "action",
+        choices=("add", "set", "list"),
+        help="add: a new account; set: change one; list: every account",
+    )
+    p.add_argument("name", nargs="?", help="the account (add, set)")
+    p.add_argument("--role", choices=ROLES, help="its role (add: required)")
+    p.add_argument(
+        "--password-file",
+        metavar="FILE",
+        help="its password (first line); "
+        "without it the password is asked for (twice) or read from stdin",
+    )
+    p.add_argument(
+        "--badge-file",
+        metavar="FILE",
+        help="add: the code its badge's bar code carries (first line): logging in by scanning it",
+    )
+    state = p.add_mutually_exclusive_group()
+    state.add_argument("--disable", action="store_true", help="set: no more logging in")
+    state.add_argument("--enable", action="store_true", help="set: logging in again")
+    add_reason_argument(p)
+    p.add_argument("--config", metavar="CFG", help="the stand's config: its [archive] url")
+    add_archive_argument(p)
+    p.add_argument("--json", action="store_true", help="list: print one JSON object")
+
+
+def _first_line(path: str, what: str) -> str:
+    try:
+        return Path(path).read_text(encoding="utf-8").splitlines()[0].strip()
+    except (OSError, IndexError, UnicodeDecodeError):
+        raise UsageError(f"{path}: cannot read {what} from it (its first line)") from None
+
+
+def _password(args: argparse.Namespace) -> str:
+    if args.password_file:
+        return _first_line(args.password_file, "a password")
+    if sys.stdin.isatty():
+        first = getpass.getpass(f"password for {args.name}: ")
+        if getpass.getpass("again: ") != first:
+            raise UsageError("the two passwords differ")
+        return first
+    return sys.stdin.readline().strip()
+
+
+def _digest(state: dict[str, Any] | None) -> str | None:
+    """An account's state (no secrets) as the journal's SHA-256."""
+    return None if state is None else sha256_of(json.dumps(state, sort_keys=True))
+
+
+def run(args: argparse.Namespace) -> int:
+    url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
+    if args.action == "list":
+        found = accounts_of(url)
+        if args.json:
+            dump_json({"accounts": found})
+        for a in [] if args.json else found:
+            print(f"{a['name']:24} {a['role']:14} {'active' if a['active'] else 'disabled'}")
+        return 0
+    if not args.name:
+        raise UsageError(f"stand users {args.action}: name the account")
+    if args.action == "add":
+        if not args.role:
+            raise UsageError("stand users add: --role is required")
+        badge = _first_line(args.badge_file, "a badge code") if args.badge_file else None
+        before, after = None, add_account(url, args.name, args.role, _password(args), badge)
+    else:
+        password = _password(args) if args.password_file else None
+        active = True if args.enable else False if args.disable else None
+        if args.role is None and password is None and active is None:
+            raise UsageError(
+                "stand users set: nothing to change (--role, --password-file, "
+                "--disable or --enable)"
+            )
+        before, after = set_account(url, args.name, role=args.role, password=password,
+                                    active=active)  # fmt: skip
+    entry = record(url, Change("account", args.name, _digest(before), _digest(after),
+                               args.reason))  # fmt: skip
+    state = "active" if after["active"] else "disabled"
+    print(f"account {args.name}: {after['role']}, {state} (audit entry {entry})")
+    return 0
