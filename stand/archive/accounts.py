@@ -4,7 +4,7 @@ station and the OPC UA server (other processes) know the same people.
 Roles, each with the rights of the one before and more (:data:`RIGHTS`):
 
 - ``operator``: measures, corrects and checks rotors; reads the history;
-- ``setter``: also loads rotor types and toolings;
+- ``setter``: also loads rotor types and toolings, sends jobs, releases certificates;
 - ``engineer``: also calibrates, evaluates the stand and edits tolerances;
 - ``administrator``: also manages the accounts.
 
@@ -27,8 +27,8 @@ from stand.errors import UsageError
 ROLES = ("operator", "setter", "engineer", "administrator")
 RIGHTS = {
     "operator": frozenset({"measure", "correct", "check", "read"}),
-    "setter": frozenset({"measure", "correct", "check", "read", "load", "jobs"}),
-    "engineer": frozenset({"measure", "correct", "check", "read", "load", "jobs",
+    "setter": frozenset({"measure", "correct", "check", "read", "load", "jobs", "release"}),
+    "engineer": frozenset({"measure", "correct", "check", "read", "load", "jobs", "release",
                            "calibrate", "evaluate", "tolerance"}),
 }  # fmt: skip
 RIGHTS["administrator"] = RIGHTS["engineer"] | {"accounts"}

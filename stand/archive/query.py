@@ -196,6 +196,15 @@ def serials_by_digest(url: str, file_sha256s: list[str]) -> dict[str, str]:
     return {str(d): str(s) for d, s in found if s}
 
 
+def run_digest(url: str, run_id: int) -> str | None:
+    """The SHA-256 the archive keeps of run ``run_id``'s file (None: no such run)."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        found = conn.execute(sa.select(runs.c.file_sha256).where(runs.c.id == run_id)).first()
+    return None if found is None else str(found.file_sha256)
+
+
 def run_file(url: str, run_id: int) -> str | None:
     """The run file archived as ``run_id`` (None if there is no such run)."""
     import sqlalchemy as sa

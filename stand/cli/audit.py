@@ -7,10 +7,11 @@ from __future__ import annotations
 import argparse
 
 from stand.archive import url_for
-from stand.archive.audit import ACTIONS, entries, verify_journal
+from stand.archive.audit import ACTIONS, entries, file_sha256, verify_journal
 from stand.cli.common import add_archive_argument, add_date_arguments
 from stand.cli.format import dump_json
 from stand.config import load_config
+from stand.errors import UsageError
 
 SHOWN = ("id", "at_utc", "zone", "who", "action", "subject", "old_sha256", "new_sha256",
          "reason")  # fmt: skip
@@ -20,10 +21,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "what",
         nargs="?",
-        choices=("list", "verify"),
+        choices=("list", "verify", "check"),
         default="list",
-        help="list (default): the entries; verify: the hash chain, row by row",
+        help="list (default): the entries; verify: the hash chain, row by row; check FILE: "
+        "was this certificate released, and is it unaltered",
     )
+    p.add_argument("file", nargs="?", metavar="FILE", help="check: a released certificate")
     p.add_argument("--who", metavar="NAME", help="list: one account's (or os:USER's) entries")
     p.add_argument("--action", choices=ACTIONS, help="list: one kind of change")
     add_date_arguments(p)
@@ -38,8 +41,37 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _check(url: str, path: str | None) -> int:
+    """``check FILE``: the release entries whose SHA-256 is the file's; 0 if one is and
+    the chain verifies, 1 if none is (altered, or never released) or the chain is broken."""
+    if not path:
+        raise UsageError("stand audit check: name the certificate file")
+    digest = file_sha256(path)
+    if digest is None:
+        raise UsageError(f"{path}: no such file")
+    found = [e for e in entries(url, action="release") if e["new_sha256"] == digest]
+    chain = verify_journal(url)
+    for e in found:
+        print(
+            f"{path}: released by {e['who']} on {e['at_utc'][:19]}Z ({e['zone']}): "
+            f"{e['subject']}, run file SHA-256 {e['old_sha256']} (audit entry {e['id']})"
+        )
+    if not found:
+        print(
+            f"{path}: NOT a released certificate of this archive (SHA-256 {digest[:16]}...): "
+            "altered since its release, or never released"
+        )
+    if chain.problem:
+        print(f"and the audit trail is BROKEN: {chain.problem}")
+    return 0 if found and chain.problem is None else 1
+
+
 def run(args: argparse.Namespace) -> int:
     url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
+    if args.what == "check":
+        return _check(url, args.file)
+    if args.file:
+        raise UsageError(f"stand audit {args.what}: takes no file (check FILE does)")
     if args.what == "verify":
         v = verify_journal(url, args.head)
         if args.json:

@@ -3,19 +3,26 @@
 from __future__ import annotations
 
 import argparse
+import datetime as dt
+from pathlib import Path
 
+from stand.archive import file_digest, url_for
+from stand.archive.audit import Change, file_sha256, os_user, record
 from stand.cli.common import (
     add_across_speeds_arguments,
+    add_archive_argument,
     add_force_argument,
     add_measure_arguments,
+    add_reason_argument,
     add_uncertainty_arguments,
     solve_options,
     write_text_output,
 )
+from stand.config import load_config
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
-from stand.report import render, render_speeds, write_pdf
+from stand.report import Release, released, render, render_speeds, write_pdf
 from stand.solve import solve_check, solve_recording
 
 
@@ -47,6 +54,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
     add_force_argument(p, "the outputs")
+    g = p.add_argument_group("releasing the certificate (an electronic signature)")
+    g.add_argument(
+        "--release",
+        action="store_true",
+        help="release it as this computer's user: "
+        "its signature block names who, when and the run file's SHA-256, and the "
+        "audit trail keeps the written file's SHA-256 (stand audit check FILE)",
+    )
+    add_archive_argument(g)
+    add_reason_argument(g)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -76,7 +93,20 @@ def run(args: argparse.Namespace) -> int:
         result = solve_check(run, args.check, args.config, options, strict=not args.check_any)
     else:
         result = solve_recording(run, args.config, options)
-    return _write(args, render(result), inputs)
+    page, release = render(result), None
+    if args.release:
+        release = Release(os_user(), None, dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+                          file_digest(run))  # fmt: skip
+        page = released(page, release)
+    _write(args, page, inputs)
+    if release is not None:  # the file a customer keeps: the PDF if one was written
+        kept = args.pdf or args.out
+        cfg = load_config(args.config)[0] if args.config else None
+        entry = record(url_for(args.archive, cfg), Change(
+            "release", f"certificate of {Path(run).name} ({Path(kept).name})",
+            release.run_sha256, file_sha256(kept), args.reason, who=release.who))  # fmt: skip
+        print(f"released by {release.who}: audit entry {entry}")
+    return 0
 
 
 def _write(args: argparse.Namespace, page: str, inputs: list[str]) -> int:

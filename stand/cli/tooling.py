@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, file_digest, url_for
-from stand.archive.audit import Change, file_sha256, record
+from stand.archive.audit import Change, file_sha256, journal
 from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config
@@ -70,15 +70,17 @@ def _measure(args: argparse.Namespace) -> int:
     where = _where(args, cfg)
     old = file_sha256(tooling_file(tooling.name, where))
     path = save_tooling(tooling, where, force=args.force)
-    record(url_for(args.archive, cfg), Change("tooling", f"tooling {tooling.name} ({path.name})",
-                                              old, file_sha256(path), args.reason))  # fmt: skip
     marked: list[int] | None = None
+    change = Change("tooling", f"tooling {tooling.name} ({path.name})", old, file_sha256(path),
+                    args.reason)  # fmt: skip
     try:
         with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production
             marked = archive.mark_tooling([file_digest(r) for r in args.runs])
-    except ArchiveError as exc:  # the tooling is kept: only the marking waits
-        print(f"the index runs are not marked as tooling runs ({exc}): measure the tooling "
-              "again with --force once the archive answers", file=sys.stderr)  # fmt: skip
+        journal(url_for(args.archive, cfg), change)
+    except ArchiveError as exc:  # the tooling is kept: the marking and its entry wait
+        print(f"the index runs are not marked as tooling runs and the change is not in the "
+              f"audit trail ({exc}): measure the tooling again with --force once the archive "
+              "answers", file=sys.stderr)  # fmt: skip
     doc = {
         "name": tooling.name,
         "file": str(path),

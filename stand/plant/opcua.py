@@ -29,7 +29,7 @@ from stand.archive import Archive
 from stand.archive.evaluations import evaluation_by_id, evaluation_ids
 from stand.archive.jobs import MAX_JOBS
 from stand.archive.query import latest, latest_id, newest_ids
-from stand.errors import ArchiveError, UsageError
+from stand.errors import ArchiveError, StandError, UsageError
 from stand.plant.ua_call import guarded
 from stand.plant.ua_job_control import JobOrders
 from stand.plant.ua_jobs import JOB_STATES, declare_job_types
@@ -58,6 +58,16 @@ RESULT_ID = re.compile(r"[1-9][0-9]{0,17}")
 """A ResultId: the archive's run id in ASCII digits (``[0-9]`` is ASCII in ``re``)."""
 
 __all__ = ["NAMESPACE", "Access", "ResultServer", "check_bind"]
+
+
+def _has_accounts(url: str) -> bool:
+    """Whether the archive has accounts (an archive that does not answer: none)."""
+    from stand.archive.accounts import accounts_of
+
+    try:
+        return bool(accounts_of(url))
+    except StandError:
+        return False
 
 
 class ResultServer:
@@ -92,7 +102,8 @@ class ResultServer:
                  cert_dir: Path | None = None,
                  rotor_types: Callable[[], list[str]] | None = None) -> None:  # fmt: skip
         access = access or Access()
-        check_bind(host, access)
+        self.users = Users(access, archive_url)  # the stand's accounts log in too
+        check_bind(host, access, accounts=_has_accounts(archive_url))
         if cert_dir is not None:
             cert_folder(cert_dir)  # a folder that is not there: said now
         self.archive_url, self.stand_id = archive_url, stand_id
@@ -110,13 +121,13 @@ class ResultServer:
         from asyncua import Server, ua
 
         install_where_clause()  # OfType as OPC 10000-4 says: the type or any subtype
-        server = Server(user_manager=Users(self.access))
+        server = Server(user_manager=self.users)
         await server.init()
         server.set_endpoint(self.endpoint)
         server.set_server_name(f"rotor balancing stand {self.stand_id}")
         app_uri = f"{NAMESPACE}:{self.stand_id}"
         await server.set_application_uri(app_uri)
-        await apply_security(server, self.host, self.access, self.cert_dir, app_uri)
+        await apply_security(server, self.host, self.users, self.cert_dir, app_uri)
         ns = self._ns = await register(server)
         await declare_machinery(server, ns)
         await declare_result_types(server, ns)

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.config.paths import data_folder
-from stand.errors import UsageError
+from stand.errors import StandError, UsageError
 from stand.plant.safety import is_local
 
 CERT_FILE, KEY_FILE = "server-cert.der", "server-key.pem"
@@ -38,12 +38,14 @@ class Access:
     password: str | None = None
 
 
-def check_bind(host: str, access: Access) -> None:
-    """A bind beyond this machine without a user and a password is refused."""
-    if not is_local(host) and not (access.user and access.password):
+def check_bind(host: str, access: Access, accounts: bool = False) -> None:
+    """A bind beyond this machine without a user and a password (or the stand's accounts:
+    ``accounts``) is refused."""
+    if not is_local(host) and not (access.user and access.password) and not accounts:
         raise UsageError(
             f"stand opcua: serving on {host} (beyond this machine) needs --user and "
-            "--password-file: no anonymous client from the network"
+            "--password-file, or the stand's accounts (stand users): no anonymous client "
+            "from the network"
         )
 
 
@@ -93,14 +95,15 @@ def server_certificate(folder: Path, app_uri: str) -> tuple[Path, Path]:
     return cert, key
 
 
-async def apply_security(server: Any, host: str, access: Access, cert_dir: Path | None,
+async def apply_security(server: Any, host: str, users: Users, cert_dir: Path | None,
                          app_uri: str) -> None:  # fmt: skip
-    """Set the server's endpoints and identity tokens by where it listens."""
+    """Set the server's endpoints, identity tokens and rights by where it listens."""
     from asyncua import ua
 
     if is_local(host):
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
-        tokens = [ua.UserNameIdentityToken] if access.user else [ua.AnonymousIdentityToken]
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity], rights(users))
+        tokens = [ua.UserNameIdentityToken] if users.access.user else [
+            ua.AnonymousIdentityToken, ua.UserNameIdentityToken]  # fmt: skip
         server.set_identity_tokens(tokens)
         return
     cert, key = server_certificate(cert_folder(cert_dir), app_uri)
@@ -110,23 +113,81 @@ async def apply_security(server: Any, host: str, access: Access, cert_dir: Path 
     except (OSError, ValueError) as exc:
         raise UsageError(f"{cert.parent}: the server's certificate or key is unreadable "
                          f"({exc}); move them away and a new pair is made") from exc  # fmt: skip
-    server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt])
+    server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
+                               rights(users))  # fmt: skip
     server.set_identity_tokens([ua.UserNameIdentityToken])
 
 
-class Users:
-    """One user with a password, read-only like every client (asyncua's user manager)."""
+JOB_METHODS = "/JobManagement/JobOrderControl/"
+"""In the NodeIds of the methods that change the stand's work (sending, starting,
+aborting jobs): a call of one takes the right ``jobs``."""
 
-    def __init__(self, access: Access) -> None:
-        self.access = access
+
+class Users:
+    """Who a client is (asyncua's user manager): anonymous on this machine; the one
+    ``access`` user; or, where the archive ``accounts_url`` has accounts, any active
+    account by its password, with its role (:mod:`stand.archive.accounts`)."""
+
+    def __init__(self, access: Access, accounts_url: str | None = None) -> None:
+        self.access, self.accounts_url = access, accounts_url
+        self.roles: dict[str, str] = {}
+        """The role of each account logged in (for :class:`Rights`)."""
 
     def get_user(self, iserver: Any, username: Any = None, password: Any = None,
                  certificate: Any = None) -> Any:  # fmt: skip
         from asyncua.crypto.permission_rules import User, UserRole
 
-        if not self.access.user:  # anonymous, on this machine only
+        if self.access.user and username == self.access.user:
+            ok = hmac.compare_digest(str(password or "").encode(),
+                                     str(self.access.password).encode())  # fmt: skip
+            return User(role=UserRole.User, name=username) if ok else None
+        if username is not None and self.accounts_url is not None:
+            from stand.archive.accounts import check_password
+
+            try:
+                found = check_password(self.accounts_url, str(username), str(password or ""))
+            except StandError:  # the archive does not answer: nobody is let in
+                return None
+            if found is None:
+                return None
+            self.roles[found["name"]] = found["role"]
+            return User(role=UserRole.User, name=found["name"])
+        if username is None and not self.access.user:  # anonymous, on this machine only
             return User(role=UserRole.User)
-        ok = username == self.access.user and hmac.compare_digest(
-            str(password or "").encode(), str(self.access.password).encode()
-        )
-        return User(role=UserRole.User) if ok else None
+        return None
+
+    def may_send_jobs(self, name: str | None) -> bool:
+        """Whether a client may call the job methods: the one ``access`` user, an account
+        whose role has the right ``jobs``; anonymous only where the stand has no accounts."""
+        from stand.archive.accounts import accounts_of, may
+
+        if name is not None:
+            return name == self.access.user or may(self.roles.get(name), "jobs")
+        try:
+            return self.accounts_url is None or not accounts_of(self.accounts_url)
+        except StandError:
+            return False
+
+
+def rights(users: Users) -> Any:
+    """The server's permission ruleset: what a read-only client may do (asyncua's user
+    requests), and a call of a job method only for who :meth:`Users.may_send_jobs`."""
+    from asyncua import ua
+    from asyncua.crypto.permission_rules import USER_TYPES, PermissionRuleset
+    from asyncua.ua.ua_binary import struct_from_binary
+
+    allowed = {ua.NodeId(t) for t in USER_TYPES} - {
+        ua.NodeId(ua.ObjectIds.WriteRequest_Encoding_DefaultBinary)}  # fmt: skip
+    call = ua.NodeId(ua.ObjectIds.CallRequest_Encoding_DefaultBinary)
+
+    class Rights(PermissionRuleset):  # type: ignore[misc]
+        def check_validity(self, user: Any, action_type_id: Any, body: Any) -> bool:
+            if action_type_id not in allowed:
+                return False
+            if action_type_id != call:
+                return True
+            params = struct_from_binary(ua.CallParameters, body.copy())  # body: read later
+            jobs = any(JOB_METHODS in str(m.MethodId.Identifier) for m in params.MethodsToCall)
+            return not jobs or users.may_send_jobs(getattr(user, "name", None))
+
+    return Rights()

@@ -9,11 +9,14 @@ g, mm, deg, rpm at the edges, SI inside).  Formatting only: nothing here measure
 from stand.report.certificate import render
 from stand.report.pages import render_production, render_speeds
 from stand.report.printing import write_pdf
+from stand.report.release import Release, released
 from stand.report.reprocess_page import render_reprocess
 from stand.report.units import Display
 
 __all__ = [
     "Display",
+    "Release",
+    "released",
     "render",
     "render_production",
     "render_reprocess",

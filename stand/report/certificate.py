@@ -40,6 +40,8 @@ table.job td, table.job th { text-align: left; }
 .warn { background: #fff4ce; border-left: 4px solid #e0a800; padding: 4px 10px; margin: 4px 0; }
 .sign { display: grid; grid-template-columns: 1fr 1fr; gap: 1.2em 3em; margin-top: 1.5em; }
 .sign div { border-top: 1px solid #222; padding-top: 3px; font-size: 0.9em; }
+.digest { font-family: monospace; font-size: 0.8em; word-break: break-all; }
+.released td { text-align: left; }
 img { max-width: 100%; }
 pre { font-size: 0.8em; background: #f6f6f6; padding: 0.6em; white-space: pre-wrap; }
 .appendix { margin-top: 2em; }
@@ -282,13 +284,18 @@ def _config_named(source: str | None) -> str:
     return f"the configuration {_file_name(source)}"
 
 
+RELEASE_START, RELEASE_END = "<!--release-->", "<!--/release-->"
+"""Around the signature block: :func:`stand.report.release.released` puts a release in
+its place."""
+
+
 def _signatures(out: dict[str, Any]) -> str:
     op = html.escape(out["job"].get("operator") or "")
     return (
-        "<div class=sign>"
+        f"{RELEASE_START}<div class=sign>"
         f"<div>balanced by {op}</div><div>date</div>"
         "<div>inspected by</div><div>date</div>"
-        "</div>"
+        f"</div>{RELEASE_END}"
     )
 
 

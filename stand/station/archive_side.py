@@ -10,21 +10,23 @@ which holds the folders, the archive's URL and the state these methods read.
 
 from __future__ import annotations
 
+import datetime as dt
 import logging
 import threading
 from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, correction_rows, file_digest
+from stand.archive.audit import Change, file_sha256, record
 from stand.archive.evaluations import evaluations_due
 from stand.archive.jobs import end_job, jobs_of, take_job
-from stand.archive.query import Filters, history, run_file
+from stand.archive.query import Filters, history, run_digest, run_file
 from stand.config import load_config
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.health import datum_row, health, health_json
 from stand.plant import export_qdas
-from stand.report import render_speeds, write_pdf
+from stand.report import Release, released, render_speeds, write_pdf
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
@@ -158,10 +160,29 @@ class ArchiveSide:
             paths.append(str(path))
         return render_speeds(speeds_json(balance_speeds(paths)))
 
+    def released_pdf(self, run_id: int, who: str, role: str | None) -> Path:
+        """The certificate of archived run ``run_id`` released by the account ``who``: its
+        signature block the release (:func:`stand.report.released`), printed once as
+        ``<run>.released.pdf`` and journaled (the PDF's SHA-256); the first release
+        stands, later asks get it."""
+        report = self.report_file(run_id)
+        pdf = report.with_suffix(".released.pdf")
+        with self._printing:
+            if not pdf.is_file():
+                digest = run_digest(self.archive_url, run_id) or ""
+                now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+                page = released(report.read_text(encoding="utf-8"),
+                                Release(who, role, now, digest))  # fmt: skip
+                write_pdf(page, pdf, inputs=[str(report)])
+                record(self.archive_url, Change(
+                    "release", f"certificate of run {run_id} ({report.stem})", digest,
+                    file_sha256(pdf), None, who=who))  # fmt: skip
+        return pdf
+
     def certificate_pdf(self, run_id: int) -> Path:
         """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
         the first time it is asked for, and again if the report changed since
-        (:func:`stand.report.printing.write_pdf`, written safely)."""
+        (:func:`stand.report.printing.write_pdf`, written safely); not released."""
         report = self.report_file(run_id)
         pdf = report.with_suffix(".pdf")
         with self._printing:

@@ -12,10 +12,12 @@ import datetime as dt
 from collections.abc import Callable
 from typing import Any, Literal
 
+from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
 from stand.report import Display
+from stand.station.login import forbidden, session_of
 from stand.station.service import Station
 
 TOAST: Literal["top-right"] = "top-right"
@@ -201,9 +203,14 @@ def add_routes(station: Station) -> None:
             return PlainTextResponse(str(exc), status_code=422)
 
     @app.get("/report/{run_id}/pdf")
-    def certificate_pdf(run_id: int) -> Any:
+    def certificate_pdf(run_id: int, request: Request) -> Any:
+        refused = forbidden(station, request, "release", "release a certificate")
+        if refused is not None:
+            return refused
+        session = session_of(station, request)
         try:
-            pdf = station.certificate_pdf(run_id)
+            pdf = (station.certificate_pdf(run_id) if session is None
+                   else station.released_pdf(run_id, session.name, session.role))  # fmt: skip
         except UsageError as exc:  # no such run, or outside the folders
             return PlainTextResponse(str(exc), status_code=404)
         except StandError as exc:  # Chromium missing or failing, a full disk

@@ -18,6 +18,13 @@ from stand.report import Display
 from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, guard, history_screen, notify
+from stand.station.login import (
+    add_login_routes,
+    login_screen,
+    require,
+    session_of,
+    who_line,
+)
 from stand.station.service import Station
 from stand.station.start import start_screen
 from stand.station.views import (
@@ -60,8 +67,18 @@ def _out(result: Any) -> dict[str, Any] | None:
 
 
 def frame(station: Station) -> None:
-    """The page frame: the header with the screens, then the screen the address names."""
+    """The page frame: the header with the screens, then the screen the address names (or
+    the log-in, where the stand has accounts and this browser no session)."""
     ui.add_head_html(STYLE)
+    request = ui.context.client.request
+    session = session_of(station, request)
+    if station.sessions.required() and session is None:
+        with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
+            ui.label("Balancing station").classes("text-h5 q-mr-lg")
+        with ui.column().classes("w-full q-pa-md"):
+            login_screen(failed=request.query_params.get("login") == "failed")
+        return
+    app.storage.client["session"] = None if session is None else session.token
     with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
         ui.label("Balancing station").classes("text-h5 q-mr-lg")
         for path, name in SCREENS:
@@ -82,6 +99,7 @@ def frame(station: Station) -> None:
             }[s.phase]
 
         ui.timer(REFRESH_S, show_status)
+        who_line(station, session)
     ui.sub_pages({
         "/": lambda: start_screen(station),
         "/measure": lambda: measure_screen(station),
@@ -227,6 +245,7 @@ def correct_screen(station: Station) -> None:
         if s.simulated and s.phase == "done":
 
             def apply() -> None:
+                require(station, "correct", "apply a correction")
                 masses = station.apply_correction()
                 notify(f"{len(masses)} masses put on the simulated rotor", "positive")
 
@@ -236,13 +255,19 @@ def correct_screen(station: Station) -> None:
         elif s.phase == "done":
 
             def confirm() -> None:
+                require(station, "correct", "confirm a correction")
                 station.confirm_applied()
                 notify("confirmed: the check will calibrate the stand too", "positive")
 
             ui.button("Applied as shown", on_click=guard(confirm)).props(
                 "size=xl color=secondary"
             ).mark("applied")
-        ui.button("Start the check run", on_click=guard(station.check, "/measure")).props(
+
+        def check() -> None:
+            require(station, "check", "measure a check run")
+            station.check()
+
+        ui.button("Start the check run", on_click=guard(check, "/measure")).props(
             "size=xl color=primary"
         ).mark("check-run")
 
@@ -323,6 +348,7 @@ def serve(station: Station, *, host: str, port: int, token: str | None, show: bo
     """Serve the station until interrupted (the token, if any, on every request)."""
 
     add_routes(station)
+    add_login_routes(station)
     if token:
         app.add_middleware(TokenGate, token=token)
     ui.run(

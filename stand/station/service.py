@@ -37,6 +37,7 @@ from stand.solve.pipeline import SolveOptions, load_config_text
 from stand.solve.recordings import correction_masses
 from stand.solve.verdict import tolerance_of
 from stand.station.archive_side import ArchiveSide
+from stand.station.sessions import Sessions
 from stand.station.snapshot import BUS, Snapshot
 
 log = logging.getLogger(__name__)
@@ -91,6 +92,7 @@ class Station(ArchiveSide):
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._state = Snapshot()
+        self.sessions = Sessions(archive_url)  # who is logged in (none: a lone stand)
 
     # -- what there is to choose -------------------------------------------------------------
     def rotor_types(self) -> list[str]:

@@ -16,6 +16,7 @@ from nicegui import ui
 
 from stand.solve import Job
 from stand.station.history import guard
+from stand.station.login import current, require
 from stand.station.service import Station
 from stand.station.snapshot import BUS
 
@@ -36,12 +37,19 @@ class _Form:
         self.serial = ui.input("serial number").classes("w-full").mark("serial")
         self.order = ui.input("order").classes("w-full").mark("order")
         self.operator = ui.input("operator").classes("w-full").mark("operator")
+        if (session := current(station)) is not None:  # the account logged in: fixed
+            self.operator.value = session.name
+            self.operator.props("readonly")
         default = "demo" if "demo" in sources else BUS
         self.source = ui.select(sources, label="source", value=default).classes("w-full")
         self.source.mark("source")
         self.job_line = ui.label().classes("text-h6").mark("job-order")
 
     def go(self) -> None:
+        require(self.station, "measure", "measure a rotor")
+        session = current(self.station)  # the run's operator is the account logged in
+        if session is not None:
+            self.operator.value = session.name
         job = Job(serial=self.serial.value or None, order=self.order.value or None,
                   operator=self.operator.value or None, job_id=self.job_id or None)  # fmt: skip
         self.station.start(str(self.rotor.value), str(self.source.value), job)
@@ -59,7 +67,8 @@ class _Form:
             self.rotor.value = job["rotor_type"]
         self.serial.value = job["serial"]
         self.order.value = job["order"] or ""
-        self.operator.value = job["operator"] or self.operator.value
+        if current(self.station) is None:  # with accounts the operator is who logged in
+            self.operator.value = job["operator"] or self.operator.value
         self.job_line.text = (f"job order {job['job_id']} from the MES: {job['rotor_type']}, "
                               f"serial {job['serial']}")  # fmt: skip
 

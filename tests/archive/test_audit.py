@@ -18,10 +18,11 @@ from stand.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 JOURNALED = {"calibrate": "calibration", "influence": "matrix", "tooling": "tooling",
-             "evaluate": "evaluation", "users": "account"}  # fmt: skip
+             "evaluate": "evaluation", "users": "account", "report": "release"}  # fmt: skip
 """The commands that change what the stand measures with, and the action each journals
 (the calibration, tooling and evaluation walks: tests/calib/test_calibrate.py and
-tests/system/test_identity.py; the others here)."""
+tests/system/test_identity.py; the release: tests/station/test_station_browser.py and
+test_a_cli_release_is_journaled_and_checked here; the others here)."""
 
 
 def _journal(path: Path, n: int) -> str:
@@ -134,11 +135,12 @@ def test_exactly_the_commands_that_change_things_journal() -> None:
     calls = {}
     for path in (ROOT / "stand" / "cli").glob("*.py"):
         tree = ast.parse(path.read_text())
-        n = sum(isinstance(c, ast.Call) and getattr(c.func, "id", None) == "record"
+        n = sum(isinstance(c, ast.Call) and getattr(c.func, "id", None) in ("record", "journal")
                 for c in ast.walk(tree))  # fmt: skip
         if n:
             calls[path.stem] = n
-    assert calls == {"calibrate": 1, "influence": 1, "tooling": 1, "evaluate": 1, "users": 1}
+    assert calls == {"calibrate": 1, "influence": 1, "tooling": 1, "evaluate": 1, "users": 1,
+                     "report": 1}  # fmt: skip
     assert set(calls) == set(JOURNALED)
 
 
@@ -167,3 +169,25 @@ def test_a_row_no_writer_made_is_one_line_and_exit_2(
     assert main([*command, "--archive", url]) == 2
     err = capsys.readouterr().err.strip()
     assert says in err and "\n" not in err and "Traceback" not in err, err
+
+
+def test_a_cli_release_is_journaled_and_checked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``stand report --release``: one entry (the run file -> the certificate), and
+    ``stand audit check`` tells the released file from an altered copy."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    run, cert = tmp_path / "r.h5", tmp_path / "c.html"
+    assert main(["simulate", "demo", "--out", str(run), "--serial", "R-1"]) == 0
+    assert main(["report", str(run), "-o", str(cert), "--release", "--archive", url,
+                 "--reason", "customer copy"]) == 0  # fmt: skip
+    (entry,) = entries(url)
+    assert (entry["action"], entry["reason"]) == ("release", "customer copy")
+    page = cert.read_text()
+    assert "Release" in page and entry["old_sha256"] in page  # bound to the run file
+    capsys.readouterr()
+    assert main(["audit", "check", str(cert), "--archive", url]) == 0
+    assert f"released by {entry['who']}" in capsys.readouterr().out
+    cert.write_text(page.replace("R-1", "R-2"))
+    assert main(["audit", "check", str(cert), "--archive", url]) == 1
+    assert "NOT a released certificate" in capsys.readouterr().out

@@ -152,3 +152,53 @@ def test_balance_refuses_a_job_it_cannot_run(tmp_path: Path, capsys: Any) -> Non
     assert "no such job order waiting or running" in capsys.readouterr().err
     assert main([*base, "--job", "J-1", "--serial", "X"]) == 2
     assert "leave out --serial" in capsys.readouterr().err
+
+
+def test_the_stands_accounts_decide_who_may_send_jobs(tmp_path: Path) -> None:
+    """With accounts in the archive: anonymous and an operator read but may not send a
+    job (BadUserAccessDenied); a setter may; a wrong password does not log in."""
+    from asyncua import Client, ua
+    from asyncua.ua.uaerrors import BadUserAccessDenied
+
+    from stand.archive import Archive
+    from stand.plant import ResultServer
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    Archive(url).close()
+    (tmp_path / "pw").write_text("a-long-password\n")
+    for name, role in (("kim", "operator"), ("ana", "setter")):
+        assert main(["users", "add", name, "--role", role, "--password-file",
+                     str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    port = _port()
+    server = ResultServer(url, "stand-7", "127.0.0.1", port, rotor_types=lambda: ["demo"])
+    server.run_in_thread()
+    endpoint = f"opc.tcp://127.0.0.1:{port}/stand/"
+
+    async def store(user: str | None, password: str = "a-long-password") -> str:
+        client = Client(endpoint)
+        if user:
+            client.set_user(user)
+            client.set_password(password)
+        stage = "log-in"
+        try:
+            async with client:
+                stage = "call"
+                await client.load_data_type_definitions()
+                control, _, ns = await job_management(client)
+                await control.get_child(["0:CurrentState"])  # reading: anyone
+                bits = await control.call_method(
+                    ua.QualifiedName("Store", ns["i"]),
+                    _order(ua, f"J-{user}"),
+                    ua.Variant([], ua.VariantType.LocalizedText),
+                )
+                return f"stored {bits}"
+        except BadUserAccessDenied:
+            return f"denied at {stage}"
+
+    try:
+        got = {who: asyncio.run(store(who)) for who in (None, "kim", "ana")}
+        wrong = asyncio.run(store("ana", "not-her-password"))
+    finally:
+        server.stop()
+    assert got == {None: "denied at call", "kim": "denied at call", "ana": "stored 1"}, got
+    assert wrong == "denied at log-in"

@@ -107,12 +107,15 @@ def _button(driver: Any, text: str, timeout_s: float = 30.0) -> Any:
 
 
 def _see(driver: Any, text: str, timeout_s: float = 30.0) -> None:
+    """Wait until the page shows ``text`` (a page that navigates meanwhile replaces its
+    body: the stale body is looked at again)."""
+    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
-    WebDriverWait(driver, timeout_s, 0.1).until(
-        lambda d: text in d.find_element(By.TAG_NAME, "body").text, f"never saw {text!r}"
-    )
+    WebDriverWait(
+        driver, timeout_s, 0.1, ignored_exceptions=(StaleElementReferenceException,)
+    ).until(lambda d: text in d.find_element(By.TAG_NAME, "body").text, f"never saw {text!r}")
 
 
 def _type(driver: Any, label: str, text: str) -> None:
@@ -412,3 +415,93 @@ def test_the_mes_job_fills_start_and_a_started_one_starts(browser: Any, tmp_path
     assert run["job"] == "MES-8" and states["MES-8"]["run_id"] == run["id"]
     assert states["MES-8"]["state"] == ("Ended" if run["verdict"] == "pass" else "Running")
     assert states["MES-7"]["state"] == "AllowedToStart"  # shown, never started
+
+
+def _fetch(base: str, path: str, cookies: list[dict[str, Any]]) -> tuple[int, bytes]:
+    """GET ``path`` with the browser's cookies: the status and the body."""
+    jar = "; ".join(f"{c['name']}={c['value']}" for c in cookies)
+    req = urllib.request.Request(base + path, headers={"Cookie": jar})
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, r.read()
+    except urllib.error.HTTPError as exc:
+        return exc.code, exc.read()
+
+
+def _log_in(browser: Any, account: str, password: str) -> None:
+    """The log-in form filled and sent, once it is mounted (NiceGUI mounts the page after
+    its first HTML: an element found before may go stale)."""
+    from selenium.common.exceptions import StaleElementReferenceException
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    def fill(d: Any) -> bool:
+        d.find_element(By.NAME, "account").clear()
+        d.find_element(By.NAME, "account").send_keys(account)
+        d.find_element(By.NAME, "password").send_keys(password + "\n")
+        return True
+
+    WebDriverWait(browser, 30, 0.2, ignored_exceptions=(StaleElementReferenceException,)).until(
+        fill, "no log-in form"
+    )
+
+
+@pytest.mark.realtime
+def test_accounts_log_in_their_rights_and_a_released_certificate(
+    browser: Any, tmp_path: Path
+) -> None:
+    """With accounts the station asks who works it; the operator is the account; an
+    operator may measure but not release a certificate (403, saying why); a setter logs in
+    with a badge and releases it, bound to the run and journaled."""
+    from selenium.webdriver.common.by import By
+
+    from stand.archive.audit import entries, file_sha256
+    from stand.archive.query import Filters, history
+    from stand.cli import main
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    (tmp_path / "pw").write_text("a-long-password\n")
+    (tmp_path / "badge").write_text("BADGE-0042\n")
+    for name, role, extra in (
+        ("kim", "operator", []),
+        ("ana", "setter", ["--badge-file", str(tmp_path / "badge")]),
+    ):
+        assert main(["users", "add", name, "--role", role, "--password-file",
+                     str(tmp_path / "pw"), "--archive", url, *extra]) == 0  # fmt: skip
+    with served(tmp_path) as base:
+        browser.get(base + "/")
+        _see(browser, "Log in")
+        _shot(browser, tmp_path, "login")
+        _log_in(browser, "kim", "wrong-password")
+        _see(browser, "wrong account, password or badge")
+        _log_in(browser, "kim", "a-long-password")
+        _see(browser, "kim (operator)")
+        fixed = browser.execute_script(  # the operator is the account, not to be typed over
+            "const i = document.querySelector('input[aria-label=\"operator\"]');"
+            "return [i.value, i.readOnly];"
+        )
+        assert fixed == ["kim", True], fixed
+        _type(browser, "serial number", "A-1")
+        _button(browser, "Start measuring").click()
+        _button(browser, "Go to the correction", 60).click()
+        end = time.monotonic() + 60  # filed after the answer is shown: a hang guard
+        while not (found := history(url, Filters(serial="A-1"))) and time.monotonic() < end:
+            time.sleep(0.2)
+        (run,) = found
+        assert run["operator"] == "kim"
+        status, body = _fetch(base, f"/report/{run['id']}/pdf", browser.get_cookies())
+        assert status == 403 and b"kim is an operator" in body, body
+        _button(browser, "Log out").click()
+        _see(browser, "Log in")
+        time.sleep(0.5)  # the log-in page mounted (a scanner types into the field it finds)
+        browser.find_element(By.NAME, "badge").send_keys("BADGE-0042\n")  # code, then Enter
+        _see(browser, "ana (setter)")
+        _shot(browser, tmp_path, "who")
+        status, pdf = _fetch(base, f"/report/{run['id']}/pdf", browser.get_cookies())
+        assert status == 200 and pdf.startswith(b"%PDF"), pdf[:100]
+    kept = tmp_path / "released.pdf"
+    kept.write_bytes(pdf)
+    (release,) = entries(url, action="release")
+    assert release["who"] == "ana" and release["new_sha256"] == file_sha256(kept)
+    assert release["old_sha256"] == run["file_sha256"]  # bound to the run
+    assert main(["audit", "check", str(kept), "--archive", url]) == 0

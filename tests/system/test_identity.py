@@ -29,7 +29,7 @@ READ_ONLY = {"history", "stats", "health", "reprocess"}
 """Commands that read the archive and take no config (``--archive``, else the default)."""
 READS_WITH_CONFIG = {"opcua", "export", "jobs", "audit"}
 """Commands that read the archive their config names and write nothing into it."""
-JOURNAL_WITH_CONFIG = {"calibrate", "influence", "users"}
+JOURNAL_WITH_CONFIG = {"calibrate", "influence", "users", "report"}
 """Commands whose only writes to the archive their config names are audit entries
 (walked in tests/archive/test_audit.py and tests/calib/test_calibrate.py)."""
 

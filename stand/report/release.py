@@ -1,0 +1,54 @@
+"""A certificate released in the stand's software (21 CFR Part 11's electronic
+signature: the name, the time, the meaning, bound to the record): the signature block of
+:mod:`stand.report.certificate` replaced by the account that released it, when, what it
+means, and the SHA-256 of the run file it states."""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass
+
+from stand.report.certificate import RELEASE_END, RELEASE_START, local_time
+
+
+@dataclass(frozen=True)
+class Release:
+    """A certificate released in the stand's software: by whom, when, bound to what.
+
+    Parameters
+    ----------
+    who, role
+        The account (or ``os:USER`` from the command line) and its role (None: none).
+    at_utc
+        When, ISO 8601 in UTC.
+    run_sha256
+        The SHA-256 of the run file the certificate states (the archive's digest).
+    """
+
+    who: str
+    role: str | None
+    at_utc: str
+    run_sha256: str
+    meaning: str = "released"
+
+
+def released(page: str, r: Release) -> str:
+    """The certificate ``page`` with its signature block replaced by the release ``r``:
+    the account, the time (local and UTC), the meaning, and the run's SHA-256 it is bound
+    to (the audit trail keeps the released file's SHA-256: ``stand audit check FILE``)."""
+    head, _, rest = page.partition(RELEASE_START)
+    _, _, tail = rest.partition(RELEASE_END)
+    e = html.escape
+    role = f" ({e(r.role)})" if r.role else ""
+    block = (
+        "<div class=released><h2>Release</h2><table>"
+        f"<tr><th>released by</th><td>{e(r.who)}{role}</td></tr>"
+        f"<tr><th>on</th><td>{e(local_time(r.at_utc))} ({e(r.at_utc[:19].replace('T', ' '))} "
+        "UTC)</td></tr>"
+        f"<tr><th>meaning</th><td>{e(r.meaning)}: the rotor was balanced and measured as "
+        "this certificate states</td></tr>"
+        f"<tr><th>run file SHA-256</th><td class=digest>{e(r.run_sha256)}</td></tr>"
+        "</table><p class=muted>Signed electronically in the stand's software; the "
+        "stand's audit trail holds this document's SHA-256 (stand audit check).</p></div>"
+    )
+    return f"{head}{RELEASE_START}{block}{RELEASE_END}{tail}"

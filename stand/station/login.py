@@ -1,0 +1,111 @@
+"""Logging in at the station (:mod:`stand.station.sessions`): a plain form posted to
+``/login`` (account and password, or a badge a scanner types, then Enter), the session in
+an HttpOnly cookie that every screen and route reads, ``/logout``; and the checks of an
+account's rights before an action (a note on the screen, 403 on a route, saying why).
+"""
+
+from __future__ import annotations
+
+import html
+from typing import Any
+
+from fastapi import Request  # a route's request: FastAPI resolves it by name
+from nicegui import app, ui
+
+from stand.errors import UsageError
+from stand.station.service import Station
+from stand.station.sessions import Session, refusal
+
+COOKIE = "stand_session"
+"""The cookie that carries the session's token."""
+FORM = """
+<style>.login input { width: 100%; font-size: 1.4rem; padding: 8px;
+                      border: 2px solid #78909c; border-radius: 4px; }</style>
+<form class="login" method="post" action="/login" style="display:flex;flex-direction:column;
+      gap:18px;max-width:520px;font-size:1.4rem">
+  <label>account <input name="account" autocomplete="username" autofocus></label>
+  <label>password <input name="password" type="password" autocomplete="current-password"></label>
+  <label>or scan your badge <input name="badge" type="password" autocomplete="off"></label>
+  <button type="submit" style="font-size:1.4rem;padding:12px;background:#1976d2;color:#fff;
+          border:0;border-radius:4px">LOG IN</button>
+</form>
+"""
+
+
+def session_of(station: Station, request: Any) -> Session | None:
+    """The live session the request's cookie names (None: none)."""
+    return station.sessions.get(request.cookies.get(COOKIE) if request is not None else None)
+
+
+def current(station: Station) -> Session | None:
+    """The session of this screen's browser (its idle time starts again)."""
+    return station.sessions.get(app.storage.client.get("session"))
+
+
+def require(station: Station, right: str, what: str) -> None:
+    """Refuse (UsageError, which the screen shows) unless this screen's account may
+    ``what`` (``right``); a lone stand (no accounts) allows everything."""
+    if not station.sessions.required():
+        return
+    why = refusal(current(station), right, what)
+    if why is not None:
+        raise UsageError(f"refused: {why}")
+
+
+def login_screen(failed: bool) -> None:
+    """The log-in form (``failed``: the last try was refused)."""
+    ui.label("Log in").classes("big")
+    if failed:
+        ui.label("wrong account, password or badge (or the account is disabled)").classes(
+            "text-h6 text-red-10"
+        ).mark("login-failed")
+    ui.html(FORM, sanitize=False).mark("login")  # our own constant form, nothing typed in it
+
+
+def who_line(station: Station, session: Session | None) -> None:
+    """The header's part that says who works the station, with Log out."""
+    if not station.sessions.required():
+        ui.label("lone stand: no accounts (stand users add makes the first)").classes(
+            "text-body1"
+        ).mark("who")
+        return
+    assert session is not None
+    ui.label(f"{session.name} ({session.role})").classes("text-h6").mark("who")
+    ui.button("Log out", on_click=lambda: ui.navigate.to("/logout")).props("flat color=white").mark(
+        "logout"
+    )
+
+
+def add_login_routes(station: Station) -> None:
+    """``POST /login`` (the form) and ``GET /logout``."""
+    from fastapi.responses import RedirectResponse
+
+    @app.post("/login")
+    async def login(request: Request) -> Any:
+        form = await request.form()
+        account, password = str(form.get("account", "")), str(form.get("password", ""))
+        badge = str(form.get("badge", ""))
+        s = (station.sessions.log_in_badge(badge) if badge
+             else station.sessions.log_in(account, password))  # fmt: skip
+        reply = RedirectResponse("/" if s else "/?login=failed", status_code=303)
+        if s is not None:
+            reply.set_cookie(COOKIE, s.token, httponly=True, samesite="strict")
+        return reply
+
+    @app.get("/logout")
+    def logout(request: Request) -> Any:
+        station.sessions.log_out(request.cookies.get(COOKIE))
+        reply = RedirectResponse("/", status_code=303)
+        reply.delete_cookie(COOKIE)
+        return reply
+
+
+def forbidden(station: Station, request: Any, right: str, what: str) -> Any | None:
+    """A 403 answer saying why this request's account may not ``what``; None if it may (or
+    the stand has no accounts)."""
+    from fastapi.responses import PlainTextResponse
+
+    if not station.sessions.required():
+        return None
+    why = refusal(session_of(station, request), right, what)
+    return None if why is None else PlainTextResponse(html.unescape(why), status_code=403)

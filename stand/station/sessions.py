@@ -1,0 +1,105 @@
+"""Who is logged in at the station: sessions of the archive's accounts
+(:mod:`stand.archive.accounts`), each ending :data:`IDLE_S` after its last use.
+
+A station whose archive has no account is a lone stand: nobody logs in, the screens
+say so, and the station serves this machine only (``stand station``'s bind rule).  Once
+an account exists, every screen but the log-in needs a session, and each action the
+role it takes (:func:`stand.archive.accounts.may`).  No UI code here.
+"""
+
+from __future__ import annotations
+
+import secrets
+import threading
+import time
+from dataclasses import dataclass, replace
+
+from stand.archive.accounts import accounts_of, check_badge, check_password, may
+from stand.errors import StandError
+
+IDLE_S = 15 * 60.0
+"""A session ends this long after its last use [s]."""
+CHECK_ACCOUNTS_S = 5.0
+"""How long the answer "are there accounts?" is kept before the archive is asked again [s]."""
+
+
+@dataclass(frozen=True)
+class Session:
+    """One logged-in account."""
+
+    name: str
+    role: str
+    token: str
+    expires_s: float
+    """``time.monotonic()`` after which it has ended."""
+
+    def may(self, right: str) -> bool:
+        return may(self.role, right)
+
+
+class Sessions:
+    """The station's sessions (thread-safe: screens and routes ask from any thread)."""
+
+    def __init__(self, archive_url: str, idle_s: float = IDLE_S) -> None:
+        self.archive_url, self.idle_s = archive_url, idle_s
+        self._by_token: dict[str, Session] = {}
+        self._lock = threading.Lock()
+        self._required: tuple[float, bool] = (-1e9, False)
+
+    def required(self) -> bool:
+        """Whether the archive has an account (then every screen needs a session); an
+        archive that does not answer requires them (never open by accident)."""
+        at, answer = self._required
+        if time.monotonic() - at < CHECK_ACCOUNTS_S:
+            return answer
+        try:
+            answer = bool(accounts_of(self.archive_url))
+        except StandError:
+            answer = True
+        self._required = (time.monotonic(), answer)
+        return answer
+
+    def log_in(self, name: str, password: str) -> Session | None:
+        """A new session for ``name`` if ``password`` is its password (else None)."""
+        found = check_password(self.archive_url, name, password)
+        return None if found is None else self._open(found["name"], found["role"])
+
+    def log_in_badge(self, code: str) -> Session | None:
+        """A new session for the account whose badge carries ``code`` (else None)."""
+        found = check_badge(self.archive_url, code.strip())
+        return None if found is None else self._open(found["name"], found["role"])
+
+    def _open(self, name: str, role: str) -> Session:
+        s = Session(name, role, secrets.token_urlsafe(24), time.monotonic() + self.idle_s)
+        with self._lock:
+            self._by_token[s.token] = s
+        return s
+
+    def get(self, token: str | None) -> Session | None:
+        """The live session of ``token`` (its idle time starts again), or None: unknown,
+        ended, or logged out."""
+        if not token:
+            return None
+        now = time.monotonic()
+        with self._lock:
+            s = self._by_token.get(token)
+            if s is None or s.expires_s < now:
+                self._by_token.pop(token, None)
+                return None
+            s = self._by_token[token] = replace(s, expires_s=now + self.idle_s)
+        return s
+
+    def log_out(self, token: str | None) -> None:
+        with self._lock:
+            self._by_token.pop(token or "", None)
+
+
+def refusal(session: Session | None, right: str, what: str) -> str | None:
+    """Why ``session`` may not do ``what`` (needing ``right``); None if it may."""
+    if session is None:
+        return f"log in to {what}"
+    if session.may(right):
+        return None
+    allowed = [r for r in ("operator", "setter", "engineer", "administrator") if may(r, right)]
+    return (f"{session.name} is {'an' if session.role[0] in 'aeiou' else 'a'} {session.role}: "
+            f"to {what} takes {' or '.join(allowed)}")  # fmt: skip

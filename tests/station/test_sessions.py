@@ -1,0 +1,54 @@
+"""The station's sessions (:mod:`stand.station.sessions`): log-in by password or badge,
+the idle end, and why an account may not do something."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+
+from stand.archive.accounts import add_account, set_account
+from stand.station.sessions import Sessions, refusal
+
+
+@pytest.fixture
+def url(tmp_path: Path) -> str:
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    add_account(url, "kim", "operator", "a-long-password", badge="B-17")
+    add_account(url, "ana", "engineer", "another-password")
+    return url
+
+
+def test_a_lone_stand_needs_no_session(tmp_path: Path) -> None:
+    assert Sessions(f"sqlite:///{tmp_path / 'a.sqlite'}").required() is False
+
+
+def test_password_badge_and_the_idle_end(url: str) -> None:
+    s = Sessions(url, idle_s=0.3)
+    assert s.required()
+    assert s.log_in("kim", "wrong") is None and s.log_in("nobody", "a-long-password") is None
+    kim = s.log_in("kim", "a-long-password")
+    assert kim is not None and (kim.name, kim.role) == ("kim", "operator")
+    assert s.log_in_badge("B-17").name == "kim" and s.log_in_badge("B-18") is None
+    assert s.get(kim.token) is not None
+    time.sleep(0.5)  # idle past its end (0.3 s): gone
+    assert s.get(kim.token) is None
+    ana = s.log_in("ana", "another-password")
+    s.log_out(ana.token)
+    assert s.get(ana.token) is None
+    set_account(url, "kim", active=False)
+    assert s.log_in("kim", "a-long-password") is None and s.log_in_badge("B-17") is None
+
+
+def test_a_refusal_says_who_may(url: str) -> None:
+    s = Sessions(url)
+    kim, ana = s.log_in("kim", "a-long-password"), s.log_in("ana", "another-password")
+    assert refusal(None, "measure", "measure a rotor") == "log in to measure a rotor"
+    assert refusal(kim, "measure", "measure a rotor") is None
+    assert refusal(kim, "release", "release a certificate") == (
+        "kim is an operator: to release a certificate takes setter or engineer or administrator"
+    )
+    assert refusal(ana, "accounts", "manage accounts") == (
+        "ana is an engineer: to manage accounts takes administrator"
+    )
