@@ -93,6 +93,27 @@ def record(url: str, change: Change) -> int:
         ) from exc
 
 
+def config_seen(url: str, path: str | Path, user: str | None = None) -> int | None:
+    """A rotor type's configuration about to be measured with: one ``config`` entry when
+    its SHA-256 is not the one the journal last recorded for that file (edited on disk
+    since, or first used); the entry's id, or None when nothing changed.  Who edited it
+    is not known here: the entry says who found it."""
+    import sqlalchemy as sa
+
+    name = Path(path).name
+    new = file_sha256(path)
+    with Archive(url) as archive, archive.transaction() as conn:
+        last = conn.execute(sa.select(audit.c.new_sha256).where(
+            audit.c.action == "config", audit.c.subject == name)
+            .order_by(audit.c.id.desc()).limit(1)).scalar()  # fmt: skip
+    if new is None or last == new:
+        return None
+    why = "first used" if last is None else "changed on disk since the last entry"
+    return record(url, Change("config", name, last, new,
+                              f"{why}; found by {user or os_user()} before a run",
+                              who=user or os_user()))  # fmt: skip
+
+
 def os_user() -> str:
     """Who runs this process, as the journal names a CLI user (``os:name``)."""
     try:

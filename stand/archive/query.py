@@ -196,6 +196,17 @@ def serials_by_digest(url: str, file_sha256s: list[str]) -> dict[str, str]:
     return {str(d): str(s) for d, s in found if s}
 
 
+def serials_starting(url: str, prefix: str) -> list[str]:
+    """Every archived serial that starts with ``prefix`` (a serial rule's day)."""
+    import sqlalchemy as sa
+
+    like = prefix.replace("\\", "\\\\").replace("%", "\\%").replace("_", "\\_") + "%"
+    with Archive(url) as archive, archive.transaction() as conn:
+        found = conn.execute(sa.select(runs.c.serial).distinct()
+                             .where(runs.c.serial.like(like, escape="\\"))).scalars()  # fmt: skip
+        return [str(s) for s in found if s]
+
+
 def run_digest(url: str, run_id: int) -> str | None:
     """The SHA-256 the archive keeps of run ``run_id``'s file (None: no such run)."""
     import sqlalchemy as sa

@@ -13,6 +13,7 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
+from stand.config.serials import SerialRule
 from stand.config.tables import STRICT, Inertia, Length, Mass, Name
 from stand.config.tolerance import KeyTable
 from stand.core.beam import beam_rotor
@@ -104,6 +105,9 @@ class RotorTable(BaseModel):
     R2: Length
     type: Name | None = None
     """The rotor type's name (optional): stored with each run and influence matrix."""
+    serial_rule: SerialRule | None = None
+    """How the station makes a serial for a rotor without one (optional):
+    ``"AUG-{date}-{n:04}"`` (:mod:`stand.config.serials`)."""
     bending_hz: Annotated[FiniteFloat, Field(gt=0.0, le=1e6)] | None = None
     """The rotor's first free-free bending frequency [Hz] (optional): the rigid model's
     limit is judged against it (:mod:`stand.core.flexible`)."""

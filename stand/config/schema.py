@@ -200,7 +200,7 @@ class Config(BaseModel):
         values = {**self.stand.model_dump(), **self.rotor.model_dump()}
         for key in ("reference_angle_deg", "clock_tolerance_pct", "type", "name", "calibrated",
                     "evaluation_interval_days",
-                    "id", "bending_hz", "shaft", "planes", "keys"):  # fmt: skip
+                    "id", "bending_hz", "shaft", "planes", "keys", "serial_rule"):  # fmt: skip
             del values[key]
         return StandParameters(**values)
 

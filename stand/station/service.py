@@ -23,7 +23,10 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import archive_result, drift_rows
+from stand.archive.audit import config_seen
+from stand.archive.query import serials_starting
 from stand.config import default_stand_id, load_config, rotor_types_in
+from stand.config.serials import next_serial, rule_prefix
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.files import output
@@ -173,15 +176,31 @@ class Station(ArchiveSide):
         if source not in self.sources():
             raise UsageError(f"no source {source!r}: the bus or one of the scenes")
         if not (job.serial or "").strip() and self._state.phase != "measuring":
-            raise UsageError(
-                "enter the rotor's serial number first (type it or scan it): without one "
-                "the rotor is anonymous in the archive, Q-DAS and OPC UA"
-            )
+            job = replace(job, serial=self._generated_serial(config))
         if job.job_id and self._state.phase != "measuring":
             self._take_job(job.job_id, rotor_type)
+        if self._state.phase != "measuring":  # a rotor type edited on disk: journaled
+            try:
+                config_seen(self.archive_url, config, job.operator)
+            except StandError as exc:  # the run itself will say the archive is out of reach
+                log.warning("rotor type %s not checked against the audit trail: %s",
+                            rotor_type, exc)  # fmt: skip
         self._launch(
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )
+
+    def _generated_serial(self, config: Path) -> str:
+        """The next serial of the rotor type's ``[rotor] serial_rule`` for today (local),
+        after those archived; UsageError where the rotor type has no rule."""
+        rule = load_config(str(config))[0].rotor.serial_rule
+        if rule is None:
+            raise UsageError(
+                "enter the rotor's serial number first (type it or scan it): without one "
+                "the rotor is anonymous in the archive, Q-DAS and OPC UA (or give the rotor "
+                "type a [rotor] serial_rule)"
+            )
+        day = dt.datetime.now().astimezone().date()
+        return next_serial(rule, day, serials_starting(self.archive_url, rule_prefix(rule, day)))
 
     def latest(self) -> Any:
         """The rotor's latest finished run (the one a correction and a check start from)."""

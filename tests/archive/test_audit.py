@@ -191,3 +191,22 @@ def test_a_cli_release_is_journaled_and_checked(
     cert.write_text(page.replace("R-1", "R-2"))
     assert main(["audit", "check", str(cert), "--archive", url]) == 1
     assert "NOT a released certificate" in capsys.readouterr().out
+
+
+def test_a_rotor_type_edited_on_disk_is_journaled_when_next_used(tmp_path: Path) -> None:
+    """The station's rotor type: one ``config`` entry when first used, none while it stays
+    the same, one more after it was edited (old -> new SHA-256)."""
+    from stand.archive.audit import config_seen, file_sha256
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    cfg = tmp_path / "auger.toml"
+    cfg.write_text("[rotor]\nR1 = 0.09\n")
+    first = file_sha256(cfg)
+    assert config_seen(url, cfg, "kim") == 1
+    assert config_seen(url, cfg, "kim") is None
+    cfg.write_text("[rotor]\nR1 = 0.10\n")
+    assert config_seen(url, cfg, "ana") == 2
+    used, edited = entries(url)
+    assert (used["old_sha256"], used["new_sha256"]) == (None, first)
+    assert (edited["old_sha256"], edited["new_sha256"]) == (first, file_sha256(cfg))
+    assert edited["who"] == "ana" and "changed on disk" in edited["reason"]

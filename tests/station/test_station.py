@@ -442,3 +442,30 @@ def test_the_station_archives_where_its_rotor_types_say(tmp_path: Path) -> None:
     (tmp_path / "c.toml").write_text(text + '\n[archive]\nurl = "sqlite:////elsewhere.sqlite"\n')
     with pytest.raises(UsageError, match="different archives"):
         Station.rotor_types_archive(tmp_path)
+
+
+def test_a_rotor_type_with_a_serial_rule_makes_the_serial(tmp_path: Path) -> None:
+    """A rotor without a serial under ``[rotor] serial_rule``: the next of the day, after
+    those archived (two rotors: -0001, -0002)."""
+    import datetime as dt
+
+    text = (Path(__file__).parents[2] / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    (folder / "demo-auger.toml").write_text(
+        text.replace(
+            'type = "demo-auger"', 'type = "demo-auger"\nserial_rule = "AUG-{date}-{n:04}"'
+        )
+    )
+    st = Station(folder, tmp_path / "runs", f"sqlite:///{tmp_path / 'a.sqlite'}", _targets)
+    today = dt.datetime.now().astimezone().strftime("%Y%m%d")
+    made = []
+    for _ in range(2):
+        st.start("demo-auger", "demo", Job())
+        s = st.wait(60)
+        made.append(s.job.serial)
+        end = time.monotonic() + 60  # filed after the answer: a hang guard
+        while st.snapshot().run_id is None and time.monotonic() < end:
+            time.sleep(0.05)
+        st.next_rotor()
+    assert made == [f"AUG-{today}-0001", f"AUG-{today}-0002"]
