@@ -67,8 +67,8 @@ def _checked(name: str, role: str | None, password: str | None) -> None:
         raise UsageError(f"a password of at least {MIN_PASSWORD} printable characters")
 
 
-def add_account(url: str, name: str, role: str, password: str, badge: str | None = None
-                ) -> dict[str, Any]:  # fmt: skip
+def add_account(url: str, name: str, role: str, password: str, badge: str | None = None,
+                language: str | None = None) -> dict[str, Any]:  # fmt: skip
     """A new account; the row as :func:`account` gives it (UsageError if the name is
     taken or a field is refused)."""
     import sqlalchemy as sa
@@ -78,6 +78,7 @@ def add_account(url: str, name: str, role: str, password: str, badge: str | None
     _checked(name, role, password)
     row = {"name": name, "role": role, "password_hash": _hasher().hash(password),
            "badge_sha256": None if badge is None else sha256_of(badge), "active": True,
+           "language": language,
            "created_at": _now(), "changed_at": _now()}  # fmt: skip
     with Archive(url) as archive, archive.transaction() as conn:
         if conn.execute(sa.select(accounts.c.name).where(accounts.c.name == name)).first():
@@ -87,7 +88,8 @@ def add_account(url: str, name: str, role: str, password: str, badge: str | None
 
 
 def set_account(url: str, name: str, *, role: str | None = None, password: str | None = None,
-                active: bool | None = None) -> tuple[dict[str, Any], dict[str, Any]]:  # fmt: skip
+                active: bool | None = None, language: str | None = None
+                ) -> tuple[dict[str, Any], dict[str, Any]]:  # fmt: skip
     """Change an account; (before, after) as :func:`account` gives them."""
     import sqlalchemy as sa
 
@@ -99,6 +101,8 @@ def set_account(url: str, name: str, *, role: str | None = None, password: str |
         changes["password_hash"] = _hasher().hash(password)
     if active is not None:
         changes["active"] = active
+    if language is not None:
+        changes["language"] = language
     with Archive(url) as archive, archive.transaction() as conn:
         before = conn.execute(sa.select(accounts).where(accounts.c.name == name)).first()
         if before is None:
@@ -129,7 +133,7 @@ def _public(row: dict[str, Any]) -> dict[str, Any]:
     """An account without its secrets (a digest of them, for the journal)."""
     from stand.archive.audit import sha256_of
 
-    state = {k: row[k] for k in ("name", "role", "active")}
+    state = {k: row.get(k) for k in ("name", "role", "active", "language")}
     state["credentials_sha256"] = sha256_of(f"{row['password_hash']}|{row['badge_sha256']}")
     return {**state, "created_at": row["created_at"], "changed_at": row["changed_at"]}
 

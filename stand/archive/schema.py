@@ -212,6 +212,7 @@ accounts = Table(
     Column("password_hash", Text, nullable=False),  # argon2id
     Column("badge_sha256", String(64)),  # a badge's bar code, hashed
     Column("active", Boolean, nullable=False),
+    Column("language", String(8)),  # the screens' language (None: the station's)
     Column("created_at", String(40), nullable=False),
     Column("changed_at", String(40), nullable=False),
 )  # revision 0009: the people who work the stand (stand.archive.accounts)

@@ -295,6 +295,7 @@ def account_row(row: Any, url: str, roles: tuple[str, ...]) -> dict[str, Any]:
     if r.get("badge_sha256") is not None:
         r.digest("badge_sha256")
     r.flag("active_raw" if r.has("active_raw") else "active")
+    r.text("language", 8)
     r.time("created_at")
     r.time("changed_at")
     return dict(r.m)

@@ -11,6 +11,7 @@ from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
 from stand.config import data_folder
 from stand.errors import UsageError
 from stand.plant import ResultServer, check_bind, read_token
+from stand.report.language import LANGUAGES
 from stand.solve.pipeline import precision_targets
 from stand.station import Station
 from stand.station.pages import serve
@@ -42,6 +43,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--opcua-port", type=int, default=4840, help="(default: %(default)s)")
     p.add_argument(
+        "--lang",
+        choices=tuple(LANGUAGES),
+        default="en",
+        help="the screens' language where the account names none (default: en)",
+    )
+    p.add_argument(
         "--max-seconds",
         type=float,
         default=120.0,
@@ -71,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         )  # fmt: skip
 
     station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
+    station.default_language = args.lang
     if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
 
         def state() -> str:

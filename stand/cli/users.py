@@ -17,6 +17,7 @@ from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError
+from stand.report.language import LANGUAGES
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,6 +33,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="its password (first line); "
         "without it the password is asked for (twice) or read from stdin",
+    )
+    p.add_argument(
+        "--language",
+        choices=tuple(LANGUAGES),
+        help="the screens' language for this account (default: the station's --lang)",
     )
     p.add_argument(
         "--badge-file",
@@ -85,17 +91,18 @@ def run(args: argparse.Namespace) -> int:
         if not args.role:
             raise UsageError("stand users add: --role is required")
         badge = _first_line(args.badge_file, "a badge code") if args.badge_file else None
-        before, after = None, add_account(url, args.name, args.role, _password(args), badge)
+        before, after = None, add_account(url, args.name, args.role, _password(args), badge,
+                                          args.language)  # fmt: skip
     else:
         password = _password(args) if args.password_file else None
         active = True if args.enable else False if args.disable else None
-        if args.role is None and password is None and active is None:
+        if args.role is None and password is None and active is None and not args.language:
             raise UsageError(
                 "stand users set: nothing to change (--role, --password-file, "
-                "--disable or --enable)"
+                "--language, --disable or --enable)"
             )
         before, after = set_account(url, args.name, role=args.role, password=password,
-                                    active=active)  # fmt: skip
+                                    active=active, language=args.language)  # fmt: skip
     entry = record(url, Change("account", args.name, _digest(before), _digest(after),
                                args.reason))  # fmt: skip
     state = "active" if after["active"] else "disabled"

@@ -13,7 +13,9 @@ import math
 from collections.abc import Sequence
 from html import escape
 
-SEEN_FROM = "seen from the end where the rotor turns counter-clockwise"
+from stand.report.language import ENGLISH, N_, Language
+
+SEEN_FROM = N_("seen from the end where the rotor turns counter-clockwise")
 """The stated end the face is drawn from (the arrow shows the rotation)."""
 R_FACE = 150.0
 """The face's radius in the drawing's units (the view box is 2 x 200 wide)."""
@@ -25,7 +27,7 @@ def _xy(angle_deg: float, r: float) -> tuple[float, float]:
     return r * math.sin(a), -r * math.cos(a)
 
 
-def _rotation_arrow() -> str:
+def _rotation_arrow(_: Language) -> str:
     """An arc outside the face, lower left, from 240 deg back to 200 deg: the rotor turns
     that way (against the angles)."""
     r = R_FACE + 20
@@ -34,12 +36,14 @@ def _rotation_arrow() -> str:
     tip = _xy(198, r)
     wing1, wing2 = _xy(208, r - 9), _xy(208, r + 9)
     lx, ly = _xy(222, r + 16)
+    word = escape(_("rotation"))
     return (
         f'<path d="M {x0:.1f} {y0:.1f} A {r} {r} 0 0 0 {x1:.1f} {y1:.1f}" fill="none" '
         f'stroke="#222" stroke-width="3"/>'
         f'<polygon points="{tip[0]:.1f},{tip[1]:.1f} {wing1[0]:.1f},{wing1[1]:.1f} '
         f'{wing2[0]:.1f},{wing2[1]:.1f}" fill="#222"/>'
-        f'<text x="{lx:.1f}" y="{ly + 10:.1f}" font-size="20" text-anchor="end">rotation</text>'
+        f'<text x="{lx - 34:.1f}" y="{ly + 24:.1f}" font-size="20" text-anchor="middle">'
+        f"{word}</text>"
     )
 
 
@@ -50,6 +54,7 @@ def face_svg(
     position1_deg: float = 0.0,
     action: str = "add",
     title: str = "",
+    words: Language = ENGLISH,
 ) -> str:
     """The face of one correction plane, as SVG text.
 
@@ -64,18 +69,22 @@ def face_svg(
         ``add`` (a weight) or ``remove`` (drill): how the masses are drawn.
     title
         Text above the face.
+    words
+        The language of its words.
     """
+    _ = words
+    mark = escape(_("reference mark"))
     parts = [
         '<svg xmlns="http://www.w3.org/2000/svg" viewBox="-215 -200 430 400" '
         'role="img" font-family="sans-serif">',
-        f"<title>{escape(title)} ({SEEN_FROM})</title>",
+        f"<title>{escape(title)} ({escape(_(SEEN_FROM))})</title>",
         f'<circle r="{R_FACE}" fill="#e8e8e8" stroke="#555" stroke-width="3"/>',
         '<circle r="28" fill="#bbb" stroke="#555" stroke-width="2"/>',
         # the reference mark: a triangle pointing at the face from outside, at the top
         f'<polygon points="0,{-R_FACE - 2} -11,{-R_FACE - 22} 11,{-R_FACE - 22}" fill="#c00"/>',
         f'<text x="-16" y="{-R_FACE - 8}" font-size="20" text-anchor="end" fill="#c00">'
-        "reference mark</text>",
-        _rotation_arrow(),
+        f"{mark}</text>",
+        _rotation_arrow(_),
     ]
     if positions:
         for k in range(positions):

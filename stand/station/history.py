@@ -9,6 +9,7 @@ comes from :class:`stand.station.service.Station`.
 from __future__ import annotations
 
 import datetime as dt
+import html
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -17,13 +18,19 @@ from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
 from stand.report import Display
-from stand.station.login import forbidden, session_of
+from stand.report.language import ENGLISH, N_, Language
+from stand.station.login import forbidden, session_of, words
 from stand.station.service import Station
 
 TOAST: Literal["top-right"] = "top-right"
 """Where the screens' notes appear: the header's corner, never over a control (the
 screens' buttons are at their foot, where Quasar's default put the notes)."""
 Kind = Literal["positive", "negative", "warning"]
+COLUMNS = (N_("report"), N_("run"), N_("time"), N_("serial"), N_("rotor type"), N_("verdict"),
+           N_("plane 1"), N_("plane 2"), N_("note"))  # fmt: skip
+"""History's columns (their keys are these English words)."""
+VERDICT_WORDS = {"pass": N_("pass"), "fail": N_("fail"), "undecided": N_("undecided"),
+                 "none": N_("none")}  # fmt: skip
 
 
 def notify(text: str, kind: Kind, *, multi_line: bool = False, timeout: int = 5000) -> None:
@@ -46,53 +53,60 @@ def guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], No
     return run
 
 
-def _health_panel(station: Station) -> None:
+def _health_panel(station: Station, _: Language) -> None:
     """Is the stand still as calibrated? One line per rotor type and speed (stand health)."""
     try:
         out = station.health()
     except StandError as exc:
-        ui.label(f"stand health: {exc}").classes("text-body1")
+        ui.label(_("stand health: {why}").format(why=exc)).classes("text-body1")
         return
     with ui.card().classes("w-full").mark("health"):
         for e in out.get("evaluations", []):
             tone = {"due": "pass", "overdue": "fail", "never": "fail"}[e["state"]]
             ui.label(e["line"]).classes(f"text-h6 {tone}").mark("evaluation-due")
         if not out["groups"]:
-            ui.label("Stand health: no calibration data yet (confirm corrections as applied)")
+            ui.label(_("Stand health: no calibration data yet (confirm corrections as applied)"))
         for g in out["groups"]:
             n = g["data"]
-            where = f"{g['rotor_type'] or 'rotor'} at {g['rpm']:.0f} rpm, {n} rotor{'s' * (n != 1)}"
+            where = (
+                _("{type} at {rpm} rpm, {n} rotor")
+                if n == 1
+                else _("{type} at {rpm} rpm, {n} rotors")
+            ).format(type=g["rotor_type"] or _("rotor"), rpm=f"{g['rpm']:.0f}", n=n)
             if not g["alarm"]:
-                ui.label(f"Stand health ({where}): as calibrated").classes("text-h6 pass")
+                ui.label(_("Stand health ({where}): as calibrated").format(where=where)).classes(
+                    "text-h6 pass"
+                )
                 continue
             m = g["moved"] or {}
             what = f": {m.get('part', '')} {m.get('change', 0):+.1f} {m.get('unit', '')}"
-            ui.label(f"Stand health ({where}): RECALIBRATE{what}").classes("text-h6 fail")
+            ui.label(
+                _("Stand health ({where}): RECALIBRATE{what}").format(where=where, what=what)
+            ).classes("text-h6 fail")
 
 
 def history_screen(station: Station) -> None:
     """History: the archive by serial and rotor type; each run opens its report; the stand's
     health from its corrected rotors."""
-    ui.label("History").classes("big")
-    _health_panel(station)
+    _ = words(station)
+    ui.label(_("History")).classes("big")
+    _health_panel(station, _)
     with ui.row().classes("items-end gap-4"):
-        serial = ui.input("serial number").mark("history-serial")
-        rotor = ui.select(["", *station.rotor_types()], label="rotor type", value="")
+        serial = ui.input(_("serial number")).mark("history-serial")
+        rotor = ui.select(["", *station.rotor_types()], label=_("rotor type"), value="")
         rotor.classes("w-64").mark("history-type")
-        found = ui.button("Search").props("size=lg").mark("history-search")
+        found = ui.button(_("Search")).props("size=lg").mark("history-search")
 
         def export() -> None:
             if not rotor.value:
-                notify("choose a rotor type to export", "warning")
+                notify(_("choose a rotor type to export"), "warning")
                 return
             ui.navigate.to(f"/export/qdas/{rotor.value}", new_tab=True)
 
-        ui.button("Export Q-DAS (.dfq)", on_click=export).props("size=lg outline").mark(
+        ui.button(_("Export Q-DAS (.dfq)"), on_click=export).props("size=lg outline").mark(
             "history-export"
         )
-    columns = [{"name": k, "label": k, "field": k, "align": "left"}
-               for k in ("report", "run", "time", "serial", "rotor type", "verdict",
-                         "plane 1", "plane 2", "note")]  # fmt: skip
+    columns = [{"name": k, "label": _(k), "field": k, "align": "left"} for k in COLUMNS]
     table = (  # the report first; long cells wrap, so the table fits a 1280 px screen
         ui.table(columns=columns, rows=[], row_key="run", selection="multiple")
         .props("dense wrap-cells")
@@ -103,17 +117,17 @@ def history_screen(station: Station) -> None:
     def across_speeds() -> None:
         ids = sorted(r["run"] for r in table.selected)
         if len(ids) < 2:
-            notify("tick one rotor's runs at two speeds or more", "warning")
+            notify(_("tick one rotor's runs at two speeds or more"), "warning")
             return
         ui.navigate.to(f"/speeds/{','.join(map(str, ids))}", new_tab=True)
 
-    ui.button("Correct across speeds", on_click=across_speeds).props("size=lg outline").mark(
-        "history-speeds"
-    )
+    ui.button(_("Correct across speeds"), on_click=across_speeds).props(
+        "size=lg outline").mark("history-speeds")  # fmt: skip
+    report = html.escape(_("report"))
     table.add_slot(
         "body-cell-report",
-        '<q-td :props="props"><a :href="props.value" target="_blank">report</a>'
-        ' &middot; <a :href="props.value + \'/pdf\'" target="_blank">PDF</a></q-td>',
+        f'<q-td :props="props"><a :href="props.value" target="_blank">{report}'
+        '</a> &middot; <a :href="props.value + \'/pdf\'" target="_blank">PDF</a></q-td>',
     )
 
     def search() -> None:
@@ -123,19 +137,24 @@ def history_screen(station: Station) -> None:
             notify(str(exc), "negative")
             return
         units = {t: Display(*station.display_units(t)) for t in {r["rotor_type"] for r in rows}}
-        table.rows = [_history_row(r, units[r["rotor_type"]]) for r in rows]
+        table.rows = [_history_row(r, units[r["rotor_type"]], _) for r in rows]
         table.update()
 
     found.on_click(search)
     search()
 
 
-def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
+def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH) -> dict[str, Any]:
     """One archived run as a row, its unbalances in its rotor type's units."""
 
     def plane(p: dict[str, Any]) -> str:
         urr = "" if p["urr"] is None else f", URR {100 * p['urr']:.1f} %"
-        return f"{units.unbalance(p['unbalance_g_mm'])} at {p['angle_deg']:.0f}°{urr}"
+        return (
+            _("{unbalance} at {angle}°").format(
+                unbalance=units.unbalance(p["unbalance_g_mm"]), angle=f"{p['angle_deg']:.0f}"
+            )
+            + urr
+        )
 
     planes = {p["plane"]: plane(p) for p in r["planes"]}
     return {
@@ -143,7 +162,8 @@ def _history_row(r: dict[str, Any], units: Display) -> dict[str, Any]:
         "time": _local(r["start_time"]),
         "serial": r["serial"] or "",
         "rotor type": r["rotor_type"] or "",
-        "verdict": (r["verdict"] or "") + (" (check)" if r["checks_run"] else ""),
+        "verdict": _(VERDICT_WORDS.get(r["verdict"], r["verdict"] or ""))
+        + (_(" (check)") if r["checks_run"] else ""),
         "plane 1": planes.get(1, ""),
         "plane 2": planes.get(2, ""),
         "note": r.get("note") or "",  # a balancer test's verdict, the operator's note
@@ -204,7 +224,7 @@ def add_routes(station: Station) -> None:
 
     @app.get("/report/{run_id}/pdf")
     def certificate_pdf(run_id: int, request: Request) -> Any:
-        refused = forbidden(station, request, "release", "release a certificate")
+        refused = forbidden(station, request, "release", N_("release a certificate"))
         if refused is not None:
             return refused
         session = session_of(station, request)

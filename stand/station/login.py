@@ -13,23 +13,32 @@ from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
 from stand.errors import UsageError
+from stand.report.language import N_, Language
 from stand.station.service import Station
-from stand.station.sessions import Session, refusal
+from stand.station.sessions import Session, allowed_roles
 
+FORM_WORDS = {"account": N_("account"), "password": N_("password"),
+              "badge": N_("or scan your badge"), "log_in": N_("LOG IN")}  # fmt: skip
+"""The log-in form's words."""
 COOKIE = "stand_session"
 """The cookie that carries the session's token."""
 FORM = """
-<style>.login input { width: 100%; font-size: 1.4rem; padding: 8px;
-                      border: 2px solid #78909c; border-radius: 4px; }</style>
+<style>.login input {{ width: 100%; font-size: 1.4rem; padding: 8px;
+                      border: 2px solid #78909c; border-radius: 4px; }}</style>
 <form class="login" method="post" action="/login" style="display:flex;flex-direction:column;
       gap:18px;max-width:520px;font-size:1.4rem">
-  <label>account <input name="account" autocomplete="username" autofocus></label>
-  <label>password <input name="password" type="password" autocomplete="current-password"></label>
-  <label>or scan your badge <input name="badge" type="password" autocomplete="off"></label>
+  <label>{account} <input name="account" autocomplete="username" autofocus></label>
+  <label>{password} <input name="password" type="password" autocomplete="current-password"></label>
+  <label>{badge} <input name="badge" type="password" autocomplete="off"></label>
   <button type="submit" style="font-size:1.4rem;padding:12px;background:#1976d2;color:#fff;
-          border:0;border-radius:4px">LOG IN</button>
+          border:0;border-radius:4px">{log_in}</button>
 </form>
 """
+
+
+ROLES = {"operator": N_("operator"), "setter": N_("setter"), "engineer": N_("engineer"),
+         "administrator": N_("administrator")}  # fmt: skip
+"""The roles, as the screens name them."""
 
 
 def session_of(station: Station, request: Any) -> Session | None:
@@ -37,43 +46,66 @@ def session_of(station: Station, request: Any) -> Session | None:
     return station.sessions.get(request.cookies.get(COOKIE) if request is not None else None)
 
 
+def words(station: Station) -> Language:
+    """The language of this screen's browser: its account's, else the station's."""
+    return station.language(app.storage.client.get("lang"))
+
+
 def current(station: Station) -> Session | None:
     """The session of this screen's browser (its idle time starts again)."""
     return station.sessions.get(app.storage.client.get("session"))
 
 
+def refused(session: Session | None, right: str, what: str, _: Language) -> str | None:
+    """Why ``session`` may not ``what`` (needing ``right``), in its language; None if it
+    may."""
+    if session is None:
+        return _("log in to {what}").format(what=what)
+    if session.may(right):
+        return None
+    return _("{name} ({role}) may not {what}: it takes {roles}").format(
+        name=session.name,
+        role=_(ROLES[session.role]),
+        what=what,
+        roles=_(" or ").join(_(ROLES[r]) for r in allowed_roles(right)),
+    )
+
+
 def require(station: Station, right: str, what: str) -> None:
     """Refuse (UsageError, which the screen shows) unless this screen's account may
-    ``what`` (``right``); a lone stand (no accounts) allows everything."""
+    ``what`` (``right``, ``what`` in the screen's language); a lone stand (no accounts)
+    allows everything."""
     if not station.sessions.required():
         return
-    why = refusal(current(station), right, what)
+    _ = words(station)
+    why = refused(current(station), right, what, _)
     if why is not None:
-        raise UsageError(f"refused: {why}")
+        raise UsageError(_("refused: {why}").format(why=why))
 
 
-def login_screen(failed: bool) -> None:
+def login_screen(_: Language, *, failed: bool) -> None:
     """The log-in form (``failed``: the last try was refused)."""
-    ui.label("Log in").classes("big")
+    ui.label(_("Log in")).classes("big")
     if failed:
-        ui.label("wrong account, password or badge (or the account is disabled)").classes(
+        ui.label(_("wrong account, password or badge (or the account is disabled)")).classes(
             "text-h6 text-red-10"
         ).mark("login-failed")
-    ui.html(FORM, sanitize=False).mark("login")  # our own constant form, nothing typed in it
+    form = FORM.format(**{k: html.escape(_(v)) for k, v in FORM_WORDS.items()})
+    ui.html(form, sanitize=False).mark("login")  # our own form: only our words in it
 
 
-def who_line(station: Station, session: Session | None) -> None:
+def who_line(station: Station, session: Session | None, _: Language) -> None:
     """The header's part that says who works the station, with Log out."""
     if not station.sessions.required():
-        ui.label("lone stand: no accounts (stand users add makes the first)").classes(
+        ui.label(_("lone stand: no accounts (stand users add makes the first)")).classes(
             "text-body1"
         ).mark("who")
         return
     assert session is not None
-    ui.label(f"{session.name} ({session.role})").classes("text-h6").mark("who")
-    ui.button("Log out", on_click=lambda: ui.navigate.to("/logout")).props("flat color=white").mark(
-        "logout"
-    )
+    ui.label(f"{session.name} ({_(ROLES[session.role])})").classes("text-h6").mark("who")
+    ui.button(_("Log out"), on_click=lambda: ui.navigate.to("/logout")).props(
+        "flat color=white"
+    ).mark("logout")
 
 
 def add_login_routes(station: Station) -> None:
@@ -101,11 +133,14 @@ def add_login_routes(station: Station) -> None:
 
 
 def forbidden(station: Station, request: Any, right: str, what: str) -> Any | None:
-    """A 403 answer saying why this request's account may not ``what``; None if it may (or
-    the stand has no accounts)."""
+    """A 403 answer saying why this request's account may not ``what`` (an English
+    message, said in the account's language); None if it may (or the stand has no
+    accounts)."""
     from fastapi.responses import PlainTextResponse
 
     if not station.sessions.required():
         return None
-    why = refusal(session_of(station, request), right, what)
-    return None if why is None else PlainTextResponse(html.unescape(why), status_code=403)
+    session = session_of(station, request)
+    _ = station.language(None if session is None else session.language)
+    why = refused(session, right, _(what), _)
+    return None if why is None else PlainTextResponse(why, status_code=403)

@@ -15,6 +15,7 @@ from nicegui import app, ui
 
 from stand.plant import TokenGate
 from stand.report import Display
+from stand.report.language import N_, Language
 from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, guard, history_screen, notify
@@ -24,6 +25,7 @@ from stand.station.login import (
     require,
     session_of,
     who_line,
+    words,
 )
 from stand.station.service import Station
 from stand.station.start import start_screen
@@ -40,8 +42,10 @@ from stand.station.views import (
 
 REFRESH_S = 0.25
 """How often a live screen looks at the station's state [s]."""
-SCREENS = (("/", "Start"), ("/measure", "Measure"), ("/correct", "Correct"),
-           ("/check", "Check"), ("/history", "History"))  # fmt: skip
+SCREENS = (("/", N_("Start")), ("/measure", N_("Measure")), ("/correct", N_("Correct")),
+           ("/check", N_("Check")), ("/history", N_("History")))  # fmt: skip
+RUN_KINDS = {"initial": N_("initial"), "check": N_("check")}
+"""A run's kind, as the screens name it."""
 STYLE = """
 <style>
   body { font-size: 20px; }
@@ -72,17 +76,19 @@ def frame(station: Station) -> None:
     ui.add_head_html(STYLE)
     request = ui.context.client.request
     session = session_of(station, request)
+    app.storage.client["lang"] = None if session is None else session.language
+    _ = words(station)
     if station.sessions.required() and session is None:
         with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
-            ui.label("Balancing station").classes("text-h5 q-mr-lg")
+            ui.label(_("Balancing station")).classes("text-h5 q-mr-lg")
         with ui.column().classes("w-full q-pa-md"):
-            login_screen(failed=request.query_params.get("login") == "failed")
+            login_screen(_, failed=request.query_params.get("login") == "failed")
         return
     app.storage.client["session"] = None if session is None else session.token
     with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
-        ui.label("Balancing station").classes("text-h5 q-mr-lg")
+        ui.label(_("Balancing station")).classes("text-h5 q-mr-lg")
         for path, name in SCREENS:
-            ui.button(name, on_click=lambda p=path: ui.navigate.to(p)).props(
+            ui.button(_(name), on_click=lambda p=path: ui.navigate.to(p)).props(
                 "flat color=white size=lg"
             ).mark(f"nav-{name.lower()}")
         ui.space()
@@ -90,16 +96,16 @@ def frame(station: Station) -> None:
 
         def show_status() -> None:
             s = station.snapshot()
-            who = s.job.serial or "-"
+            who, kind = s.job.serial or "-", _(RUN_KINDS.get(s.kind or "", s.kind or ""))
             status.text = {
-                "idle": "ready",
-                "measuring": f"measuring {who} ({s.kind} run)",
-                "done": f"{who}: {s.kind} run done",
-                "failed": f"{who}: {s.kind} run failed",
-            }[s.phase]
+                "idle": _("ready"),
+                "measuring": _("measuring {who} ({kind} run)"),
+                "done": _("{who}: {kind} run done"),
+                "failed": _("{who}: {kind} run failed"),
+            }[s.phase].format(who=who, kind=kind)
 
         ui.timer(REFRESH_S, show_status)
-        who_line(station, session)
+        who_line(station, session, _)
     ui.sub_pages({
         "/": lambda: start_screen(station),
         "/measure": lambda: measure_screen(station),
@@ -109,15 +115,18 @@ def frame(station: Station) -> None:
     }).classes("w-full q-pa-md")  # fmt: skip
 
 
-def _waiting(s: Any, head: str, sub: str) -> tuple[str, str]:
+def _waiting(s: Any, head: str, sub: str, _: Language) -> tuple[str, str]:
     """The Measure screen's two lines before the first estimate."""
     if s.phase == "idle":
-        return "Nothing measured yet", "start a rotor on the Start screen"
+        return _("Nothing measured yet"), _("start a rotor on the Start screen")
     if s.phase == "failed":
-        return "The run failed", s.error
+        return _("The run failed"), s.error
     if s.phase == "measuring":
-        who = f"{s.kind} run of {s.job.serial or 'the rotor'}: starting"
-        return who, f"waiting: {s.waiting}" if s.waiting else "waiting for the stand"
+        who = _("{kind} run of {rotor}: starting").format(
+            kind=_(RUN_KINDS.get(s.kind, s.kind)), rotor=s.job.serial or _("the rotor")
+        )
+        return who, (_("waiting: {why}").format(why=s.waiting) if s.waiting
+                     else _("waiting for the stand"))  # fmt: skip
     return head, sub
 
 
@@ -140,33 +149,40 @@ class _PlaneView:
     95 % interval against the goal on a bar (at a scale where both show: on the polar
     plot they are smaller than the dot while the unbalance is large)."""
 
-    def __init__(self, plane: int) -> None:
-        self.plane = plane
+    def __init__(self, plane: int, _: Language) -> None:
+        self.plane, self._ = plane, _
         with ui.column().classes("w-1/2 items-center"):
-            self.chart = ui.echart(polar_chart(plane, None, Display())).classes("w-full h-96")
+            self.chart = ui.echart(polar_chart(plane, None, Display(), _)).classes("w-full h-96")
             self.text = ui.label().classes("text-h6").mark(f"plane{plane}-live")
             bar = ui.linear_progress(value=0, show_value=False, size="14px")
             self.bar = bar.props("color=primary track-color=grey-4").mark(f"plane{plane}-goal")
             self.goal = ui.label().classes("text-body1").mark(f"plane{plane}-goal-text")
 
     def show(self, p: Any, units: Display) -> None:
+        _ = self._
         self.chart.options.clear()
-        self.chart.options.update(polar_chart(self.plane, p, units))
+        self.chart.options.update(polar_chart(self.plane, p, units, _))
         self.chart.update()
-        self.text.text = f"plane {self.plane}: {plane_status(p, units)}"
+        self.text.text = _("plane {i}: {status}").format(
+            i=self.plane, status=plane_status(p, units, _)
+        )
         self.bar.value = min(1.0, p.goal_kg_m / max(p.radius95_kg_m, 1e-300))
-        self.goal.text = (f"95 % interval ± {units.number(p.radius95_kg_m * 1e6)}, goal ± "
-                          f"{units.number(p.goal_kg_m * 1e6)} {units.unbalance_unit}: "
-                          + ("reached" if p.precise else "not yet"))  # fmt: skip
+        self.goal.text = _("95 % interval ± {r95}, goal ± {goal} {unit}: {state}").format(
+            r95=units.number(p.radius95_kg_m * 1e6),
+            goal=units.number(p.goal_kg_m * 1e6),
+            unit=units.unbalance_unit,
+            state=_("reached") if p.precise else _("not yet"),
+        )
 
 
 def measure_screen(station: Station) -> None:
     """Measure: speed, per plane the live polar plot, the supports, the warnings."""
+    _ = words(station)
     with ui.row().classes("w-full items-center gap-4"):  # Stop first: on every screen size
-        stop = ui.button("Stop", on_click=station.stop).props("size=xl color=negative")
+        stop = ui.button(_("Stop"), on_click=station.stop).props("size=xl color=negative")
         stop.mark("stop")
         onward = ui.button(
-            "Go on",
+            _("Go on"),
             on_click=lambda: ui.navigate.to(
                 "/check" if station.snapshot().kind == "check" else "/correct"
             ),
@@ -175,8 +191,8 @@ def measure_screen(station: Station) -> None:
         head = ui.label().classes("big").mark("measure-head")
     sub = ui.label().classes("text-h6").mark("measure-sub")
     with ui.row().classes("w-full no-wrap gap-4"):
-        planes = [_PlaneView(i) for i in (1, 2)]
-    note = ui.label(ANGLE_NOTE).classes("text-body1 text-grey-8")
+        planes = [_PlaneView(i, _) for i in (1, 2)]
+    note = ui.label(_(ANGLE_NOTE)).classes("text-body1 text-grey-8")
     warn = ui.column().mark("warnings")
     seen = {"seq": -1}
 
@@ -188,19 +204,22 @@ def measure_screen(station: Station) -> None:
         units = _units(station)
         stop.set_visibility(s.phase == "measuring")
         onward.set_visibility(s.phase == "done")
-        onward.text = "See the check" if s.kind == "check" else "Go to the correction"
+        onward.text = _("See the check") if s.kind == "check" else _("Go to the correction")
         if s.progress is None:
-            head.text, sub.text = _waiting(s, head.text, sub.text)
+            head.text, sub.text = _waiting(s, head.text, sub.text, _)
             return
         n = live_numbers(s.progress)
-        verb = {"measuring": "measuring", "done": "measured"}.get(s.phase, "stopped")
-        head.text = f"{n['rpm']:.0f} rpm   {verb} {n['elapsed_s']:.1f} s"
+        verb = {"measuring": _("measuring"), "done": _("measured")}.get(s.phase, _("stopped"))
+        head.text = _("{rpm} rpm   {verb} {seconds} s").format(
+            rpm=_.number(n["rpm"], 0), verb=verb, seconds=_.number(n["elapsed_s"], 1)
+        )
         why = getattr(s.progress, "waiting_for", ())
         sub.text = (
-            f"{s.kind} run of {s.job.serial or 'the rotor'}; vibration at the supports "
-            f"{n['support1_m_s2']:.3f} and {n['support2_m_s2']:.3f} m/s²"
+            _("{kind} run of {rotor}; vibration at the supports {a1} and {a2} m/s²").format(
+                kind=_(RUN_KINDS.get(s.kind, s.kind)), rotor=s.job.serial or _("the rotor"),
+                a1=_.number(n["support1_m_s2"], 3), a2=_.number(n["support2_m_s2"], 3))
             + (f"; {s.waiting}" if s.waiting else "")
-            + (f". Still measuring: waiting for {' and '.join(why)}"
+            + (_(". Still measuring: waiting for {what}").format(what=_(" and ").join(why))
                if why and s.phase == "measuring" else "")
         )  # fmt: skip
         for view, p in zip(planes, planes_live(s.progress, s.tolerance_kg_m), strict=True):
@@ -214,16 +233,19 @@ def measure_screen(station: Station) -> None:
 
 def correct_screen(station: Station) -> None:
     """Correct: per plane the instruction in large type, on the rotor face."""
+    _ = words(station)
     s, latest = station.snapshot(), station.latest()
     if latest is None:
-        ui.label("Measure the rotor first (Start).").classes("big")
+        ui.label(_("Measure the rotor first (Start).")).classes("big")
         return
     out = to_json(latest)
     pos = out.get("correction_positions") or {}
-    ui.label(f"Correction of {s.job.serial or 'the rotor'}").classes("big")
-    ui.label(f"{ANGLE_NOTE}; the faces are drawn {SEEN_FROM}").classes("text-body1")
+    ui.label(_("Correction of {rotor}").format(rotor=s.job.serial or _("the rotor"))).classes("big")
+    ui.label(_("{angles}; the faces are drawn {seen}").format(angles=_(ANGLE_NOTE),
+                                                             seen=_(SEEN_FROM))).classes(
+        "text-body1")  # fmt: skip
     with ui.row().classes("w-full no-wrap gap-6"):
-        for ins in instructions(out):
+        for ins in instructions(out, _):
             with ui.card().classes("w-1/2").mark(f"correct-plane{ins.plane}"):
                 ui.label(ins.headline).classes("text-h5")
                 with ui.column().classes("w-full items-center"):  # the face at the card's width
@@ -232,7 +254,8 @@ def correct_screen(station: Station) -> None:
                         positions=int(pos.get("count") or 0),
                         position1_deg=float(pos.get("position1_deg") or 0.0),
                         action=out["correction_mode"],
-                        title=f"plane {ins.plane}",
+                        title=_("plane {i}").format(i=ins.plane),
+                        words=_,
                     )
                     ui.html(svg, sanitize=False).classes("w-full").style("max-width: 30rem")
                     with ui.column().classes("w-full gap-1"):
@@ -245,78 +268,85 @@ def correct_screen(station: Station) -> None:
         if s.simulated and s.phase == "done":
 
             def apply() -> None:
-                require(station, "correct", "apply a correction")
+                require(station, "correct", _("apply a correction"))
                 masses = station.apply_correction()
-                notify(f"{len(masses)} masses put on the simulated rotor", "positive")
+                notify(_("{n} masses put on the simulated rotor").format(n=len(masses)), "positive")
 
-            ui.button("Apply the correction (simulated stand)", on_click=guard(apply)).props(
+            ui.button(_("Apply the correction (simulated stand)"), on_click=guard(apply)).props(
                 "size=xl color=secondary"
             ).mark("apply")
         elif s.phase == "done":
 
             def confirm() -> None:
-                require(station, "correct", "confirm a correction")
+                require(station, "correct", _("confirm a correction"))
                 station.confirm_applied()
-                notify("confirmed: the check will calibrate the stand too", "positive")
+                notify(_("confirmed: the check will calibrate the stand too"), "positive")
 
-            ui.button("Applied as shown", on_click=guard(confirm)).props(
+            ui.button(_("Applied as shown"), on_click=guard(confirm)).props(
                 "size=xl color=secondary"
             ).mark("applied")
 
         def check() -> None:
-            require(station, "check", "measure a check run")
+            require(station, "check", _("measure a check run"))
             station.check()
 
-        ui.button("Start the check run", on_click=guard(check, "/measure")).props(
+        ui.button(_("Start the check run"), on_click=guard(check, "/measure")).props(
             "size=xl color=primary"
         ).mark("check-run")
 
 
 def check_screen(station: Station) -> None:
     """Check: before and after, URR per plane, the verdict, the certificate."""
+    _ = words(station)
     s = station.snapshot()
     if s.kind != "check" or s.result is None:
-        ui.label("No check run yet: correct the rotor, then start the check run.").classes("big")
+        ui.label(_("No check run yet: correct the rotor, then start the check run.")).classes("big")
         return
     out = to_json(s.result)
     verdict = check_verdict(out)
-    word = {"pass": "WITHIN TOLERANCE", "fail": "NOT WITHIN TOLERANCE",
-            "undecided": "UNDECIDED: MEASURE LONGER"}.get(
-        str(verdict), "CHECKED (no tolerance set)"
+    word = {"pass": _("WITHIN TOLERANCE"), "fail": _("NOT WITHIN TOLERANCE"),
+            "undecided": _("UNDECIDED: MEASURE LONGER")}.get(
+        str(verdict), _("CHECKED (no tolerance set)")
     )  # fmt: skip
-    ui.label(f"{s.job.serial or 'rotor'}: {word}").classes(
+    ui.label(f"{s.job.serial or _('rotor')}: {word}").classes(
         "huge " + ("fail" if verdict in ("fail", "undecided") else "pass")
     ).mark("verdict")
     if verdict == "fail":
-        ui.label("Correct again (Correct shows what is left), then check again.").classes("text-h5")
+        ui.label(_("Correct again (Correct shows what is left), then check again.")).classes(
+            "text-h5"
+        )
     elif verdict == "undecided":
         ui.label(
-            "The residual's interval straddles the limit: check again with a longer run."
+            _("The residual's interval straddles the limit: check again with a longer run.")
         ).classes("text-h5")
     if out.get("tolerance"):
         t = out["tolerance"]
-        ui.label(f"Tolerance: {t['source']}; judged in {t['judged_in']}. Rule: {t['rule']}.")
+        ui.label(
+            _("Tolerance: {source}; judged in {where}. Rule: {rule}.").format(
+                source=t["source"], where=t["judged_in"], rule=t["rule"]
+            )
+        )
     names = {
-        "plane": "plane",
-        "before": "before",
-        "after": "after",
-        "urr": "reduction (URR)",
-        "permissible": "permissible",
-        "verdict": "verdict",
+        "plane": _("plane"),
+        "before": _("before"),
+        "after": _("after"),
+        "urr": _("reduction (URR)"),
+        "permissible": _("permissible"),
+        "verdict": _("verdict"),
     }
     columns = [{"name": k, "label": v, "field": k, "align": "left"}
                for k, v in names.items()]  # fmt: skip
-    ui.table(columns=columns, rows=check_rows(out)).classes("text-h6").mark("check-table")
+    ui.table(columns=columns, rows=check_rows(out, _)).classes("text-h6").mark("check-table")
     with ui.row().classes("gap-4 q-mt-md"):
-        _certificate_links(station, s.result)
+        _certificate_links(station, s.result, _)
 
         def next_rotor() -> None:
             station.next_rotor()
 
-        ui.button("Next rotor", on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
+        ui.button(_("Next rotor"), on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
 
 
-def _certificate_links(station: Station, result: Any) -> None:
+def _certificate_links(station: Station, result: Any, _: Language) -> None:
     """The certificate's links once the run is filed (the answer shows before: the report
     and the archive are written while the operator reads it)."""
     box = ui.row().classes("gap-4")
@@ -333,10 +363,10 @@ def _certificate_links(station: Station, result: Any) -> None:
         if s.result is not result or s.run_id is None:  # moved on, or not archived (notes)
             return
         with box:
-            ui.link("Open the certificate", f"/report/{s.run_id}", new_tab=True).classes(
+            ui.link(_("Open the certificate"), f"/report/{s.run_id}", new_tab=True).classes(
                 "text-h5"
             ).mark("certificate")
-            ui.link("as PDF", f"/report/{s.run_id}/pdf", new_tab=True).classes("text-h5").mark(
+            ui.link(_("as PDF"), f"/report/{s.run_id}/pdf", new_tab=True).classes("text-h5").mark(
                 "certificate-pdf"
             )
 

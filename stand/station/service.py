@@ -34,6 +34,7 @@ from stand.health import with_drift
 from stand.live import live_source, measure_live
 from stand.plant import publish_archived
 from stand.report import render
+from stand.report.language import Language, language
 from stand.sim import Mass, shipped_scenes
 from stand.solve import Job, with_check
 from stand.solve.pipeline import SolveOptions, load_config_text
@@ -96,8 +97,18 @@ class Station(ArchiveSide):
         self._thread: threading.Thread | None = None
         self._state = Snapshot()
         self.sessions = Sessions(archive_url)  # who is logged in (none: a lone stand)
+        self.default_language = "en"  # the screens' language where no account names one
+        self._languages: dict[str, Language] = {}
 
     # -- what there is to choose -------------------------------------------------------------
+    def language(self, code: str | None) -> Language:
+        """A language for the screens (its catalogue read once per station); None: the
+        station's default."""
+        code = code or self.default_language
+        if code not in self._languages:
+            self._languages[code] = language(code)
+        return self._languages[code]
+
     def rotor_types(self) -> list[str]:
         """The rotor types: the configuration files in ``config_dir``, by name."""
         return rotor_types_in(self.config_dir)

@@ -13,6 +13,7 @@ import secrets
 import threading
 import time
 from dataclasses import dataclass, replace
+from typing import Any
 
 from stand.archive.accounts import accounts_of, check_badge, check_password, may
 from stand.errors import StandError
@@ -30,6 +31,8 @@ class Session:
     name: str
     role: str
     token: str
+    language: str | None
+    """The account's language for the screens (None: the station's)."""
     expires_s: float
     """``time.monotonic()`` after which it has ended."""
 
@@ -62,15 +65,16 @@ class Sessions:
     def log_in(self, name: str, password: str) -> Session | None:
         """A new session for ``name`` if ``password`` is its password (else None)."""
         found = check_password(self.archive_url, name, password)
-        return None if found is None else self._open(found["name"], found["role"])
+        return None if found is None else self._open(found)
 
     def log_in_badge(self, code: str) -> Session | None:
         """A new session for the account whose badge carries ``code`` (else None)."""
         found = check_badge(self.archive_url, code.strip())
-        return None if found is None else self._open(found["name"], found["role"])
+        return None if found is None else self._open(found)
 
-    def _open(self, name: str, role: str) -> Session:
-        s = Session(name, role, secrets.token_urlsafe(24), time.monotonic() + self.idle_s)
+    def _open(self, account: dict[str, Any]) -> Session:
+        s = Session(account["name"], account["role"], secrets.token_urlsafe(24),
+                    account.get("language"), time.monotonic() + self.idle_s)  # fmt: skip
         with self._lock:
             self._by_token[s.token] = s
         return s
@@ -94,12 +98,6 @@ class Sessions:
             self._by_token.pop(token or "", None)
 
 
-def refusal(session: Session | None, right: str, what: str) -> str | None:
-    """Why ``session`` may not do ``what`` (needing ``right``); None if it may."""
-    if session is None:
-        return f"log in to {what}"
-    if session.may(right):
-        return None
-    allowed = [r for r in ("operator", "setter", "engineer", "administrator") if may(r, right)]
-    return (f"{session.name} is {'an' if session.role[0] in 'aeiou' else 'a'} {session.role}: "
-            f"to {what} takes {' or '.join(allowed)}")  # fmt: skip
+def allowed_roles(right: str) -> list[str]:
+    """The roles that have ``right``, the least first."""
+    return [r for r in ("operator", "setter", "engineer", "administrator") if may(r, right)]

@@ -14,9 +14,10 @@ from typing import Any
 
 from nicegui import ui
 
+from stand.report.language import Language
 from stand.solve import Job
 from stand.station.history import guard
-from stand.station.login import current, require
+from stand.station.login import current, require, words
 from stand.station.service import Station
 from stand.station.snapshot import BUS
 
@@ -27,26 +28,27 @@ JOB_POLL_S = 1.0
 class _Form:
     """The Start screen's fields, and the job order they were filled from (if any)."""
 
-    def __init__(self, station: Station) -> None:
+    def __init__(self, station: Station, _: Language) -> None:
         types = station.rotor_types()
-        sources = {src: ("the stand (CAN bus)" if src == BUS else f"simulated: {src}")
+        sources = {src: (_("the stand (CAN bus)") if src == BUS
+                         else _("simulated: {scene}").format(scene=src))
                    for src in station.sources()}  # fmt: skip
-        self.station, self.job_id = station, ""
-        self.rotor = ui.select(types, label="rotor type", value=types[0] if types else None)
+        self.station, self.job_id, self._ = station, "", _
+        self.rotor = ui.select(types, label=_("rotor type"), value=types[0] if types else None)
         self.rotor.classes("w-full").mark("rotor-type")
-        self.serial = ui.input("serial number").classes("w-full").mark("serial")
-        self.order = ui.input("order").classes("w-full").mark("order")
-        self.operator = ui.input("operator").classes("w-full").mark("operator")
+        self.serial = ui.input(_("serial number")).classes("w-full").mark("serial")
+        self.order = ui.input(_("order")).classes("w-full").mark("order")
+        self.operator = ui.input(_("operator")).classes("w-full").mark("operator")
         if (session := current(station)) is not None:  # the account logged in: fixed
             self.operator.value = session.name
             self.operator.props("readonly")
         default = "demo" if "demo" in sources else BUS
-        self.source = ui.select(sources, label="source", value=default).classes("w-full")
+        self.source = ui.select(sources, label=_("source"), value=default).classes("w-full")
         self.source.mark("source")
         self.job_line = ui.label().classes("text-h6").mark("job-order")
 
     def go(self) -> None:
-        require(self.station, "measure", "measure a rotor")
+        require(self.station, "measure", self._("measure a rotor"))
         session = current(self.station)  # the run's operator is the account logged in
         if session is not None:
             self.operator.value = session.name
@@ -69,18 +71,20 @@ class _Form:
         self.order.value = job["order"] or ""
         if current(self.station) is None:  # with accounts the operator is who logged in
             self.operator.value = job["operator"] or self.operator.value
-        self.job_line.text = (f"job order {job['job_id']} from the MES: {job['rotor_type']}, "
-                              f"serial {job['serial']}")  # fmt: skip
+        self.job_line.text = self._("job order {id} from the MES: {type}, serial {serial}").format(
+            id=job["job_id"], type=job["rotor_type"], serial=job["serial"]
+        )
 
 
 def start_screen(station: Station) -> None:
     """Start: the rotor type, the job, the source."""
-    ui.label("New rotor").classes("big")
+    _ = words(station)
+    ui.label(_("New rotor")).classes("big")
     with ui.column().classes("w-full max-w-xl gap-4"):
-        form = _Form(station)
+        form = _Form(station, _)
         start = guard(form.go, "/measure")
         form.serial.on("keydown.enter", start)  # a bar-code scanner types, then Enter
-        ui.button("Start measuring", on_click=start).props("size=xl color=primary").mark("start")
+        ui.button(_("Start measuring"), on_click=start).props("size=xl color=primary").mark("start")
 
     def look() -> None:
         job = station.waiting_job()
@@ -90,4 +94,8 @@ def start_screen(station: Station) -> None:
 
     ui.timer(JOB_POLL_S, look)
     if not form.rotor.options:
-        ui.label(f"No rotor types: put a configuration (.toml) in {station.config_dir}")
+        ui.label(
+            _("No rotor types: put a configuration (.toml) in {folder}").format(
+                folder=station.config_dir
+            )
+        )

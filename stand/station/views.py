@@ -17,8 +17,9 @@ import numpy as np
 
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.report import Display
+from stand.report.language import ENGLISH, N_, Language
 
-ANGLE_NOTE = "angles from the reference mark, against the direction of rotation"
+ANGLE_NOTE = N_("angles from the reference mark, against the direction of rotation")
 RING = np.linspace(0.0, 2.0 * math.pi, 73)
 """Points of a drawn circle (every 5 deg)."""
 
@@ -83,7 +84,8 @@ def _nice_max(x: float) -> float:
     return 10 * step
 
 
-def polar_chart(plane: int, p: PlaneLive | None, units: Display) -> dict[str, Any]:
+def polar_chart(plane: int, p: PlaneLive | None, units: Display,
+                _: Language = ENGLISH) -> dict[str, Any]:  # fmt: skip
     """The ECharts options of one plane: the tolerance circle, the unbalance, its 95 %
     circle and the precision goal around it (display units)."""
     v = units.unbalance_value
@@ -95,17 +97,20 @@ def polar_chart(plane: int, p: PlaneLive | None, units: Display) -> dict[str, An
         if p.permissible_kg_m is not None:
             per = v(p.permissible_kg_m * 1e6)
             top = max(top, per * 1.15)
-            series.append(_line("tolerance", _circle(0.0, 0.0, per), "#2e7d32", area=True))
-        series.append(_line("precision goal", _circle(p.angle_deg, u, goal), "#555", dashed=True))
-        series.append(_line("95 % circle", _circle(p.angle_deg, u, r95), "#c62828"))
+            series.append(_line(_("tolerance"), _circle(0.0, 0.0, per), "#2e7d32", area=True))
+        series.append(
+            _line(_("precision goal"), _circle(p.angle_deg, u, goal), "#555", dashed=True)
+        )
+        series.append(_line(_("95 % circle"), _circle(p.angle_deg, u, r95), "#c62828"))
         series.append({
-            "type": "scatter", "coordinateSystem": "polar", "name": "unbalance",
+            "type": "scatter", "coordinateSystem": "polar", "name": _("unbalance"),
             "data": [[round(u, 6), round(p.angle_deg, 3)]], "symbolSize": 18,
             "itemStyle": {"color": "#c62828"}, "z": 5,
         })  # fmt: skip
     return {
         "animation": False,
-        "title": {"text": f"plane {plane} [{units.unbalance_unit}]", "left": "center",
+        "title": {"text": _("plane {i} [{unit}]").format(i=plane, unit=units.unbalance_unit),
+                  "left": "center",
                   "textStyle": {"fontSize": 22}},
         "legend": {"bottom": 0, "textStyle": {"fontSize": 15}},
         "polar": {"radius": "68%", "center": ["50%", "52%"]},
@@ -130,11 +135,17 @@ def _line(
     return out
 
 
-def plane_status(p: PlaneLive, units: Display) -> str:
+def plane_status(p: PlaneLive, units: Display, _: Language = ENGLISH) -> str:
     """One plane's estimate in words."""
     text = f"{units.unbalance(p.U_kg_m * 1e6)} ± {units.number(p.radius95_kg_m * 1e6)}"
-    angle = "" if p.U_kg_m <= p.radius95_kg_m else f" at {p.angle_deg:.0f}°"
-    state = "precise" if p.precise else f"measuring (goal ± {units.number(p.goal_kg_m * 1e6)})"
+    angle = (
+        "" if p.U_kg_m <= p.radius95_kg_m else _(" at {angle}°").format(angle=f"{p.angle_deg:.0f}")
+    )
+    state = (
+        _("precise")
+        if p.precise
+        else _("measuring (goal ± {goal})").format(goal=units.number(p.goal_kg_m * 1e6))
+    )
     return f"{text}{angle}, {state}"
 
 
@@ -151,33 +162,43 @@ class Instruction:
     needed: bool
 
 
-def _machined(i: int, plane: dict[str, Any], u: Display) -> Instruction:
+DIRECTIONS = {"radial": N_("radial"), "axial": N_("axial")}
+"""A hole's direction, as the screens name it."""
+
+
+def _machined(i: int, plane: dict[str, Any], u: Display, _: Language) -> Instruction:
     """A drilled or milled plane: per hole (in drilling order) the drill and the depth."""
     lines, marks = [], []
     for h in plane.get("holes") or []:
         lines.append((
-            f"{h['number']}. DRILL Ø{u.length(h['diameter_mm'])}, {u.depth(h['depth_mm'])} DEEP",
-            f"at {h['angle_deg']:.0f}° ({h['direction']}; depth to the tip)",
-            f"removes {u.mass(h['mass_g'])}",
+            _("{n}. DRILL Ø{diameter}, {depth} DEEP").format(
+                n=h["number"], diameter=u.length(h["diameter_mm"]), depth=u.depth(h["depth_mm"])),
+            _("at {angle}° ({direction}; depth to the tip)").format(
+                angle=f"{h['angle_deg']:.0f}",
+                direction=_(DIRECTIONS.get(h["direction"], h["direction"]))),
+            _("removes {mass}").format(mass=u.mass(h["mass_g"])),
         ))  # fmt: skip
         marks.append((float(h["angle_deg"]), str(h["number"])))  # the drilling order
     slot = plane.get("slot")
     if slot:
         lines.append((
-            f"MILL {u.length(slot['width_mm'])} × {u.depth(slot['depth_mm'])}",
-            f"centred at {slot['angle_deg']:.0f}°, over {slot['arc_deg']:.0f}° "
-            f"({u.depth(slot['arc_length_mm'])})",
-            f"removes {u.mass(slot['mass_g'])}",
+            _("MILL {width} × {depth}").format(width=u.length(slot["width_mm"]),
+                                               depth=u.depth(slot["depth_mm"])),
+            _("centred at {angle}°, over {arc}° ({length})").format(
+                angle=f"{slot['angle_deg']:.0f}", arc=f"{slot['arc_deg']:.0f}",
+                length=u.depth(slot["arc_length_mm"])),
+            _("removes {mass}").format(mass=u.mass(slot["mass_g"])),
         ))  # fmt: skip
-        marks.append((float(slot["angle_deg"]), f"slot {slot['arc_deg']:.0f}°"))
-    head = f"plane {i}: {u.cuts(plane)}"
+        marks.append((float(slot["angle_deg"]),
+                      _("slot {arc}°").format(arc=f"{slot['arc_deg']:.0f}")))  # fmt: skip
+    head = _("plane {i}: {cuts}").format(i=i, cuts=u.cuts(plane))
     return Instruction(i, head, tuple(lines), tuple(marks), bool(lines))
 
 
-def instructions(out: dict[str, Any]) -> list[Instruction]:
+def instructions(out: dict[str, Any], _: Language = ENGLISH) -> list[Instruction]:
     """The correction of each plane of a result's JSON form, in the operator's words."""
     u = Display.of(out)
-    verb = "ADD" if out["correction_mode"] == "add" else "REMOVE"
+    verb = _("ADD") if out["correction_mode"] == "add" else _("REMOVE")
     found = []
     planes = out.get("planes") or [{} for _ in out["corrections"]]
     for c, plane in zip(out["corrections"], planes, strict=True):
@@ -188,29 +209,46 @@ def instructions(out: dict[str, Any]) -> list[Instruction]:
             or c.get("within_tolerance")
             or not (c["weights"] or plane.get("holes") or plane.get("slot"))
         ):
-            why = "within tolerance" if c.get("within_tolerance") else "nothing to correct"
-            found.append(Instruction(i, f"plane {i}: {why}", (), (), False))
+            why = _("within tolerance") if c.get("within_tolerance") else _("nothing to correct")
+            found.append(Instruction(i, _("plane {i}: {cuts}").format(i=i, cuts=why), (), (),
+                                     False))  # fmt: skip
             continue
         if machined:
-            found.append(_machined(i, plane, u))
+            found.append(_machined(i, plane, u, _))
             continue
         lines, marks = [], []
         for w in c["weights"]:
-            where = f"at {w['angle_deg']:.0f}°"
+            where = _("at {angle}°").format(angle=f"{w['angle_deg']:.0f}")
             if w["position"] is not None:
-                where = f"in hole {w['position']} ({w['angle_deg']:.0f}°)"
+                where = _("in hole {n} ({angle}°)").format(
+                    n=w["position"], angle=f"{w['angle_deg']:.0f}"
+                )
             pieces = w.get("pieces_g") or []
-            stock = "" if len(pieces) < 2 else "stock: " + " + ".join(u.mass(g) for g in pieces)
+            stock = (
+                ""
+                if len(pieces) < 2
+                else _("stock: {pieces}").format(pieces=" + ".join(u.mass(g) for g in pieces))
+            )
             lines.append((f"{verb} {u.mass(w['mass_g'])}", where, stock))
             marks.append((float(w["angle_deg"]), u.mass(w["mass_g"])))
         radius = u.length(c["weights"][0]["radius_mm"])
         found.append(
-            Instruction(i, f"plane {i}: at radius {radius}", tuple(lines), tuple(marks), True)
+            Instruction(
+                i,
+                _("plane {i}: at radius {radius}").format(i=i, radius=radius),
+                tuple(lines),
+                tuple(marks),
+                True,
+            )
         )
     return found
 
 
-def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
+VERDICTS = {"pass": N_("PASS"), "fail": N_("FAIL"), "undecided": N_("UNDECIDED")}
+"""A plane's verdict, as the check's table says it."""
+
+
+def check_rows(out: dict[str, Any], _: Language = ENGLISH) -> list[dict[str, Any]]:
     """Per plane: before, after, URR [%] and the verdict of a check run's JSON form."""
     u = Display.of(out)
     crit = (out.get("tolerance") or {}).get("criteria", [])
@@ -224,7 +262,7 @@ def check_rows(out: dict[str, Any]) -> list[dict[str, Any]]:
             "after": u.unbalance(p["after_g_mm"]),
             "urr": f"{100 * p['urr']:.1f} %" if p.get("urr") is not None else "-",
             "permissible": "-" if t is None else u.unbalance(t["permissible_g_mm"]),
-            "verdict": "-" if t is None else t["verdict"].upper(),
+            "verdict": "-" if t is None else _(VERDICTS.get(t["verdict"], t["verdict"].upper())),
         })  # fmt: skip
     return rows
 

@@ -9,7 +9,9 @@ from pathlib import Path
 import pytest
 
 from stand.archive.accounts import add_account, set_account
-from stand.station.sessions import Sessions, refusal
+from stand.report.language import ENGLISH, language
+from stand.station.login import refused
+from stand.station.sessions import Sessions
 
 
 @pytest.fixture
@@ -44,11 +46,16 @@ def test_password_badge_and_the_idle_end(url: str) -> None:
 def test_a_refusal_says_who_may(url: str) -> None:
     s = Sessions(url)
     kim, ana = s.log_in("kim", "a-long-password"), s.log_in("ana", "another-password")
-    assert refusal(None, "measure", "measure a rotor") == "log in to measure a rotor"
-    assert refusal(kim, "measure", "measure a rotor") is None
-    assert refusal(kim, "release", "release a certificate") == (
-        "kim is an operator: to release a certificate takes setter or engineer or administrator"
+    assert refused(None, "measure", "measure a rotor", ENGLISH) == "log in to measure a rotor"
+    assert refused(kim, "measure", "measure a rotor", ENGLISH) is None
+    assert refused(kim, "release", "release a certificate", ENGLISH) == (
+        "kim (operator) may not release a certificate: it takes setter or engineer or administrator"
     )
-    assert refusal(ana, "accounts", "manage accounts") == (
-        "ana is an engineer: to manage accounts takes administrator"
+    assert refused(ana, "accounts", "manage accounts", ENGLISH) == (
+        "ana (engineer) may not manage accounts: it takes administrator"
+    )
+    de = language("de")
+    assert refused(kim, "release", de("release a certificate"), de) == (
+        "kim (Bediener) darf nicht: ein Wuchtprotokoll freigeben; nötig ist Einrichter oder "
+        "Ingenieur oder Administrator"
     )

@@ -490,7 +490,7 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
         (run,) = found
         assert run["operator"] == "kim"
         status, body = _fetch(base, f"/report/{run['id']}/pdf", browser.get_cookies())
-        assert status == 403 and b"kim is an operator" in body, body
+        assert status == 403 and b"kim (operator) may not release a certificate" in body, body
         _button(browser, "Log out").click()
         _see(browser, "Log in")
         time.sleep(0.5)  # the log-in page mounted (a scanner types into the field it finds)
@@ -505,3 +505,32 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
     assert release["who"] == "ana" and release["new_sha256"] == file_sha256(kept)
     assert release["old_sha256"] == run["file_sha256"]  # bound to the run
     assert main(["audit", "check", str(kept), "--archive", url]) == 0
+
+
+@pytest.mark.realtime
+def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> None:
+    """An account in Ukrainian works the station in Ukrainian (Start, Measure, Correct);
+    a lone stand started with --lang de speaks German."""
+    from stand.cli import main
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    (tmp_path / "pw").write_text("a-long-password\n")
+    assert main(["users", "add", "olena", "--role", "operator", "--language", "uk",
+                 "--password-file", str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    with served(tmp_path) as base:
+        browser.get(base + "/")
+        _see(browser, "Log in")
+        _log_in(browser, "olena", "a-long-password")
+        _see(browser, "Новий ротор")
+        _type(browser, "серійний номер", "U-1")
+        _button(browser, "Почати вимірювання").click()
+        _button(browser, "До корекції", 60).click()
+        _see(browser, "Корекція U-1")
+        _see(browser, "опорна мітка")
+        _shot(browser, tmp_path, "correct-uk")
+    german = tmp_path / "de"
+    german.mkdir()
+    with served(german, "--lang", "de") as base:
+        browser.get(base + "/")
+        _see(browser, "Neuer Rotor")
+        _see(browser, "Einzelplatz: keine Benutzerkonten")

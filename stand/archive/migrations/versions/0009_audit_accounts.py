@@ -39,6 +39,7 @@ def upgrade() -> None:
         sa.Column("password_hash", sa.Text, nullable=False),
         sa.Column("badge_sha256", sa.String(64)),
         sa.Column("active", sa.Boolean, nullable=False),
+        sa.Column("language", sa.String(8)),
         sa.Column("created_at", sa.String(40), nullable=False),
         sa.Column("changed_at", sa.String(40), nullable=False),
     )
