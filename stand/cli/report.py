@@ -23,6 +23,7 @@ from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
 from stand.report import Release, released, render, render_speeds, write_pdf
+from stand.report.language import LANGUAGES, language
 from stand.solve import solve_check, solve_recording
 
 
@@ -54,6 +55,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_measure_arguments(p)
     add_uncertainty_arguments(p)
     add_force_argument(p, "the outputs")
+    p.add_argument(
+        "--lang",
+        choices=tuple(LANGUAGES),
+        default="en",
+        help="the certificate's language: the customer's (default: en)",
+    )
     g = p.add_argument_group("releasing the certificate (an electronic signature)")
     g.add_argument(
         "--release",
@@ -93,11 +100,12 @@ def run(args: argparse.Namespace) -> int:
         result = solve_check(run, args.check, args.config, options, strict=not args.check_any)
     else:
         result = solve_recording(run, args.config, options)
-    page, release = render(result), None
+    words = language(args.lang)
+    page, release = render(result, words), None
     if args.release:
         release = Release(os_user(), None, dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
                           file_digest(run))  # fmt: skip
-        page = released(page, release)
+        page = released(page, release, words)
     _write(args, page, inputs)
     if release is not None:  # the file a customer keeps: the PDF if one was written
         kept = args.pdf or args.out

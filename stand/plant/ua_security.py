@@ -186,7 +186,10 @@ def rights(users: Users) -> Any:
                 return False
             if action_type_id != call:
                 return True
-            params = struct_from_binary(ua.CallParameters, body.copy())  # body: read later
+            try:
+                params = struct_from_binary(ua.CallParameters, body.copy())  # body: read later
+            except Exception:  # a Call that does not decode: refused, never let through
+                return False
             jobs = any(JOB_METHODS in str(m.MethodId.Identifier) for m in params.MethodsToCall)
             return not jobs or users.may_send_jobs(getattr(user, "name", None))
 

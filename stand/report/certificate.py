@@ -15,11 +15,12 @@ from __future__ import annotations
 
 import datetime as dt
 import html
-from pathlib import PurePath
 from typing import Any
 
-from stand.report.plots import polar, spectrum_and_speed
-from stand.report.units import Display
+from stand.report.appendix import appendix, file_name
+from stand.report.language import ENGLISH, N_, Language
+from stand.report.plots import polar
+from stand.report.units import ACTIONS, Display
 from stand.solve import Result, to_json
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 
@@ -71,72 +72,90 @@ def local_time(iso_utc: str) -> str:
 
 
 BADGES = {
-    "pass": '<span class="badge pass">IN TOLERANCE</span>',
-    "fail": '<span class="badge fail">OUT OF TOLERANCE</span>',
-    "undecided": '<span class="badge fail">UNDECIDED: measure longer</span>',
-    "none": '<span class="badge muted">no tolerance set</span>',
+    "pass": ("pass", N_("IN TOLERANCE")),
+    "fail": ("fail", N_("OUT OF TOLERANCE")),
+    "undecided": ("fail", N_("UNDECIDED: measure longer")),
+    "none": ("muted", N_("no tolerance set")),
 }
-"""The one verdict (:mod:`stand.solve.verdict`) as the certificate's badge."""
+"""The one verdict (:mod:`stand.solve.verdict`) as the certificate's badge: its style and
+its words."""
+PLANE_VERDICTS = {"pass": N_("PASS"), "fail": N_("FAIL"), "undecided": N_("UNDECIDED")}
+"""A criterion's verdict, as the tables say it."""
 
 
-def _badge(out: dict[str, Any]) -> str:
-    return BADGES[out.get("verdict", "none")]
+def _badge(out: dict[str, Any], _: Language) -> str:
+    style, text = BADGES[out.get("verdict", "none")]
+    return f'<span class="badge {style}">{html.escape(_(text))}</span>'
 
 
-def _job(out: dict[str, Any], result: Result) -> str:
+def _verdict_word(state: str, _: Language) -> str:
+    return html.escape(_(PLANE_VERDICTS.get(state, state.upper())))
+
+
+def _job(out: dict[str, Any], result: Result, _: Language) -> str:
     e, j, st = html.escape, out["job"], out["stand"]
     cells = [
-        ("rotor type", j.get("rotor_type")), ("serial number", j.get("serial")),
-        ("order", j.get("order")), ("operator", j.get("operator")),
-        ("balancing stand", st.get("name") or st.get("id")),
-        ("date", local_time(result.provenance.start_time)),
+        (_("rotor type"), j.get("rotor_type")), (_("serial number"), j.get("serial")),
+        (_("order"), j.get("order")), (_("operator"), j.get("operator")),
+        (_("balancing stand"), st.get("name") or st.get("id")),
+        (_("date"), local_time(result.provenance.start_time)),
     ]  # fmt: skip
-    row = "".join(f"<th>{k}</th><td>{e(v or '–')}</td>" for k, v in cells[:3])
-    row2 = "".join(f"<th>{k}</th><td>{e(v or '–')}</td>" for k, v in cells[3:])
-    note = f"<tr><th>note</th><td colspan=5>{e(j['note'])}</td></tr>" if j.get("note") else ""
+    row = "".join(f"<th>{e(k)}</th><td>{e(v or '–')}</td>" for k, v in cells[:3])
+    row2 = "".join(f"<th>{e(k)}</th><td>{e(v or '–')}</td>" for k, v in cells[3:])
+    note = (f"<tr><th>{e(_('note'))}</th><td colspan=5>{e(j['note'])}</td></tr>"
+            if j.get("note") else "")  # fmt: skip
     return f"<table class=job><tr>{row}</tr><tr>{row2}</tr>{note}</table>"
 
 
-def _basis(out: dict[str, Any]) -> str:
+def _basis(out: dict[str, Any], _: Language) -> str:
     t, d, e = out.get("tolerance"), Display.of(out), html.escape
     if t is None:
-        return "<p><b>Tolerance:</b> none set (the configuration has no [tolerance] table).</p>"
+        return "<p>" + e(_("Tolerance: none set (the configuration has no [tolerance] "
+                           "table).")) + "</p>"  # fmt: skip
     per = ""
     if "permissible_g_mm" in t:
         per = f": U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}"
     rows = "".join(
         f"<tr><td>{e(c['name'])}</td><td>{e(_value(c, d))}</td><td>{e(_limit(c, d))}</td>"
         f"<td><span class={'pass' if c['verdict'] == 'pass' else 'fail'}>"
-        f"{c['verdict'].upper()}</span></td></tr>"
+        f"{_verdict_word(c['verdict'], _)}</span></td></tr>"
         for c in t["criteria"]
     )
+    heads = "".join(
+        f"<th>{e(h)}</th>"
+        for h in (_("criterion"), _("value ± combined error"), _("permissible"), _("verdict"))
+    )
     return (
-        f"<p><b>Tolerance:</b> {e(t['source'])}{per}; judged in {e(t['judged_in'])}. "
-        f"Balancing speed {out['rpm']:.0f} rpm.<br><b>Rule:</b> {e(t['rule'])}.</p>"
+        f"<p><b>{e(_('Tolerance:'))}</b> {e(t['source'])}{per}; "
+        + e(_("judged in {where}. Balancing speed {rpm} rpm.").format(
+            where=t["judged_in"], rpm=_.number(out["rpm"], 0)))
+        + f"<br><b>{e(_('Rule:'))}</b> {e(t['rule'])}.</p>"
         + (  # planes judged alone show in the table of planes below
-            f"<table><tr><th>criterion</th><th>value &plusmn; combined error</th>"
-            f"<th>permissible</th><th>verdict</th></tr>{rows}</table>"
+            f"<table><tr>{heads}</tr>{rows}</table>"
             if any(c["plane"] is None for c in t["criteria"])
             else ""
         )
-        + _keys(out)
-    )
+        + _keys(out, _)
+    )  # fmt: skip
 
 
-def _keys(out: dict[str, Any]) -> str:
+def _keys(out: dict[str, Any], _: Language) -> str:
     """The keys' convention and the part's marking (ISO 21940-32)."""
     keys = out.get("keys") or []
     if not keys:
         return ""
     d, e = Display.of(out), html.escape
     items = "".join(
-        f"<li>keyway at {k['angle_deg']:g}°, key {d.mass(k['mass_g'])} at radius "
-        f"{d.length(k['radius_mm'])}: balanced with {CONVENTION_WORDS[k['convention']]} "
-        f"({FITTED_WORDS[k['fitted']]} fitted on the stand, the difference counted); "
-        f"<b>mark the part {e(k['marking'])}</b></li>"
+        "<li>" + e(_("keyway at {angle}°, key {mass} at radius {radius}: balanced with "
+                     "{convention} ({fitted} fitted on the stand, the difference counted); "
+                     ).format(angle=f"{k['angle_deg']:g}", mass=d.mass(k["mass_g"]),
+                              radius=d.length(k["radius_mm"]),
+                              convention=CONVENTION_WORDS[k["convention"]],
+                              fitted=FITTED_WORDS[k["fitted"]]))
+        + f"<b>{e(_('mark the part {marking}').format(marking=k['marking']))}</b></li>"
         for k in keys
-    )
-    return f"<p><b>Keys (ISO 21940-32):</b></p><ul>{items}</ul>"
+    )  # fmt: skip
+    return f"<p><b>{e(_('Keys (ISO 21940-32):'))}</b></p><ul>{items}</ul>"
 
 
 def _value(c: dict[str, Any], d: Display) -> str:
@@ -151,16 +170,17 @@ def _limit(c: dict[str, Any], d: Display) -> str:
     return d.unbalance(c["permissible_g_mm"])
 
 
-def _results(out: dict[str, Any]) -> str:
+def _results(out: dict[str, Any], _: Language) -> str:
     d, e = Display.of(out), html.escape
     crit = out.get("tolerance", {}).get("criteria", [])
     tol = {c["plane"]: c for c in crit if c["plane"] is not None}
     check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}
     u = d.unbalance_unit
     head = (
-        f"<th>before [{u}]</th><th>after [{u}] (95 %)</th><th>URR</th>"
+        f"<th>{e(_('before [{unit}]').format(unit=u))}</th>"
+        f"<th>{e(_('after [{unit}] (95 %)').format(unit=u))}</th><th>URR</th>"
         if check
-        else f"<th>unbalance [{u}] (95 %)</th>"
+        else f"<th>{e(_('unbalance [{unit}] (95 %)').format(unit=u))}</th>"
     )
     rows = []
     for plane in out["planes"]:
@@ -176,52 +196,57 @@ def _results(out: dict[str, Any]) -> str:
         state = tol[i]["verdict"] if i in tol else None
         verdict = (
             "–" if state is None
-            else f'<span class="{"pass" if state == "pass" else "fail"}">{state.upper()}</span>'
+            else f'<span class="{"pass" if state == "pass" else "fail"}">'
+            f"{_verdict_word(state, _)}</span>"
         )  # fmt: skip
         per = d.number(tol[i]["permissible_g_mm"]) if i in tol else "–"
         rows.append(f"<tr><td>{i}</td>{cells}<td>{angle}</td><td>{per}</td><td>{verdict}</td></tr>")
     prev = (
-        f"<p class=muted>Before: the run {e(_file_name(out['check']['previous_run']))}, "
-        "before the correction; after: this run.</p>"
+        "<p class=muted>" + e(_("Before: the run {run}, before the correction; after: this "
+                                "run.").format(run=file_name(out["check"]["previous_run"])))
+        + "</p>"
         if check
         else ""
-    )
-    return (
-        f"<table><tr><th>plane</th>{head}<th>angle</th><th>permissible [{u}]</th>"
-        f"<th>verdict</th></tr>{''.join(rows)}</table>{prev}"
-    )
+    )  # fmt: skip
+    heads = (f"<th>{e(_('plane'))}</th>{head}<th>{e(_('angle'))}</th>"
+             f"<th>{e(_('permissible [{unit}]').format(unit=u))}</th>"
+             f"<th>{e(_('verdict'))}</th>")  # fmt: skip
+    return f"<table><tr>{heads}</tr>{''.join(rows)}</table>{prev}"
 
 
-def _machined(plane: dict[str, Any], c: dict[str, Any], d: Display) -> str:
+def _judged(judged: bool | None, _: Language) -> str:
+    return "" if judged is None else _(" (within tolerance)") if judged else _(" (OVER tolerance)")
+
+
+def _machined(plane: dict[str, Any], c: dict[str, Any], d: Display, _: Language) -> str:
     """A drilled or milled plane: the cuts in drilling order, then what they leave."""
     e = html.escape
-    cuts = [d.hole(h) for h in plane.get("holes") or []]
+    cuts = [d.hole(h, _) for h in plane.get("holes") or []]
     if plane.get("slot"):
-        cuts.append(d.slot(plane["slot"]))
-    judged = c.get("residual_within_tolerance")
-    verdict = "" if judged is None else " (within tolerance)" if judged else " (OVER tolerance)"
+        cuts.append(d.slot(plane["slot"], _))
+    verdict = _judged(c.get("residual_within_tolerance"), _)
     return (
-        f"plane {plane['plane']}: <b>{e(d.cuts(plane))}</b>, removing "
-        f"{e(d.mass(plane['removed_g']))}; leaves {e(d.unbalance(plane['leftover_g_mm']))}"
-        f"{verdict}<ul class=cuts>" + "".join(f"<li>{e(x)}</li>" for x in cuts) + "</ul>"
-    )
+        e(_("plane {i}: ").format(i=plane["plane"])) + f"<b>{e(d.cuts(plane, _))}</b>"
+        + e(_(", removing {mass}; leaves {left}").format(
+            mass=d.mass(plane["removed_g"]), left=d.unbalance(plane["leftover_g_mm"])))
+        + f"{e(verdict)}<ul class=cuts>" + "".join(f"<li>{e(x)}</li>" for x in cuts) + "</ul>"
+    )  # fmt: skip
 
 
-def _corrections(out: dict[str, Any]) -> str:
+def _corrections(out: dict[str, Any], _: Language) -> str:
     d, e = Display.of(out), html.escape
     items = []
     for plane, c in zip(out["planes"], out["corrections"], strict=True):
         i = plane["plane"]
         if c.get("within_noise"):
-            items.append(
-                f"plane {i}: no correction needed: the unbalance is inside its own 95 % interval"
-            )
+            items.append(e(_("plane {i}: no correction needed: the unbalance is inside its own "
+                             "95 % interval").format(i=i)))  # fmt: skip
             continue
         if c.get("within_tolerance"):
-            items.append(f"plane {i}: within tolerance: no correction needed")
+            items.append(e(_("plane {i}: within tolerance: no correction needed").format(i=i)))
             continue
         if "holes" in plane:
-            items.append(_machined(plane, c, d))
+            items.append(_machined(plane, c, d, _))
             continue
         what = " + ".join(
             f"{d.mass(w['mass_g'])}"
@@ -230,58 +255,60 @@ def _corrections(out: dict[str, Any]) -> str:
                 if len(w["pieces_g"]) > 1
                 else ""
             )
-            + f" at {w['angle_deg']:.1f}°"
-            + ("" if w["position"] is None else f" (position {w['position']})")
+            + _(" at {angle}°").format(angle=f"{w['angle_deg']:.1f}")
+            + ("" if w["position"] is None else _(" (position {n})").format(n=w["position"]))
             for w in c["weights"]
         )
         left = ""
         if c["residual_g_mm"] > 0.05:
-            judged = c.get("residual_within_tolerance")
-            left = f"; the weight rounding leaves {d.unbalance(c['residual_g_mm'])}" + (
-                "" if judged is None else " (within tolerance)" if judged else " (OVER tolerance)"
-            )
+            left = _("; the weight rounding leaves {left}").format(
+                left=d.unbalance(c["residual_g_mm"])) + _judged(
+                c.get("residual_within_tolerance"), _)  # fmt: skip
         items.append(
-            f"plane {i}: <b>{e(c['action'])} {e(what)}</b> at radius "
-            f"{d.length(plane['radius_mm'])}{left}"
-        )
+            e(_("plane {i}: ").format(i=i)) + f"<b>{e(_(ACTIONS.get(c['action'], c['action'])))} "
+            f"{e(what)}</b>" + e(_(" at radius {radius}").format(
+                radius=d.length(plane["radius_mm"])) + left)
+        )  # fmt: skip
     return "<ul>" + "".join(f"<li>{x}</li>" for x in items) + "</ul>"
 
 
-def _calibration(out: dict[str, Any], result: Result) -> str:
+def _calibration(out: dict[str, Any], result: Result, _: Language) -> str:
     p, e = result.provenance, html.escape
     when = out["stand"].get("calibrated")
-    cal = f"calibrated on {e(when)}" if when else "design values (no calibration date)"
-    matrix = f"; influence matrix {e(p.matrix)}" if p.matrix else ""
+    cal = (_("calibrated on {date}").format(date=when) if when
+           else _("design values (no calibration date)"))  # fmt: skip
+    matrix = e(_("; influence matrix {matrix}").format(matrix=p.matrix)) if p.matrix else ""
     t = out.get("tooling")
     if t:
         d = Display.of(out)
         parts = ", ".join(
-            f"plane {x['plane']} {d.unbalance(x['unbalance_g_mm'])} at {x['angle_deg']:.1f}°"
+            _("plane {i} {unbalance} at {angle}°").format(
+                i=x["plane"], unbalance=d.unbalance(x["unbalance_g_mm"]),
+                angle=f"{x['angle_deg']:.1f}")
             for x in t["subtracted"]
-        )
+        )  # fmt: skip
         matrix += (
-            f". <b>Tooling compensation:</b> {e(t['name'])}, measured {e(t['measured'][:10])} "
-            f"by the two-run index procedure; its unbalance ({e(parts)}) is subtracted"
-        )
+            f". <b>{e(_('Tooling compensation:'))}</b> " + e(_(
+                "{name}, measured {date} by the two-run index procedure; its unbalance "
+                "({parts}) is subtracted").format(name=t["name"], date=t["measured"][:10],
+                                                   parts=parts))
+        )  # fmt: skip
     return (
-        f"<p><b>Calibration used:</b> {e(_config_named(p.config_source))} (SHA-256 "
-        f"{p.config_sha256[:16]}…, the stand's archive keeps it whole), {cal}{matrix}. "
-        f"Measured with {e(p.software)}.</p>"
-    )
+        f"<p><b>{e(_('Calibration used:'))}</b> " + e(_(
+            "{config} (SHA-256 {digest}…, the stand's archive keeps it whole), {calibration}"
+        ).format(config=_config_named(p.config_source, _), digest=p.config_sha256[:16],
+                 calibration=cal)) + matrix + ". "
+        + e(_("Measured with {software}.").format(software=p.software)) + "</p>"
+    )  # fmt: skip
 
 
-def _file_name(path: str | None) -> str:
-    """A file as a customer's paper names it: its name, never the stand's folders."""
-    return PurePath(path).name if path else "–"
-
-
-def _config_named(source: str | None) -> str:
+def _config_named(source: str | None, _: Language = ENGLISH) -> str:
     """The configuration a run was solved with, as the certificate names it."""
     if not source or source == "the stand's configuration":
-        return "the stand's configuration"
+        return _("the stand's configuration")
     if source in ("scene", "stored") or source.endswith("(stored)"):
-        return "the configuration stored with the run"
-    return f"the configuration {_file_name(source)}"
+        return _("the configuration stored with the run")
+    return _("the configuration {name}").format(name=file_name(source))
 
 
 RELEASE_START, RELEASE_END = "<!--release-->", "<!--/release-->"
@@ -289,111 +316,52 @@ RELEASE_START, RELEASE_END = "<!--release-->", "<!--/release-->"
 its place."""
 
 
-def _signatures(out: dict[str, Any]) -> str:
-    op = html.escape(out["job"].get("operator") or "")
+def _signatures(out: dict[str, Any], _: Language) -> str:
+    e = html.escape
+    op = out["job"].get("operator") or ""
     return (
         f"{RELEASE_START}<div class=sign>"
-        f"<div>balanced by {op}</div><div>date</div>"
-        "<div>inspected by</div><div>date</div>"
+        f"<div>{e(_('balanced by {operator}').format(operator=op))}</div><div>{e(_('date'))}</div>"
+        f"<div>{e(_('inspected by'))}</div><div>{e(_('date'))}</div>"
         f"</div>{RELEASE_END}"
     )
 
 
-def _uncertainty(out: dict[str, Any]) -> str:
-    pu = out.get("parameter_uncertainty")
-    if pu is None:
-        return ""
-    t = pu["tolerances"]
-    d = Display.of(out)
-    rows = "".join(
-        f"<tr><td>{p['plane']}</td><td>±{d.number(p['radius95_monte_carlo_g_mm'])}</td>"
-        f"<td>±{d.number(p['radius95_linear_g_mm'])}</td>"
-        f"<td>±{d.number(p['combined_g_mm'])}</td>"
-        f"<td class=l>{', '.join(f'{k} {100 * s:.0f} %' for k, s in p['largest_shares'])}</td></tr>"
-        for p in pu["planes"]
-    )
-    return (
-        f"<h2>Parameter tolerances</h2><p class=muted>Uniform within C ±{t['C_pct']:g} %, "
-        f"M and J3 ±{t['M_pct']:g} %, lengths ±{d.length(t['length_mm'])}, sensor gains "
-        f"±{t['gain_pct']:g} %; {pu['draws']} Monte Carlo draws.</p>"
-        f"<table><tr><th>plane</th><th>95 % [{d.unbalance_unit}], Monte Carlo</th>"
-        "<th>linearised</th>"
-        "<th>with the measurement</th><th class=l>largest shares</th></tr>"
-        f"{rows}</table>"
-    )
-
-
-def _appendix(out: dict[str, Any], result: Result) -> str:
-    e = html.escape
-    supports = "".join(
-        f"<tr><td>{s['node']}</td><td>{s['amplitude_m_s2']:.4f} ± {s['uncertainty_m_s2']:.4f}</td>"
-        f"<td>{s['phase_deg']:.2f}°</td><td>{s['revolutions']:.0f}</td>"
-        f"<td>{s['noise_m_s2']:.4f}</td></tr>"
-        for s in out["supports"]
-    )
-    warnings = (
-        "".join(f'<div class="warn">{e(w)}</div>' for w in out["warnings"])
-        or "<p class=muted>none</p>"
-    )
-    spectrum, speed = spectrum_and_speed(result.traces, out["rpm"])
-    p = result.provenance
-    meta = {
-        "run file": _file_name(p.run_file), "start time (UTC)": p.start_time,
-        "frames": p.frames, "duration [s]": round(p.duration_s, 3),
-        **_parameters(out),
-    }  # fmt: skip
-    rows = "".join(
-        f"<tr><th class=l>{e(str(k))}</th><td class=l>{e(str(v))}</td></tr>"
-        for k, v in meta.items()
-    )
-    return f"""<div class=appendix>
-<h2>Measurement</h2>
-<table><tr><th>support</th><th>1x amplitude [m/s²] (95 %)</th><th>phase</th><th>revolutions</th>
-<th>noise at 1x [m/s²]</th></tr>{supports}</table>
-{_uncertainty(out)}
-<h2>Spectrum around 1x</h2><img alt="spectrum" src="{spectrum}">
-<h2>Speed over the run</h2><img alt="speed" src="{speed}">
-<h2>Warnings</h2>{warnings}
-<h2>Run and parameters</h2><table>{rows}</table>
-<p class=muted>The whole configuration is kept in the stand's archive under its SHA-256
-({e(p.config_sha256[:16])}…).</p>
-</div>"""
-
-
-def _parameters(out: dict[str, Any]) -> dict[str, str]:
-    """The few parameters a customer needs (the rest stays in the archive)."""
-    d = Display.of(out)
-    got = {"speed [rpm]": f"{out['rpm']:.0f}"}
-    for x in out.get("planes", []):
-        if x.get("radius_mm") is not None:
-            got[f"plane {x['plane']}: correction radius"] = d.length(x["radius_mm"])
-    t = out.get("tolerance") or {}
-    if t.get("source"):
-        got["tolerance"] = str(t["source"])
-    return got
-
-
-def render(result: Result) -> str:
-    """The certificate of a result as one HTML document (figures embedded)."""
-    out = to_json(result)
+def render(result: Result, words: Language = ENGLISH) -> str:
+    """The certificate of a result as one HTML document (figures embedded), in the
+    language ``words`` (the customer's)."""
+    out, _, e = to_json(result), words, html.escape
+    title = e(_("Balancing certificate"))
     return f"""<!doctype html>
-<html lang="en"><head><meta charset="utf-8"><title>Balancing certificate</title>
+<html lang="{_.code}"><head><meta charset="utf-8"><title>{title}</title>
 <style>{CSS}</style></head><body>
-<header><h1>Balancing certificate</h1>{_badge(out)}</header>
-{_job(out, result)}
-{_basis(out)}
-<h2>Unbalance per correction plane</h2>
-{_results(out)}
-<p class=muted>Angles from the reference mark, counted
-<b>against the direction of rotation</b>. Material is removed, or weights added, at the
-angles given.</p>
-<h2>Correction</h2>
-{_corrections(out)}
-<img alt="each plane: tolerance, unbalance, correction" src="{polar(out)}">
-<p class=muted>▼ the reference mark; the arrow: the direction of rotation; angles are counted
-against it from the mark; 1..N: the holes (positions) when the correction uses them.</p>
-{_calibration(out, result)}
-{_signatures(out)}
-{_appendix(out, result)}
+<header><h1>{title}</h1>{_badge(out, _)}</header>
+{_job(out, result, _)}
+{_basis(out, _)}
+<h2>{e(_("Unbalance per correction plane"))}</h2>
+{_results(out, _)}
+<p class=muted>{
+        e(
+            _(
+                "Angles from the reference mark, counted against the direction of "
+                "rotation. Material is removed, or weights added, at the angles given."
+            )
+        )
+    }</p>
+<h2>{e(_("Correction"))}</h2>
+{_corrections(out, _)}
+<img alt="{e(_("each plane: tolerance, unbalance, correction"))}" src="{polar(out, _)}">
+<p class=muted>{
+        e(
+            _(
+                "▼ the reference mark; the arrow: the direction of rotation; angles are "
+                "counted against it from the mark; 1..N: the holes (positions) when the "
+                "correction uses them."
+            )
+        )
+    }</p>
+{_calibration(out, result, _)}
+{_signatures(out, _)}
+{appendix(out, result, _)}
 </body></html>
 """

@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm
-from stand.report.units import Display
+from stand.report.language import ENGLISH, Language
+from stand.report.units import ACTIONS, Display
 from stand.solve.result import Traces
 
 
@@ -79,7 +80,35 @@ def _plane_limits(out: dict[str, Any]) -> dict[int, dict[str, float]]:
     return {k + 1: {"permissible_g_mm": v} for k, v in enumerate(limits)}
 
 
-def polar(out: dict[str, Any]) -> str:
+def _cuts_and_weights(ax: Any, plane: dict[str, Any], corr: dict[str, Any], d: Display,
+                      rmax: float, _: Language) -> None:  # fmt: skip
+    """A plane's correction on its polar plot: the holes (numbered in drilling order, with
+    their depths), the slot, the weights."""
+
+    for h in plane.get("holes") or []:  # numbered in drilling order, with their depths
+        a = math.radians(h["angle_deg"])
+        ax.plot([a, a], [0, rmax * 0.95], color="tab:orange", lw=2.5)
+        at = rmax * (0.82 - 0.3 * (h["number"] % 2 == 0))  # neighbours' labels apart
+        ax.annotate(f"{h['number']}: {d.depth(h['depth_mm'])}", (a, at),
+                    fontsize=9, fontweight="bold", ha="center", color="tab:orange",
+                    bbox={"boxstyle": "round", "fc": "white", "ec": "tab:orange"})  # fmt: skip
+    if plane.get("holes"):
+        ax.plot([], [], color="tab:orange", lw=2.5, label=d.cuts(plane, _))
+    if plane.get("slot"):
+        sl = plane["slot"]
+        arc = np.radians(sl["angle_deg"] + np.linspace(-0.5, 0.5, 50) * sl["arc_deg"])
+        ax.plot(arc, np.full_like(arc, rmax * 0.9), color="tab:orange", lw=6,
+                label=_("slot {arc}° × {depth}").format(
+                    arc=f"{sl['arc_deg']:.0f}", depth=d.depth(sl["depth_mm"])))  # fmt: skip
+    for k, w in enumerate(corr["weights"]):
+        a = math.radians(w["angle_deg"])
+        where = "" if w["position"] is None else _(" (position {n})").format(n=w["position"])
+        text = f"{_(ACTIONS.get(corr['action'], corr['action']))} {d.mass(w['mass_g'])}{where}"
+        ax.plot([a, a], [0, rmax * 0.95], color="tab:blue", lw=2.5,
+                label=text if k < 3 else None)  # fmt: skip
+
+
+def polar(out: dict[str, Any], _: Language = ENGLISH) -> str:
     """Each plane: tolerance, unbalance (before and after a check), correction, holes."""
     import matplotlib.pyplot as plt
 
@@ -101,61 +130,50 @@ def polar(out: dict[str, Any]) -> str:
             per = d.unbalance_value(tol[i]["permissible_g_mm"])
             ax.fill(ring, np.full_like(ring, per), color="tab:green", alpha=0.15)
             ax.plot(ring, np.full_like(ring, per), color="tab:green", lw=1.5,
-                    label=f"tolerance {d.unbalance(tol[i]['permissible_g_mm'])}")  # fmt: skip
+                    label=_("tolerance {limit}").format(
+                        limit=d.unbalance(tol[i]["permissible_g_mm"])))  # fmt: skip
             rmax = max(rmax, per * 1.25)
         if i in check:  # the run before the correction, where it was
             b = check[i]
             ax.plot([math.radians(b["before_angle_deg"])], [d.unbalance_value(b["before_g_mm"])],
-                    "s", color="0.45", ms=7, label=f"before {d.unbalance(b['before_g_mm'])} at "
-                    f"{b['before_angle_deg']:.1f}°")  # fmt: skip
-        word = "after" if i in check else "unbalance"
-        label = f"{word} {d.unbalance(plane['unbalance_g_mm'])} at {plane['angle_deg']:.1f}°"
+                    "s", color="0.45", ms=7, label=_("before {unbalance} at {angle}°").format(
+                        unbalance=d.unbalance(b["before_g_mm"]),
+                        angle=f"{b['before_angle_deg']:.1f}"))  # fmt: skip
+        word = (
+            _("after {unbalance} at {angle}°")
+            if i in check
+            else _("unbalance {unbalance} at {angle}°")
+        )
+        label = word.format(unbalance=d.unbalance(plane["unbalance_g_mm"]),
+                            angle=f"{plane['angle_deg']:.1f}")  # fmt: skip
         ax.plot([phi], [u], "o", color="tab:red", ms=7, label=label)
         z = u * np.exp(1j * phi) + r95 * np.exp(1j * ring)  # the 95 % circle, in the plane
         ax.plot(np.angle(z), np.abs(z), color="tab:red", lw=1)
-        for h in plane.get("holes") or []:  # numbered in drilling order, with their depths
-            a = math.radians(h["angle_deg"])
-            ax.plot([a, a], [0, rmax * 0.95], color="tab:orange", lw=2.5)
-            at = rmax * (0.82 - 0.3 * (h["number"] % 2 == 0))  # neighbours' labels apart
-            ax.annotate(f"{h['number']}: {d.depth(h['depth_mm'])}", (a, at),
-                        fontsize=9, fontweight="bold", ha="center", color="tab:orange",
-                        bbox={"boxstyle": "round", "fc": "white", "ec": "tab:orange"})  # fmt: skip
-        if plane.get("holes"):
-            ax.plot([], [], color="tab:orange", lw=2.5, label=d.cuts(plane))
-        if plane.get("slot"):
-            sl = plane["slot"]
-            arc = np.radians(sl["angle_deg"] + np.linspace(-0.5, 0.5, 50) * sl["arc_deg"])
-            ax.plot(arc, np.full_like(arc, rmax * 0.9), color="tab:orange", lw=6,
-                    label=f"slot {sl['arc_deg']:.0f}° × {d.depth(sl['depth_mm'])}")  # fmt: skip
-        for k, w in enumerate(corr["weights"]):
-            a = math.radians(w["angle_deg"])
-            where = "" if w["position"] is None else f" (position {w['position']})"
-            text = f"{corr['action']} {d.mass(w['mass_g'])}{where}"
-            ax.plot([a, a], [0, rmax * 0.95], color="tab:blue", lw=2.5,
-                    label=text if k < 3 else None)  # fmt: skip
+        _cuts_and_weights(ax, plane, corr, d, rmax, _)
         ax.set_rmax(rmax)
         ax.set_rticks(_ticks(rmax))
         ax.set_rlabel_position(112)
         _grid(ax, out.get("correction_positions", {}))
         _rotation(ax, rmax)
-        ax.set_title(f"plane {i} [{d.unbalance_unit}]", pad=26)
+        ax.set_title(_("plane {i} [{unit}]").format(i=i, unit=d.unbalance_unit), pad=26)
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), fontsize=8, frameon=False)
     return png(fig)
 
 
-def spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
+def spectrum_and_speed(traces: Traces | None, rpm: float,
+                       _: Language = ENGLISH) -> tuple[str, str]:  # fmt: skip
     """The spectrum around 1x and the speed over the run, per node."""
     import matplotlib.pyplot as plt
 
     f1 = rpm / 60
     fig, ax = plt.subplots(figsize=(9, 3.2))
     for n, (f, spec) in sorted((traces.spectra if traces else {}).items()):
-        ax.semilogy(f, spec, lw=1, label=f"support {n}")
+        ax.semilogy(f, spec, lw=1, label=_("support {n}").format(n=n))
     for k in (1, 2, 3):
         ax.axvline(k * f1, color="grey", ls=":", lw=1)
         ax.text(k * f1, ax.get_ylim()[1], f"{k}x", ha="center", va="bottom", fontsize=8)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("amplitude [m/s²]")
+    ax.set_xlabel(_("frequency [Hz]"))
+    ax.set_ylabel(_("amplitude [m/s²]"))
     if ax.get_legend_handles_labels()[0]:  # without traces no curve to name
         ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
@@ -163,9 +181,9 @@ def spectrum_and_speed(traces: Traces | None, rpm: float) -> tuple[str, str]:
 
     fig, ax = plt.subplots(figsize=(9, 2.6))
     for n, (t, w) in sorted((traces.speeds if traces else {}).items()):
-        ax.plot(t, rad_s_to_rpm(w), lw=1, label=f"node {n}")
-    ax.set_xlabel("time [s] (node clock)")
-    ax.set_ylabel("speed [rpm]")
+        ax.plot(t, rad_s_to_rpm(w), lw=1, label=_("node {n}").format(n=n))
+    ax.set_xlabel(_("time [s] (node clock)"))
+    ax.set_ylabel(_("speed [rpm]"))
     ax.ticklabel_format(axis="y", useOffset=False, style="plain")
     lo, hi = ax.get_ylim()
     mid = 0.5 * (lo + hi)

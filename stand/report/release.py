@@ -9,6 +9,7 @@ import html
 from dataclasses import dataclass
 
 from stand.report.certificate import RELEASE_END, RELEASE_START, local_time
+from stand.report.language import ENGLISH, Language
 
 
 @dataclass(frozen=True)
@@ -32,23 +33,26 @@ class Release:
     meaning: str = "released"
 
 
-def released(page: str, r: Release) -> str:
+def released(page: str, r: Release, words: Language = ENGLISH) -> str:
     """The certificate ``page`` with its signature block replaced by the release ``r``:
     the account, the time (local and UTC), the meaning, and the run's SHA-256 it is bound
     to (the audit trail keeps the released file's SHA-256: ``stand audit check FILE``)."""
     head, _, rest = page.partition(RELEASE_START)
     _, _, tail = rest.partition(RELEASE_END)
-    e = html.escape
-    role = f" ({e(r.role)})" if r.role else ""
-    block = (
-        "<div class=released><h2>Release</h2><table>"
-        f"<tr><th>released by</th><td>{e(r.who)}{role}</td></tr>"
-        f"<tr><th>on</th><td>{e(local_time(r.at_utc))} ({e(r.at_utc[:19].replace('T', ' '))} "
-        "UTC)</td></tr>"
-        f"<tr><th>meaning</th><td>{e(r.meaning)}: the rotor was balanced and measured as "
-        "this certificate states</td></tr>"
-        f"<tr><th>run file SHA-256</th><td class=digest>{e(r.run_sha256)}</td></tr>"
-        "</table><p class=muted>Signed electronically in the stand's software; the "
-        "stand's audit trail holds this document's SHA-256 (stand audit check).</p></div>"
+    e, _ = html.escape, words
+    role = f" ({e(_(r.role))})" if r.role else ""
+    rows = (
+        (_("released by"), f"{e(r.who)}{role}"),
+        (_("on"), e(local_time(r.at_utc)) + f" ({e(r.at_utc[:19].replace('T', ' '))} UTC)"),
+        (_("meaning"), e(_("released: the rotor was balanced and measured as this "
+                           "certificate states"))),
+        (_("run file SHA-256"), f"<span class=digest>{e(r.run_sha256)}</span>"),
+    )  # fmt: skip
+    table = "".join(f"<tr><th>{e(k)}</th><td>{v}</td></tr>" for k, v in rows)
+    note = _(
+        "Signed electronically in the stand's software; the stand's audit trail holds "
+        "this document's SHA-256 (stand audit check)."
     )
+    block = (f"<div class=released><h2>{e(_('Release'))}</h2><table>{table}</table>"
+             f"<p class=muted>{e(note)}</p></div>")  # fmt: skip
     return f"{head}{RELEASE_START}{block}{RELEASE_END}{tail}"

@@ -16,10 +16,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from stand.report.language import ENGLISH, N_, Language
+
 G_PER_OZ = 28.349523125
 """Grams in an avoirdupois ounce (exact by definition)."""
 MM_PER_IN = 25.4
 """Millimetres in an inch (exact by definition)."""
+
+
+ACTIONS = {"remove": N_("remove"), "add": N_("add"), "drill": N_("drill"), "mill": N_("mill")}
+"""A correction's action, as the certificate and its figures say it."""
 
 
 @dataclass(frozen=True)
@@ -65,35 +71,46 @@ class Display:
             return f"{self.length_value(mm):.4f} in"
         return f"{round(mm, 2):g} mm"
 
-    def hole(self, h: dict[str, Any]) -> str:
+    def hole(self, h: dict[str, Any], _: Language = ENGLISH) -> str:
         """One drilled hole of a result's JSON form, in the machinist's words."""
-        return (
-            f"hole {h['number']} at {h['angle_deg']:.1f} deg: {self.length(h['diameter_mm'])} "
-            f"drill ({h['point_angle_deg']:g} deg point), {self.depth(h['depth_mm'])} deep to "
-            f"the tip ({self.mass(h['mass_g'])})"
-        )
+        return _("hole {n} at {angle} deg: {diameter} drill ({point} deg point), {depth} deep "
+                 "to the tip ({mass})").format(
+            n=h["number"], angle=f"{h['angle_deg']:.1f}", diameter=self.length(h["diameter_mm"]),
+            point=f"{h['point_angle_deg']:g}", depth=self.depth(h["depth_mm"]),
+            mass=self.mass(h["mass_g"]))  # fmt: skip
 
-    def slot(self, s: dict[str, Any]) -> str:
+    def slot(self, s: dict[str, Any], _: Language = ENGLISH) -> str:
         """A milled slot of a result's JSON form, in the machinist's words."""
-        return (
-            f"slot centred at {s['angle_deg']:.1f} deg over {s['arc_deg']:.1f} deg "
-            f"({self.depth(s['arc_length_mm'])} of arc): {self.length(s['width_mm'])} wide, "
-            f"{self.depth(s['depth_mm'])} deep ({self.mass(s['mass_g'])})"
-        )
+        return _("slot centred at {angle} deg over {arc} deg ({length} of arc): {width} wide, "
+                 "{depth} deep ({mass})").format(
+            angle=f"{s['angle_deg']:.1f}", arc=f"{s['arc_deg']:.1f}",
+            length=self.depth(s["arc_length_mm"]), width=self.length(s["width_mm"]),
+            depth=self.depth(s["depth_mm"]), mass=self.mass(s["mass_g"]))  # fmt: skip
 
-    def cuts(self, plane: dict[str, Any]) -> str:
+    def cuts(self, plane: dict[str, Any], _: Language = ENGLISH) -> str:
         """Where a plane's holes or slot go in: ``radial holes into radius 90 mm``."""
         holes, slot = plane.get("holes") or [], plane.get("slot")
         if slot:
-            return f"mill into radius {self.length(slot['entry_radius_mm'])}"
+            return _("mill into radius {radius}").format(
+                radius=self.length(slot["entry_radius_mm"])
+            )
         if not holes:
-            return "no cut"
-        n = len(holes)
-        where = "into radius" if holes[0]["direction"] == "radial" else "parallel to the axis at"
-        return (
-            f"drill {n} {holes[0]['direction']} hole{'s' if n > 1 else ''} {where} "
-            f"{self.length(holes[0]['entry_radius_mm'])}"
-        )
+            return _("no cut")
+        n, radius = len(holes), self.length(holes[0]["entry_radius_mm"])
+        radial = holes[0]["direction"] == "radial"
+        if n == 1:
+            text = (
+                _("drill 1 radial hole into radius {radius}")
+                if radial
+                else _("drill 1 axial hole parallel to the axis at {radius}")
+            )
+        else:
+            text = (
+                _("drill {n} radial holes into radius {radius}")
+                if radial
+                else _("drill {n} axial holes parallel to the axis at {radius}")
+            )
+        return text.format(n=n, radius=radius)  # fmt: skip
 
     def unbalance(self, g_mm: float) -> str:
         """``5000.0 g mm``, or about as many digits in other units."""

@@ -27,6 +27,7 @@ from stand.field import balance_speeds, speeds_json
 from stand.health import datum_row, health, health_json
 from stand.plant import export_qdas
 from stand.report import Release, released, render_speeds, write_pdf
+from stand.report.language import Language
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
@@ -44,6 +45,10 @@ class ArchiveSide:
 
     def stand_id(self) -> str:
         """The station's stand id (:meth:`stand.station.service.Station.stand_id`)."""
+        raise NotImplementedError
+
+    def language(self, code: str | None) -> Language:
+        """A language (:meth:`stand.station.service.Station.language`)."""
         raise NotImplementedError
 
     def waiting_job(self) -> dict[str, Any] | None:
@@ -172,7 +177,8 @@ class ArchiveSide:
                 digest = run_digest(self.archive_url, run_id) or ""
                 now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
                 page = released(report.read_text(encoding="utf-8"),
-                                Release(who, role, now, digest))  # fmt: skip
+                                Release(who, role, now, digest),
+                                self.language(None))  # the report's language  # fmt: skip
                 write_pdf(page, pdf, inputs=[str(report)])
                 record(self.archive_url, Change(
                     "release", f"certificate of run {run_id} ({report.stem})", digest,

@@ -372,7 +372,7 @@ class Station(ArchiveSide):
         notes = []
         run = Path(result.provenance.run_file)
         try:
-            data = render(result).encode("utf-8")
+            data = render(result, self.language(None)).encode("utf-8")
             with output(run.with_suffix(".html"), need_bytes=len(data)) as tmp:
                 tmp.write_bytes(data)
         except StandError as exc:
