@@ -79,7 +79,9 @@ def _digest(state: dict[str, Any] | None) -> str | None:
 def run(args: argparse.Namespace) -> int:
     url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
     if args.action == "list":
-        found = accounts_of(url)
+        found = [
+            {k: v for k, v in a.items() if k != "credentials_sha256"} for a in accounts_of(url)
+        ]
         if args.json:
             dump_json({"accounts": found})
         for a in [] if args.json else found:

@@ -7,12 +7,13 @@ account's rights before an action (a note on the screen, 403 on a route, saying 
 from __future__ import annotations
 
 import html
+import logging
 from typing import Any
 
 from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
-from stand.errors import UsageError
+from stand.errors import StandError, UsageError
 from stand.report.language import N_, Language
 from stand.station.service import Station
 from stand.station.sessions import Session, allowed_roles
@@ -20,6 +21,7 @@ from stand.station.sessions import Session, allowed_roles
 FORM_WORDS = {"account": N_("account"), "password": N_("password"),
               "badge": N_("or scan your badge"), "log_in": N_("LOG IN")}  # fmt: skip
 """The log-in form's words."""
+log = logging.getLogger(__name__)
 COOKIE = "stand_session"
 """The cookie that carries the session's token."""
 FORM = """
@@ -83,13 +85,20 @@ def require(station: Station, right: str, what: str) -> None:
         raise UsageError(_("refused: {why}").format(why=why))
 
 
-def login_screen(_: Language, *, failed: bool) -> None:
-    """The log-in form (``failed``: the last try was refused)."""
+def login_screen(_: Language, *, failed: str | None) -> None:
+    """The log-in form (``failed``: why the last try was refused: ``failed``, or
+    ``unavailable`` when the accounts did not read)."""
     ui.label(_("Log in")).classes("big")
     if failed:
-        ui.label(_("wrong account, password or badge (or the account is disabled)")).classes(
-            "text-h6 text-red-10"
-        ).mark("login-failed")
+        why = (
+            _(
+                "the accounts cannot be read now (the station's log says why): try again "
+                "or ask the administrator"
+            )
+            if failed == "unavailable"
+            else _("wrong account, password or badge (or the account is disabled)")
+        )
+        ui.label(why).classes("text-h6 text-red-10").mark("login-failed")
     form = FORM.format(**{k: html.escape(_(v)) for k, v in FORM_WORDS.items()})
     ui.html(form, sanitize=False).mark("login")  # our own form: only our words in it
 
@@ -117,8 +126,12 @@ def add_login_routes(station: Station) -> None:
         form = await request.form()
         account, password = str(form.get("account", "")), str(form.get("password", ""))
         badge = str(form.get("badge", ""))
-        s = (station.sessions.log_in_badge(badge) if badge
-             else station.sessions.log_in(account, password))  # fmt: skip
+        try:
+            s = (station.sessions.log_in_badge(badge) if badge
+                 else station.sessions.log_in(account, password))  # fmt: skip
+        except StandError as exc:  # the accounts do not read: said here and in the log
+            log.warning("log-in not possible: %s", exc)
+            return RedirectResponse("/?login=unavailable", status_code=303)
         reply = RedirectResponse("/" if s else "/?login=failed", status_code=303)
         if s is not None:
             reply.set_cookie(COOKIE, s.token, httponly=True, samesite="strict")

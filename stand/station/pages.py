@@ -82,7 +82,7 @@ def frame(station: Station) -> None:
         with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
             ui.label(_("Balancing station")).classes("text-h5 q-mr-lg")
         with ui.column().classes("w-full q-pa-md"):
-            login_screen(_, failed=request.query_params.get("login") == "failed")
+            login_screen(_, failed=request.query_params.get("login"))
         return
     app.storage.client["session"] = None if session is None else session.token
     with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):

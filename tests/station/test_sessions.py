@@ -59,3 +59,16 @@ def test_a_refusal_says_who_may(url: str) -> None:
         "kim (Bediener) darf nicht: ein Wuchtprotokoll freigeben; nötig ist Einrichter oder "
         "Ingenieur oder Administrator"
     )
+
+
+def test_a_row_no_writer_made_is_an_error_the_log_in_says(url: str) -> None:
+    """A hostile accounts row: log-in raises the archive's row error (a StandError the
+    log-in route turns into "the accounts cannot be read now"), never lets anyone in."""
+    import sqlite3
+
+    from stand.errors import StandError
+
+    with sqlite3.connect(url.removeprefix("sqlite:///")) as db:
+        db.execute("UPDATE accounts SET role = 'god' WHERE name = 'kim'")
+    with pytest.raises(StandError, match="role"):
+        Sessions(url).log_in("kim", "a-long-password")
