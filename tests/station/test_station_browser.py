@@ -357,15 +357,7 @@ def test_the_screens_work_from_the_keyboard_alone(browser: Any, tmp_path: Path) 
             _tab_to(browser, label).send_keys(text)
         _tab_to(browser, "Start measuring").send_keys(Keys.ENTER)
         _see(browser, "vibration at the supports")  # the first estimate: an answer to stop on
-        for width, height in ((1024, 768), (1280, 800)):  # STOP on screen at either size
-            browser.set_window_size(width, height)
-            top, bottom, inner = browser.execute_script(
-                "const b = [...document.querySelectorAll('button')].find("
-                "x => x.innerText.trim().toUpperCase() === 'STOP');"
-                "const r = b.getBoundingClientRect(); return [r.top, r.bottom, innerHeight];"
-            )
-            assert 0 <= top and bottom <= inner, (width, height, top, bottom, inner)
-        browser.set_window_size(1400, 950)
+        _stop_on_screen(browser, "STOP")
         _tab_to(browser, "Stop").send_keys(Keys.ENTER)
         _tab_to(browser, "Go to the correction").send_keys(Keys.ENTER)
         _see(browser, "in hole")
@@ -415,6 +407,21 @@ def test_the_mes_job_fills_start_and_a_started_one_starts(browser: Any, tmp_path
     assert run["job"] == "MES-8" and states["MES-8"]["run_id"] == run["id"]
     assert states["MES-8"]["state"] == ("Ended" if run["verdict"] == "pass" else "Running")
     assert states["MES-7"]["state"] == "AllowedToStart"  # shown, never started
+
+
+def _stop_on_screen(browser: Any, word: str) -> None:
+    """The Stop button (its text ``word`` as shown) wholly inside the window at 1024 x 768
+    and at 1280 x 800; the window back to its size after."""
+    for width, height in ((1024, 768), (1280, 800)):
+        browser.set_window_size(width, height)
+        top, bottom, inner = browser.execute_script(
+            "const b = [...document.querySelectorAll('button')].find("
+            "x => x.innerText.trim().toUpperCase() === arguments[0]);"
+            "const r = b.getBoundingClientRect(); return [r.top, r.bottom, innerHeight];",
+            word,
+        )
+        assert 0 <= top and bottom <= inner, (word, width, height, top, bottom, inner)
+    browser.set_window_size(1400, 950)
 
 
 def _fetch(base: str, path: str, cookies: list[dict[str, Any]]) -> tuple[int, bytes]:
@@ -530,7 +537,18 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         _shot(browser, tmp_path, "correct-uk")
     german = tmp_path / "de"
     german.mkdir()
-    with served(german, "--lang", "de") as base:
+    strict = german / "rotors"  # a grade no run proves: it measures until stopped
+    strict.mkdir()
+    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    (strict / "demo-auger.toml").write_text(text.replace("grade_mm_s = 6.3", "grade_mm_s = 0.1"))
+    with served(german, "--lang", "de", "--config-dir", str(strict)) as base:
         browser.get(base + "/")
         _see(browser, "Neuer Rotor")
         _see(browser, "Einzelplatz: keine Benutzerkonten")
+        _type(browser, "Seriennummer", "D-1")
+        _button(browser, "Messung starten").click()
+        _see(browser, "Schwingung an den Lagern")  # the first estimate, in German
+        _stop_on_screen(browser, "STOPP")  # the longer header still leaves Stop in view
+        _button(browser, "Stopp").click()
+        _button(browser, "Zur Korrektur", 60).click()
+        _see(browser, "Korrektur für D-1")
