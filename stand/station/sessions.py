@@ -50,15 +50,17 @@ class Sessions:
         self._required: tuple[float, bool] = (-1e9, False)
 
     def required(self) -> bool:
-        """Whether the archive has an account (then every screen needs a session); an
-        archive that does not answer requires them (never open by accident)."""
+        """Whether the archive has an account (then every screen needs a session).  An
+        archive that does not answer keeps the last answer it gave (a lone stand goes on
+        measuring; a stand with accounts stays closed); one that never answered requires
+        them (never open by accident)."""
         at, answer = self._required
         if time.monotonic() - at < CHECK_ACCOUNTS_S:
             return answer
         try:
             answer = bool(accounts_of(self.archive_url))
         except StandError:
-            answer = True
+            answer = answer if at >= 0 else True
         self._required = (time.monotonic(), answer)
         return answer
 

@@ -72,3 +72,23 @@ def test_a_row_no_writer_made_is_an_error_the_log_in_says(url: str) -> None:
         db.execute("UPDATE accounts SET role = 'god' WHERE name = 'kim'")
     with pytest.raises(StandError, match="role"):
         Sessions(url).log_in("kim", "a-long-password")
+
+
+def test_an_archive_that_stops_answering_keeps_the_last_answer(tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch
+                                                               ) -> None:  # fmt: skip
+    """A lone stand whose archive goes away goes on without log-in; one never reached
+    asks for it."""
+    import stand.station.sessions as sessions_module
+    from stand.errors import ArchiveError
+
+    lone = Sessions(f"sqlite:///{tmp_path / 'a.sqlite'}")
+    assert lone.required() is False
+
+    def gone(url: str) -> list[object]:
+        raise ArchiveError("the archive does not answer", url=url)
+
+    monkeypatch.setattr(sessions_module, "CHECK_ACCOUNTS_S", 0.0)
+    monkeypatch.setattr(sessions_module, "accounts_of", gone)
+    assert lone.required() is False  # as it last said
+    assert Sessions(f"sqlite:///{tmp_path / 'b.sqlite'}").required() is True  # never said
