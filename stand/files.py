@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from stand.errors import DiskFullError, RecordingError, WriteError
+from stand.errors import DiskFullError, RecordingError, UsageError, WriteError
 
 HEADROOM_BYTES = 1 << 18
 """Room kept free beyond each write's own need (HDF5's metadata, the file system's)."""
@@ -101,6 +101,15 @@ def check_input(path: str | Path) -> Path:
     if not stat.S_ISREG(mode):
         raise RecordingError(f"is {_kind(mode)}: not read", path=str(p))
     return p
+
+
+def first_line(path: str | Path, what: str) -> str:
+    """The first line of a small text file (a password, a badge's code), stripped
+    (UsageError naming ``what`` and the file when there is none to read)."""
+    try:
+        return Path(path).read_text(encoding="utf-8").splitlines()[0].strip()
+    except (OSError, IndexError, UnicodeDecodeError):
+        raise UsageError(f"{path}: cannot read {what} from it (its first line)") from None
 
 
 def strict_json(text: str) -> Any:

@@ -21,7 +21,7 @@ from typing import Any
 
 from stand.archive.schema import accounts
 from stand.archive.store import Archive
-from stand.archive.validate import account_row, shown_url
+from stand.archive.validate import account_row, as_stored, shown_url
 from stand.errors import UsageError
 
 ROLES = ("operator", "setter", "engineer", "administrator")
@@ -113,12 +113,10 @@ def set_account(url: str, name: str, *, role: str | None = None, password: str |
 
 
 def _select() -> Any:
-    """Every column, and ``active`` as stored too (SQLAlchemy makes any non-zero SQLite
-    value True: the check must see it first)."""
+    """Every column, and ``active`` as stored too (:func:`as_stored`)."""
     import sqlalchemy as sa
 
-    raw = sa.type_coerce(accounts.c.active, sa.types.NullType())
-    return sa.select(accounts, raw.label("active_raw"))
+    return sa.select(accounts, as_stored(accounts.c.active))
 
 
 def _rows(url: str, *where: Any) -> list[dict[str, Any]]:

@@ -22,7 +22,7 @@ from typing import Any
 
 from stand.archive.schema import jobs
 from stand.archive.store import Archive
-from stand.archive.validate import JOB_STATES, job_row, shown_url
+from stand.archive.validate import JOB_STATES, as_stored, job_row, shown_url
 
 MAX_JOBS = 100
 """The most job orders a stand keeps at once (MaxDownloadableJobOrders)."""
@@ -47,12 +47,10 @@ def _where(stand: str, job_id: str) -> Any:
 
 
 def _select() -> Any:
-    """Every column, and ``start_requested`` as stored too (SQLAlchemy makes any non-zero
-    SQLite value True: the check must see it first)."""
+    """Every column, and ``start_requested`` as stored too (:func:`as_stored`)."""
     import sqlalchemy as sa
 
-    raw = sa.type_coerce(jobs.c.start_requested, sa.types.NullType())
-    return sa.select(jobs, raw.label("start_requested_raw"))
+    return sa.select(jobs, as_stored(jobs.c.start_requested))
 
 
 def store_job(archive: Archive, stand: str, fields: dict[str, Any], *, start: bool) -> str | None:

@@ -13,7 +13,7 @@ from typing import Any
 from stand.archive.revisions import revision_id_in
 from stand.archive.schema import planes, revised, revised_planes, runs
 from stand.archive.store import Archive
-from stand.archive.validate import checked_planes, checked_runs, run_row, shown_url
+from stand.archive.validate import as_stored, checked_planes, checked_runs, run_row, shown_url
 
 
 @dataclass(frozen=True)
@@ -135,7 +135,7 @@ def plane_rows(conn: Any, ids: list[int], revision: str | None = None) -> Iterat
     if revision is not None:
         table = revised_planes
         where = [revised_planes.c.revision_id == revision_id_in(conn, revision)]
-    raw = sa.type_coerce(table.c.passed, sa.types.NullType()).label("passed_raw")
+    raw = as_stored(table.c.passed)
     url = shown_url(conn)
     for part in chunks(ids):
         found = conn.execute(

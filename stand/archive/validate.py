@@ -107,12 +107,12 @@ class _Row:
             raise self.fail(column, f"{str(self.get(column))[:70]!r} is not a SHA-256 digest")
 
     def flag(self, column: str) -> None:
-        """A boolean: ``passed_raw`` is ``passed`` as stored, before SQLAlchemy makes any
-        non-zero SQLite value True."""
-        v = self.get(column)
-        if self.has(column) and not (v is None or (type(v) in (bool, int) and v in (0, 1))):
-            name = column.removesuffix("_raw")
-            raise self.fail(name, f"{v!r} is not true, false or empty")
+        """A boolean, as stored where the row carries it so (``<column>_raw``,
+        :func:`as_stored`): SQLAlchemy makes any non-zero SQLite value True."""
+        stored = f"{column}_raw" if self.has(f"{column}_raw") else column
+        v = self.get(stored)
+        if self.has(stored) and not (v is None or (type(v) in (bool, int) and v in (0, 1))):
+            raise self.fail(column, f"{v!r} is not true, false or empty")
 
     def json_object(self, column: str, *, none: bool = False) -> dict[str, Any] | None:
         v = self.get(column)
@@ -125,6 +125,15 @@ class _Row:
         if not isinstance(doc, dict):
             raise self.fail(column, "not a JSON object")
         return doc
+
+
+def as_stored(column: Any) -> Any:
+    """A boolean ``column`` as the database holds it, labelled ``<name>_raw``, to select
+    beside it: :meth:`_Row.flag` checks that value (SQLAlchemy would make any non-zero
+    SQLite value True)."""
+    import sqlalchemy as sa
+
+    return sa.type_coerce(column, sa.types.NullType()).label(f"{column.name}_raw")
 
 
 def shown_url(conn: Any) -> str:
@@ -162,7 +171,7 @@ def plane_row(row: Any, url: str, table: str = "planes") -> Any:
         r.number(part, -MAX_UNBALANCE_KG_M, MAX_UNBALANCE_KG_M)
     r.number("radius95_kg_m", 0.0, MAX_UNBALANCE_KG_M)
     r.number("permissible_kg_m", 1e-15, MAX_UNBALANCE_KG_M, none=True)
-    r.flag("passed_raw" if r.has("passed_raw") else "passed")
+    r.flag("passed")
     r.number("leftover_kg_m", 0.0, MAX_UNBALANCE_KG_M)
     r.number("urr", -1e6, 1e6, none=True)
     return row
@@ -251,7 +260,7 @@ def job_row(row: Any, url: str) -> dict[str, Any]:
         r.text(column, 64)
     r.text("description", 4000)
     r.choice("state", frozenset(JOB_STATES))
-    r.flag("start_requested_raw" if r.has("start_requested_raw") else "start_requested")
+    r.flag("start_requested")
     r.time("stored_at")
     for column in ("started_at", "ended_at"):
         if r.get(column) is not None:
@@ -294,7 +303,7 @@ def account_row(row: Any, url: str, roles: tuple[str, ...]) -> dict[str, Any]:
         raise r.fail("password_hash", "not a password hash")
     if r.get("badge_sha256") is not None:
         r.digest("badge_sha256")
-    r.flag("active_raw" if r.has("active_raw") else "active")
+    r.flag("active")
     r.text("language", 8)
     r.time("created_at")
     r.time("changed_at")

@@ -14,6 +14,7 @@ from stand.archive import Archive, url_for
 from stand.cli.common import add_archive_argument
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.errors import UsageError
+from stand.files import first_line
 from stand.plant import Access, ResultServer
 
 
@@ -46,12 +47,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def read_access(args: argparse.Namespace) -> Any:
     """The options' user and password (:class:`stand.plant.opcua.Access`)."""
 
-    password = None
-    if args.password_file:
-        try:
-            password = Path(args.password_file).read_text().splitlines()[0].strip()
-        except (OSError, IndexError, UnicodeDecodeError):
-            raise UsageError(f"{args.password_file}: cannot read a password from it") from None
+    password = first_line(args.password_file, "a password") if args.password_file else None
     if bool(args.user) != bool(password):
         raise UsageError("stand opcua: --user and --password-file go together")
     return Access(args.user, password)

@@ -7,7 +7,6 @@ import argparse
 import getpass
 import json
 import sys
-from pathlib import Path
 from typing import Any
 
 from stand.archive import url_for
@@ -17,6 +16,7 @@ from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError
+from stand.files import first_line
 from stand.report.language import LANGUAGES
 
 
@@ -53,16 +53,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true", help="list: print one JSON object")
 
 
-def _first_line(path: str, what: str) -> str:
-    try:
-        return Path(path).read_text(encoding="utf-8").splitlines()[0].strip()
-    except (OSError, IndexError, UnicodeDecodeError):
-        raise UsageError(f"{path}: cannot read {what} from it (its first line)") from None
-
-
 def _password(args: argparse.Namespace) -> str:
     if args.password_file:
-        return _first_line(args.password_file, "a password")
+        return first_line(args.password_file, "a password")
     if sys.stdin.isatty():
         first = getpass.getpass(f"password for {args.name}: ")
         if getpass.getpass("again: ") != first:
@@ -92,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     if args.action == "add":
         if not args.role:
             raise UsageError("stand users add: --role is required")
-        badge = _first_line(args.badge_file, "a badge code") if args.badge_file else None
+        badge = first_line(args.badge_file, "a badge code") if args.badge_file else None
         before, after = None, add_account(url, args.name, args.role, _password(args), badge,
                                           args.language)  # fmt: skip
     else:

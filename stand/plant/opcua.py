@@ -27,7 +27,6 @@ from typing import Any
 
 from stand.archive import Archive
 from stand.archive.evaluations import evaluation_by_id, evaluation_ids
-from stand.archive.jobs import MAX_JOBS
 from stand.archive.query import latest, latest_id, newest_ids
 from stand.errors import ArchiveError, StandError, UsageError
 from stand.plant.ua_call import guarded
@@ -186,7 +185,6 @@ class ResultServer:
         masters = [ua.ISA95WorkMasterDataType(ID=t) for t in types]
         await n["WorkMaster"].write_value(ua.Variant(masters, ua.VariantType.ExtensionObject))
         await n["MaterialDefinitionID"].write_value(ua.Variant(types, ua.VariantType.String))
-        await n["MaxDownloadableJobOrders"].write_value(ua.Variant(MAX_JOBS, ua.VariantType.UInt16))
         await n["CurrentState"].write_value(ua.LocalizedText(current))
         state_id = ua.NodeId(JOB_STATES[current][0], self._ns.isa95) if current else ua.NodeId()
         await n["CurrentState/Id"].write_value(ua.Variant(state_id, ua.VariantType.NodeId))

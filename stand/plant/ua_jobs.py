@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from stand.archive.jobs import MAX_JOBS
 from stand.plant.ua_model import ISA95_URI, JOBS_URI, Namespaces, structure, structure_field
 from stand.plant.ua_nodes import add_node, add_property, argument, arguments, modelling_rule
 
@@ -232,7 +233,8 @@ async def receiver_children(
 ) -> dict[str, Any]:  # fmt: skip
     """A JobOrderControl's variables (CurrentState with its Id, the ISA-95 lists,
     MaxDownloadableJobOrders), their NodeIds ``ids(name)``: the type's declarations
-    (Mandatory) or an instance's (``stand`` its EquipmentID); the nodes by name."""
+    (Mandatory) or an instance's (``stand`` its EquipmentID, :data:`MAX_JOBS` the most it
+    keeps); the nodes by name."""
     from asyncua import ua
 
     i = ns.isa95
@@ -264,7 +266,8 @@ async def receiver_children(
     nodes["MaxDownloadableJobOrders"] = await add_property(
         server, parent, ids("MaxDownloadableJobOrders"),
         ua.QualifiedName("MaxDownloadableJobOrders", i),
-        ua.Variant(0, ua.VariantType.UInt16), mandatory=declaration)  # fmt: skip
+        ua.Variant(0 if declaration else MAX_JOBS, ua.VariantType.UInt16),
+        mandatory=declaration)  # fmt: skip
     if declaration:
         for name in ("CurrentState", *RECEIVER_VARIABLES):
             await modelling_rule(server, ids(name), mandatory=True)

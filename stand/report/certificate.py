@@ -20,7 +20,7 @@ from typing import Any
 from stand.report.appendix import appendix, file_name
 from stand.report.language import ENGLISH, N_, Language
 from stand.report.plots import polar
-from stand.report.units import ACTIONS, Display
+from stand.report.units import ACTIONS, Display, verdict_word
 from stand.solve import Result, to_json
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 
@@ -79,8 +79,6 @@ BADGES = {
 }
 """The one verdict (:mod:`stand.solve.verdict`) as the certificate's badge: its style and
 its words."""
-PLANE_VERDICTS = {"pass": N_("PASS"), "fail": N_("FAIL"), "undecided": N_("UNDECIDED")}
-"""A criterion's verdict, as the tables say it."""
 
 
 def _badge(out: dict[str, Any], _: Language) -> str:
@@ -89,7 +87,7 @@ def _badge(out: dict[str, Any], _: Language) -> str:
 
 
 def _verdict_word(state: str, _: Language) -> str:
-    return html.escape(_(PLANE_VERDICTS.get(state, state.upper())))
+    return html.escape(verdict_word(state, _))
 
 
 def _job(out: dict[str, Any], result: Result, _: Language) -> str:

@@ -18,6 +18,7 @@ import numpy as np
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.report import Display
 from stand.report.language import ENGLISH, N_, Language
+from stand.report.units import verdict_word
 
 ANGLE_NOTE = N_("angles from the reference mark, against the direction of rotation")
 RING = np.linspace(0.0, 2.0 * math.pi, 73)
@@ -244,10 +245,6 @@ def instructions(out: dict[str, Any], _: Language = ENGLISH) -> list[Instruction
     return found
 
 
-VERDICTS = {"pass": N_("PASS"), "fail": N_("FAIL"), "undecided": N_("UNDECIDED")}
-"""A plane's verdict, as the check's table says it."""
-
-
 def check_rows(out: dict[str, Any], _: Language = ENGLISH) -> list[dict[str, Any]]:
     """Per plane: before, after, URR [%] and the verdict of a check run's JSON form."""
     u = Display.of(out)
@@ -262,7 +259,7 @@ def check_rows(out: dict[str, Any], _: Language = ENGLISH) -> list[dict[str, Any
             "after": u.unbalance(p["after_g_mm"]),
             "urr": f"{100 * p['urr']:.1f} %" if p.get("urr") is not None else "-",
             "permissible": "-" if t is None else u.unbalance(t["permissible_g_mm"]),
-            "verdict": "-" if t is None else _(VERDICTS.get(t["verdict"], t["verdict"].upper())),
+            "verdict": "-" if t is None else verdict_word(t["verdict"], _),
         })  # fmt: skip
     return rows
 
