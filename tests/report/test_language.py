@@ -70,3 +70,19 @@ def test_languages_read_and_write_numbers_their_way() -> None:
     assert uk.number(1234.5).replace("\u00a0", " ") == "1 234,5"
     with pytest.raises(UsageError, match="one of en, uk, de"):
         language("xx")
+
+
+@pytest.mark.parametrize("code", [c for c in LANGUAGES if c != "en"])
+def test_gnu_gettext_compiles_every_catalogue(code: str, tmp_path: Path) -> None:
+    """Another implementation reads the catalogues: GNU gettext's ``msgfmt --check``
+    (header, plural forms, each message's {placeholders} against its translation)."""
+    import shutil
+    import subprocess
+
+    msgfmt = shutil.which("msgfmt")
+    if msgfmt is None:
+        pytest.skip("GNU gettext's msgfmt is not installed (apt-get install gettext)")
+    done = subprocess.run([msgfmt, "--check", "--statistics", "-o", str(tmp_path / "m.mo"),
+                           str(catalogue_path(code))], capture_output=True, text=True)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert re.fullmatch(r"\d+ translated messages\.\n", done.stderr), done.stderr  # all of them
