@@ -126,6 +126,6 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):  # type: igno
         terminalreporter.write_line(f"{n:4d} test{'s' if n > 1 else ' '}  {reason}")
     terminalreporter.write_line(
         "(.ci/run installs every system package the tests use: sudo apt-get install "
-        "postgresql mosquitto chromium chromium-driver poppler-utils nodejs npm; then "
-        "npm ci --prefix tests/js)"
+        "postgresql mosquitto chromium chromium-driver poppler-utils nodejs npm gettext; "
+        "then npm ci --prefix tests/js)"
     )
