@@ -33,6 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core import Diagnostic, StandParameters, forward
 from stand.errors import ModelError
+from stand.words import said
 
 TRIAL_EFFECT_MIN = 0.25
 """A trial run should move some reading by at least 25 % of the initial one."""
@@ -150,9 +151,15 @@ def influence_matrix(runs: list[InfluenceRun]) -> tuple[NDArray[np.complex128], 
     notes = [
         Diagnostic(
             "trial_too_small",
-            f"run {k}: the trial mass in plane {run.trial.plane} moved the readings by at most "
-            f"{100 * e:.0f} % (want {100 * TRIAL_EFFECT_MIN:.0f} % or more, well above the "
-            "noise): use a larger trial mass",
+            said(
+                "run {run}: the trial mass in plane {plane} moved the readings by at most "
+                "{pct} % (want {want} % or more, well above the noise): use a larger trial "
+                "mass",
+                run=k,
+                plane=run.trial.plane,
+                pct=f"{100 * e:.0f}",
+                want=f"{100 * TRIAL_EFFECT_MIN:.0f}",
+            ),
             e,
         )
         for k, (run, e) in enumerate(zip(runs[1:], effects, strict=True), start=2)

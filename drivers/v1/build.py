@@ -43,6 +43,7 @@ from stand.drivers.streams import NodeStream, RunStreams
 from stand.drivers.v1.codec import concat_decoded, decode
 from stand.drivers.v1.node_build import rebuild_node
 from stand.drivers.v1.protocol import Decoded, node_records, shift_decoded
+from stand.words import said
 
 
 def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:
@@ -110,14 +111,22 @@ def rebuild_decoded(
         warnings.append(
             Diagnostic(
                 "bad_frames",
-                f"{len(bad)} malformed protocol frame(s) ignored; the first: frame {b.frame} "
-                f"(id 0x{b.can_id:03X}): {b.reason}",
+                said(
+                    "{n} malformed protocol frame(s) ignored; the first: frame {frame} (id "
+                    "{id}): {reason}",
+                    n=len(bad),
+                    frame=b.frame,
+                    id=f"0x{b.can_id:03X}",
+                    reason=b.reason,
+                ),
                 float(len(bad)),
             )
         )
     if errors:
         warnings.append(
-            Diagnostic("error_frames", f"{errors} CAN error frame(s) on the bus", float(errors))
+            Diagnostic(
+                "error_frames", said("{n} CAN error frame(s) on the bus", n=errors), float(errors)
+            )
         )
     duration = float(t_s[-1] - t_s[0]) if len(t_s) else 0.0
     return RunStreams(

@@ -24,6 +24,7 @@ from stand.drivers.v1.protocol import (
     Decoded,
 )
 from stand.errors import NoStatusError
+from stand.words import said
 
 STATUS_WITHIN_S = 1.5
 """A node's first STATUS must come within this time of its first frame [s]."""
@@ -157,13 +158,23 @@ def _node_warnings(
         starts = np.flatnonzero(on & ~np.concatenate(([False], on[:-1])))
         ends = np.flatnonzero(on & ~np.concatenate((on[1:], [False])))
         for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
-            when = f"at {st_t[a] - t0:.2f} s"
+            when = said("at {t} s", t=f"{st_t[a] - t0:.2f}")
             if b > a:
-                when += f" (in {b - a + 1} STATUS frames, until {st_t[b] - t0:.2f} s)"
+                when = said(
+                    "at {t} s (in {n} STATUS frames, until {until} s)",
+                    t=f"{st_t[a] - t0:.2f}",
+                    n=b - a + 1,
+                    until=f"{st_t[b] - t0:.2f}",
+                )
             out.append(
                 Diagnostic(
                     f"status_{name}",
-                    f"node {node}: STATUS reports {name.replace('_', ' ')} {when}",
+                    said(
+                        "node {node}: STATUS reports {flag} {when}",
+                        node=node,
+                        flag=name.replace("_", " "),
+                        when=when,
+                    ),
                     float(b - a + 1),
                     float(st_t[a] - t0),
                 )
@@ -242,7 +253,11 @@ def _frame_warnings(node: int, n_seg: int, lost: int, kept: int) -> list[Diagnos
         warn.append(
             Diagnostic(
                 "node_restart",
-                f"node {node}: restarted {n_seg - 1} time(s); each part is timed on its own",
+                said(
+                    "node {node}: restarted {n} time(s); each part is timed on its own",
+                    node=node,
+                    n=n_seg - 1,
+                ),
                 float(n_seg - 1),
             )
         )
@@ -250,9 +265,13 @@ def _frame_warnings(node: int, n_seg: int, lost: int, kept: int) -> list[Diagnos
         warn.append(
             Diagnostic(
                 "lost_frames",
-                f"node {node}: {lost} SAMPLES frames lost "
-                f"({100 * lost / (lost + kept):.2g} %): their samples are "
-                "missing, the others keep their index",
+                said(
+                    "node {node}: {n} SAMPLES frames lost ({pct} %): their samples are "
+                    "missing, the others keep their index",
+                    node=node,
+                    n=lost,
+                    pct=f"{100 * lost / (lost + kept):.2g}",
+                ),
                 float(lost),
             )
         )
@@ -320,8 +339,13 @@ def _marks(
         warn.append(
             Diagnostic(
                 "edges_dropped",
-                f"node {node}: {dropped} reference edge(s) dropped: their position or "
-                "revolution counter disagrees with their neighbours (a corrupt MARK frame)",
+                said(
+                    "node {node}: {n} reference edge(s) dropped: their position or "
+                    "revolution counter disagrees with their neighbours (a corrupt MARK "
+                    "frame)",
+                    node=node,
+                    n=dropped,
+                ),
                 float(dropped),
             )
         )

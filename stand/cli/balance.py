@@ -28,6 +28,7 @@ from stand.files import check_output
 from stand.health import datum_row, with_drift
 from stand.process import warm_imports
 from stand.report import render, render_speeds
+from stand.report.language import language
 from stand.solve import to_json, with_check
 from stand.solve.recordings import result_masses, solve_recording
 
@@ -135,13 +136,14 @@ def run(args: argparse.Namespace) -> int:
     report = args.report or str(Path(result.provenance.run_file or "run").with_suffix(".html"))
     out = to_json(result)
     out["report"] = report
-    show(out, args.json)  # the answer first: the report takes a moment
+    _ = language(args.lang)
+    show(out, args.json, _)  # the answer first: the report takes a moment
     sys.stdout.flush()
 
     inputs = [i for i in (result.provenance.run_file, args.check, args.config) if i]
-    write_text_output(report, render(result), force=args.force, inputs=inputs)
+    write_text_output(report, render(result, _), force=args.force, inputs=inputs)
     if not args.json:
-        print(f"report: {report}")
+        print(_("report: {path}").format(path=report))
     archive_live(args, result, cfg)  # last: an archive that fails loses neither run nor report
     if args.check:
         _store_datum(args, result, cfg, params)
@@ -200,7 +202,8 @@ def _across_speeds(args: argparse.Namespace) -> int:
         one = copy.copy(args)
         one.out, one.rpm = f"{stem}-{rpm:g}rpm.h5", rpm
         if not args.scene:  # a real stand: the operator sets the speed
-            print(f"set the rotor to {rpm:g} rpm, then press Enter", file=sys.stderr)
+            print(language(args.lang)("set the rotor to {rpm} rpm, then press Enter").format(
+                rpm=f"{rpm:g}"), file=sys.stderr)  # fmt: skip
             input()
         result, cfg, _ = measure_live_from_args(
             one, "balance", targets_from(one, TOLERANCE_SHARE), solve_options(one)

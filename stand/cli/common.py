@@ -14,6 +14,7 @@ from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, p
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import UsageError
 from stand.files import output
+from stand.report.language import LANGUAGES
 from stand.solve import Job, job_field_problem
 from stand.solve.pipeline import SolveOptions, precision_targets
 
@@ -252,6 +253,18 @@ TOLERANCE_SHARE = 0.10
 tolerance (``stand balance`` and the station)."""
 
 
+def add_language_argument(p: argparse.ArgumentParser) -> None:
+    """``--lang``: the operator's text (and the certificate) in one of the shipped
+    languages; the JSON stays as it is."""
+    p.add_argument(
+        "--lang",
+        choices=list(LANGUAGES),
+        metavar="CODE",
+        help="the operator's text and the certificate in this language: "
+        f"{', '.join(LANGUAGES)} (default en; --json stays English)",
+    )
+
+
 def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: str) -> None:
     """``stand measure`` and ``stand balance``: the source, the precision target, the limits,
     the run file."""
@@ -291,6 +304,7 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
         "--out", metavar="RUN.h5", help="run file to record into (default run-YYYYmmdd-HHMMSS.h5)"
     )
     add_live_arguments(p)
+    add_language_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_measure_arguments(p)
     add_job_arguments(p, live=True)

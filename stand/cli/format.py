@@ -11,17 +11,19 @@ from collections.abc import Iterable
 from typing import Any, TextIO
 
 from stand.report import Display
+from stand.report.language import ENGLISH, N_, Language
+from stand.report.units import ACTIONS, verdict_word
 from stand.solve import json_text
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 from stand.solve.recordings import recording_summary
 
-ANGLE_NOTE = "angles from the reference mark, counted against the direction of rotation"
+ANGLE_NOTE = N_("angles from the reference mark, counted against the direction of rotation")
 
 
-def print_warnings(warnings: Iterable[Any]) -> None:
+def print_warnings(warnings: Iterable[Any], _: Language = ENGLISH) -> None:
     """Warnings (:class:`stand.core.Diagnostic`) to stderr, one line each."""
     for w in warnings:
-        print(f"warning: {w.message}", file=sys.stderr)
+        print(_("warning: {message}").format(message=_(w.message)), file=sys.stderr)
 
 
 def dump_json(obj: Any, out: TextIO | None = None) -> None:
@@ -29,37 +31,40 @@ def dump_json(obj: Any, out: TextIO | None = None) -> None:
     print(json_text(obj), file=out or sys.stdout)
 
 
-def print_measurement(out: dict[str, Any]) -> None:
+def _n(text: str, _: Language) -> str:
+    """Figures written with the language's decimal sign."""
+    return text if _.decimal == "." else text.replace(".", _.decimal)
+
+
+def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
     """Speed, unbalance per plane, supports."""
-    u = Display.of(out)
-    print(f"speed {out['rpm']:.1f} rpm")
-    print(
-        f"plane  unbalance [{u.unbalance_unit}]    95 % +-   angle [deg]   "
-        f"mass [{u.mass_unit}] at radius [{u.length_unit}]"
-    )
+    u = Display.of(out, _)
+    print(_("speed {rpm} rpm").format(rpm=_n(f"{out['rpm']:.1f}", _)))
+    print(_("plane  unbalance [{unit}]    95 % +-   angle [deg]   mass [{mass}] at radius "
+            "[{length}]").format(unit=u.unbalance_unit, mass=u.mass_unit,
+                                 length=u.length_unit))  # fmt: skip
     for p in out["planes"]:
+        figures = f"{p['angle_deg']:13.2f} {u.mass_value(p['mass_g']):10.3f}"
         print(
             f"  {p['plane']}  {u.number(p['unbalance_g_mm']):>16} "
-            f"{u.number(p['uncertainty_g_mm']):>10} {p['angle_deg']:13.2f} "
-            f"{u.mass_value(p['mass_g']):10.3f} at {u.length(p['radius_mm']).split()[0]}"
+            f"{u.number(p['uncertainty_g_mm']):>10} {_n(figures, _)} {_('at')} "
+            f"{u.length(p['radius_mm']).split()[0]}"
         )
     cal = [p.get("calibration_interval_g_mm") for p in out["planes"]]
     if None not in cal:
-        print(
-            "the calibration's own 95 % +-: "
-            + ", ".join(f"{u.number(c)}" for c in cal)
-            + f" {u.unbalance_unit} (what the stand's parameters are known to, [calibration])"
-        )
-    print(f"({ANGLE_NOTE})")
-    print("support  amplitude [m/s^2]  phase [deg]  95 % +-   revolutions")
+        print(_("the calibration's own 95 % +-: {values} {unit} (what the stand's parameters "
+                "are known to, [calibration])").format(
+            values=", ".join(f"{u.number(c)}" for c in cal), unit=u.unbalance_unit))  # fmt: skip
+    print(f"({_(ANGLE_NOTE)})")
+    print(_("support  amplitude [m/s^2]  phase [deg]  95 % +-   revolutions"))
     for s in out["supports"]:
-        print(
-            f"  {s['node']}  {s['amplitude_m_s2']:17.5f} {s['phase_deg']:12.2f} "
-            f"{s['uncertainty_m_s2']:9.5f} {s['revolutions']:10.1f}"
-        )
+        line = (f"  {s['node']}  {s['amplitude_m_s2']:17.5f} {s['phase_deg']:12.2f} "
+                f"{s['uncertainty_m_s2']:9.5f} {s['revolutions']:10.1f}")  # fmt: skip
+        print(_n(line, _))
     cost = out["supports"][0]["noise_cost"]
     if cost > 1.0:
-        print(f"(taper: the noise variance is {cost:.2f} times that of the plain fit)")
+        print(_("(taper: the noise variance is {k} times that of the plain fit)").format(
+            k=_n(f"{cost:.2f}", _)))  # fmt: skip
 
 
 def _pieces(w: dict[str, Any], u: Display) -> str:
@@ -68,115 +73,125 @@ def _pieces(w: dict[str, Any], u: Display) -> str:
     if len(p) < 2:
         return ""
     if u.mass_unit == "g":
-        return f" ({' + '.join(f'{x:g}' for x in p)} g)"
+        return f" ({' + '.join(u._n(f'{x:g}') for x in p)} g)"
     return f" ({' + '.join(u.mass(x) for x in p)})"
 
 
-def weights_text(c: dict[str, Any], u: Display | None = None) -> str:
+def weights_text(c: dict[str, Any], u: Display | None = None, _: Language = ENGLISH) -> str:
     """``55.54 g at 30.0 deg (position 2) + ...`` for one plane's correction."""
     u = u or Display()
     return (
         " + ".join(
-            f"{u.mass(w['mass_g'])}{_pieces(w, u)} at {w['angle_deg']:.1f} deg"
-            + ("" if w["position"] is None else f" (position {w['position']})")
+            _("{mass} at {angle} deg").format(mass=f"{u.mass(w['mass_g'])}{_pieces(w, u)}",
+                                              angle=u._n(f"{w['angle_deg']:.1f}"))
+            + ("" if w["position"] is None
+               else " " + _("(position {n})").format(n=w["position"]))
             for w in c["weights"]
         )
-        or "nothing"
-    )
+        or _("nothing")
+    )  # fmt: skip
 
 
-def _machined(c: dict[str, Any], plane: dict[str, Any], u: Display) -> str:
+def _judged(judged: bool | None, over: str, _: Language) -> str:
+    """`` (within tolerance)``, `` (OVER the tolerance...)`` or nothing."""
+    if judged is None:
+        return ""
+    return " " + (_("(within tolerance)") if judged else _(over))
+
+
+def _machined(c: dict[str, Any], plane: dict[str, Any], u: Display, _: Language) -> str:
     """A drilled or milled plane: one line per hole (in drilling order), then the leftover."""
-    lines = [u.hole(h) for h in plane.get("holes") or []]
+    lines = [u.hole(h, _) for h in plane.get("holes") or []]
     if plane.get("slot"):
-        lines.append(u.slot(plane["slot"]))
-    judged = c.get("residual_within_tolerance")
-    verdict = "" if judged is None else " (within tolerance)" if judged else " (OVER the tolerance)"
-    head = (
-        f"  plane {c['plane']}: {u.cuts(plane)}, removing {u.mass(plane['removed_g'])}; "
-        f"leaves {u.unbalance(plane['leftover_g_mm'])}{verdict}"
-    )
+        lines.append(u.slot(plane["slot"], _))
+    verdict = _judged(c.get("residual_within_tolerance"), N_("(OVER the tolerance)"), _)
+    head = "  " + _("plane {plane}: {cuts}, removing {mass}; leaves {left}").format(
+        plane=c["plane"], cuts=u.cuts(plane, _), mass=u.mass(plane["removed_g"]),
+        left=u.unbalance(plane["leftover_g_mm"])) + verdict  # fmt: skip
     return "\n".join([head, *(f"    {x}" for x in lines)] if lines else [head])
 
 
-def _correction_line(c: dict[str, Any], u: Display, plane: dict[str, Any] | None = None) -> str:
+def _correction_line(
+    c: dict[str, Any], u: Display, plane: dict[str, Any] | None = None, _: Language = ENGLISH
+) -> str:
     if c.get("within_noise"):
-        return (
-            f"  plane {c['plane']}: no correction: the unbalance is inside its own 95 % "
-            "interval (its angle is undefined)"
-        )
+        return "  " + _("plane {plane}: no correction: the unbalance is inside its own 95 % "
+                        "interval (its angle is undefined)").format(plane=c["plane"])  # fmt: skip
     if c.get("within_tolerance"):
-        return f"  plane {c['plane']}: within tolerance: no correction needed"
+        return "  " + _("plane {plane}: within tolerance: no correction needed").format(
+            plane=c["plane"])  # fmt: skip
     if plane is not None and "holes" in plane:
-        return _machined(c, plane, u)
-    left = (
-        f"; rounding leaves {u.unbalance(c['residual_g_mm'])}" if c["residual_g_mm"] > 0.05 else ""
-    )
-    if left and c.get("residual_within_tolerance") is not None:
-        left += (
-            " (within tolerance)"
-            if c["residual_within_tolerance"]
-            else " (OVER the tolerance: finer weights are needed)"
-        )
+        return _machined(c, plane, u, _)
+    left = ""
+    if c["residual_g_mm"] > 0.05:
+        left = "; " + _("rounding leaves {left}").format(left=u.unbalance(c["residual_g_mm"]))
+        left += _judged(c.get("residual_within_tolerance"),
+                        N_("(OVER the tolerance: finer weights are needed)"), _)  # fmt: skip
     radius = c["weights"][0]["radius_mm"] if c["weights"] else 0
-    return (
-        f"  plane {c['plane']}: {c['action']} {weights_text(c, u)} at radius "
-        f"{u.length(radius)}{left}"
-    )
+    return "  " + _("plane {plane}: {action} {weights} at radius {radius}").format(
+        plane=c["plane"], action=_(ACTIONS.get(c["action"], c["action"])),
+        weights=weights_text(c, u, _), radius=u.length(radius)) + left  # fmt: skip
 
 
-VERBS = {"remove": "remove material", "add": "add weights", "drill": "drill holes",
-         "mill": "mill a slot"}  # fmt: skip
+VERBS = {"remove": N_("remove material"), "add": N_("add weights"), "drill": N_("drill holes"),
+         "mill": N_("mill a slot")}  # fmt: skip
 
 
-def print_corrections(out: dict[str, Any]) -> None:
+def print_corrections(out: dict[str, Any], _: Language = ENGLISH) -> None:
     """The corrections, static and couple parts, and the tolerance verdict."""
-    u = Display.of(out)
-    verb = VERBS.get(out["correction_mode"], "add weights")
-    print(f"correction ({verb}; {ANGLE_NOTE}):")
+    u = Display.of(out, _)
+    verb = VERBS.get(out["correction_mode"], VERBS["add"])
+    print(_("correction ({verb}; {note}):").format(verb=_(verb), note=_(ANGLE_NOTE)))
     for c, plane in zip(out["corrections"], out["planes"], strict=True):
-        print(_correction_line(c, u, plane))
+        print(_correction_line(c, u, plane, _))
     s, cp = out["static"], out["couple"]
-    print(
-        f"  static part {u.unbalance(s['unbalance_g_mm'])} at {s['angle_deg']:.1f} deg; couple "
-        f"part +-{u.unbalance(cp['unbalance_g_mm'])} at {cp['angle_deg']:.1f} deg "
-        "(plane 1 / plane 2)"
-    )
+    print("  " + _("static part {static} at {a1} deg; couple part +-{couple} at {a2} deg "
+                   "(plane 1 / plane 2)").format(
+        static=u.unbalance(s["unbalance_g_mm"]), a1=u._n(f"{s['angle_deg']:.1f}"),
+        couple=u.unbalance(cp["unbalance_g_mm"]), a2=u._n(f"{cp['angle_deg']:.1f}")))  # fmt: skip
     for k in out.get("keys") or []:
-        print(
-            f"key at {k['angle_deg']:g} deg ({u.mass(k['mass_g'])}): balanced with "
-            f"{CONVENTION_WORDS[k['convention']]}, {FITTED_WORDS[k['fitted']]} fitted "
-            "(ISO 21940-32); "
-            f"mark the part {k['marking']}"
-        )
+        print(_("key at {angle} deg ({mass}): balanced with {convention}, {fitted} fitted "
+                "(ISO 21940-32); mark the part {marking}").format(
+            angle=u._n(f"{k['angle_deg']:g}"), mass=u.mass(k["mass_g"]),
+            convention=_(CONVENTION_WORDS[k["convention"]]), fitted=_(FITTED_WORDS[k["fitted"]]),
+            marking=k["marking"]))  # fmt: skip
+    print_tolerance(out, u, _)
+
+
+def print_tolerance(out: dict[str, Any], u: Display, _: Language = ENGLISH) -> None:
+    """The tolerance, its rule, each criterion judged, and the verdict."""
     t = out.get("tolerance")
     if t is None:
-        print("tolerance: none set (add a [tolerance] table: docs/tolerance.md)")
+        print(_("tolerance: none set (add a [tolerance] table: docs/tolerance.md)"))
         return
-    per = f": U_per {u.unbalance(t['permissible_g_mm'])}" if "permissible_g_mm" in t else ""
-    print(f"tolerance: {t['source']} ({FORM_WORDS[t['form']]} form){per}")
-    print(f"  judged in {t['judged_in']}")
-    print(f"  rule: {t['rule']}")
+    per = (": U_per " + u.unbalance(t["permissible_g_mm"])) if "permissible_g_mm" in t else ""
+    print(_("tolerance: {source} ({form} form)").format(
+        source=_(t["source"]), form=_(FORM_WORDS[t["form"]])) + per)  # fmt: skip
+    print("  " + _("judged in {where}").format(where=_(t["judged_in"])))
+    print("  " + _("rule: {rule}").format(rule=_(t["rule"])))
     for c in t["criteria"]:
-        print("  " + criterion_text(c, u, out))
-    print(f"verdict: {VERDICT_WORDS[t['verdict']]}")
+        print("  " + criterion_text(c, u, out, _))
+    print(_("verdict: {verdict}").format(verdict=_(VERDICT_WORDS[t["verdict"]])))
     stuck = [c for c in t["criteria"] if c["verdict"] == "undecided"]
     if stuck and all(c.get("limited_by") == "calibration" for c in stuck):
-        print("  a longer run will not decide it: the calibration's own interval limits it")
+        print("  " + _("a longer run will not decide it: the calibration's own interval limits "
+                       "it"))  # fmt: skip
 
 
-FORM_WORDS = {"grade": "grade", "per_plane": "per plane", "static_couple": "resultant and moment",
-              "api": "API"}  # fmt: skip
+FORM_WORDS = {"grade": N_("grade"), "per_plane": N_("per plane"),
+              "static_couple": N_("resultant and moment"), "api": N_("API")}  # fmt: skip
 VERDICT_WORDS = {
-    "pass": "PASS",
-    "fail": "FAIL",
-    "undecided": "UNDECIDED: the interval straddles the limit; measure longer to decide",
-    "none": "none (no tolerance)",
+    "pass": N_("PASS"),
+    "fail": N_("FAIL"),
+    "undecided": N_("UNDECIDED: the interval straddles the limit; measure longer to decide"),
+    "none": N_("none (no tolerance)"),
 }
 """The one verdict in the operator's words."""
 
 
-def criterion_text(c: dict[str, Any], u: Display, out: dict[str, Any]) -> str:
+def criterion_text(
+    c: dict[str, Any], u: Display, out: dict[str, Any], _: Language = ENGLISH
+) -> str:
     """One judged criterion: value +- its combined error against the limit, and its state."""
     if "value_g_mm2" in c:
         val = f"{u.number(c['value_g_mm2'])} +- {u.number(c['error_g_mm2'])} g mm^2"
@@ -186,7 +201,7 @@ def criterion_text(c: dict[str, Any], u: Display, out: dict[str, Any]) -> str:
         val = f"{u.unbalance(c['value_g_mm'])} +- {u.number(c['error_g_mm'])}"
         lim, margin = u.unbalance(c["permissible_g_mm"]), c["margin_g_mm"]
         gap = u.unbalance(abs(margin))
-    how = "margin" if margin >= 0 else "over by"
+    how = _("margin") if margin >= 0 else _("over by")
     note = ""
     cal = (
         None
@@ -194,83 +209,86 @@ def criterion_text(c: dict[str, Any], u: Display, out: dict[str, Any]) -> str:
         else out["planes"][c["plane"] - 1].get("calibration_interval_g_mm")
     )
     if c.get("limited_by") == "calibration" and cal is not None and c["verdict"] == "undecided":
-        note = f"; the calibration's own +-{u.number(cal)} limits it"
-    state = c["verdict"].upper() if c["verdict"] != "pass" else "pass"
-    return f"{c['name']}: {val} against {lim}: {state} ({how} {gap}){note}"
+        note = "; " + _("the calibration's own +-{interval} limits it").format(
+            interval=u.number(cal))  # fmt: skip
+    state = _("pass") if c["verdict"] == "pass" else verdict_word(c["verdict"], _)
+    return _("{name}: {value} against {limit}: {state} ({how} {gap})").format(
+        name=_(c["name"]), value=val, limit=lim, state=state, how=how, gap=gap) + note  # fmt: skip
 
 
-def print_uncertainty(out: dict[str, Any]) -> None:
+def print_uncertainty(out: dict[str, Any], _: Language = ENGLISH) -> None:
     """The parameter-tolerance spread, if computed."""
     pu = out.get("parameter_uncertainty")
     if pu is None:
         return
-    u = Display.of(out)
+    u = Display.of(out, _)
     t = pu["tolerances"]
-    print(
-        f"parameter tolerances (uniform): C +-{t['C_pct']:g} %, M and J3 +-{t['M_pct']:g} %, "
-        f"lengths +-{u.length(t['length_mm'])}, sensor gains +-{t['gain_pct']:g} %"
-    )
+    print(_("parameter tolerances (uniform): C +-{c} %, M and J3 +-{m} %, lengths +-{length}, "
+            "sensor gains +-{gain} %").format(
+        c=u._n(f"{t['C_pct']:g}"), m=u._n(f"{t['M_pct']:g}"), length=u.length(t["length_mm"]),
+        gain=u._n(f"{t['gain_pct']:g}")))  # fmt: skip
     for p in pu["planes"]:
         top = ", ".join(f"{k} {100 * s:.0f} %" for k, s in p["largest_shares"])
-        print(
-            f"  plane {p['plane']}: 95 % +-{u.unbalance(p['radius95_monte_carlo_g_mm'])} "
-            f"(Monte Carlo, {pu['draws']} draws; linearised "
-            f"{u.number(p['radius95_linear_g_mm'])}); with the measurement "
-            f"+-{u.number(p['combined_g_mm'])}; most from {top}"
-        )
+        print("  " + _("plane {plane}: 95 % +-{mc} (Monte Carlo, {draws} draws; linearised "
+                       "{linear}); with the measurement +-{combined}; most from {top}").format(
+            plane=p["plane"], mc=u.unbalance(p["radius95_monte_carlo_g_mm"]), draws=pu["draws"],
+            linear=u.number(p["radius95_linear_g_mm"]), combined=u.number(p["combined_g_mm"]),
+            top=top))  # fmt: skip
 
 
-def print_check(out: dict[str, Any]) -> None:
+def print_check(out: dict[str, Any], _: Language = ENGLISH) -> None:
     """Before and after a correction, with the unbalance reduction ratio."""
     c = out.get("check")
     if c is None:
         return
-    u = Display.of(out)
-    print(f"check against the run before the correction ({c['previous_run']}):")
+    u = Display.of(out, _)
+    print(_("check against the run before the correction ({run}):").format(
+        run=c["previous_run"]))  # fmt: skip
     for p in c["planes"]:
-        urr = "-" if p["urr"] is None else f"{100 * p['urr']:.1f} %"
-        print(
-            f"  plane {p['plane']}: {u.number(p['before_g_mm'])} -> "
-            f"{u.unbalance(p['after_g_mm'])} residual, reduction ratio URR {urr}"
-        )
+        urr = "-" if p["urr"] is None else u._n(f"{100 * p['urr']:.1f}") + " %"
+        print("  " + _("plane {plane}: {before} -> {after} residual, reduction ratio URR "
+                       "{urr}").format(plane=p["plane"], before=u.number(p["before_g_mm"]),
+                                       after=u.unbalance(p["after_g_mm"]), urr=urr))  # fmt: skip
 
 
-def tooling_line(out: dict[str, Any]) -> str | None:
+def tooling_line(out: dict[str, Any], _: Language = ENGLISH) -> str | None:
     """``tooling mandrel-A subtracted: ...`` when a tooling compensation was used."""
     t = out.get("tooling")
     if t is None:
         return None
-    u = Display.of(out)
+    u = Display.of(out, _)
     planes = "; ".join(
-        f"plane {p['plane']} {u.unbalance(p['unbalance_g_mm'])} at {p['angle_deg']:.1f} deg"
+        _("plane {plane} {unbalance} at {angle} deg").format(
+            plane=p["plane"], unbalance=u.unbalance(p["unbalance_g_mm"]),
+            angle=u._n(f"{p['angle_deg']:.1f}"))
         for p in t["subtracted"]
-    )
-    return f"tooling {t['name']} subtracted (measured {t['measured'][:10]}): {planes}"
+    )  # fmt: skip
+    return _("tooling {name} subtracted (measured {date}): {planes}").format(
+        name=t["name"], date=t["measured"][:10], planes=planes)  # fmt: skip
 
 
-def print_result(out: dict[str, Any]) -> None:
-    """The whole result as text (stdout); warnings go to stderr."""
-    print_measurement(out)
-    if line := tooling_line(out):
+def print_result(out: dict[str, Any], _: Language = ENGLISH) -> None:
+    """The whole result as text (stdout) in the language ``_``; warnings go to stderr."""
+    print_measurement(out, _)
+    if line := tooling_line(out, _):
         print(line)
-    print_corrections(out)
-    print_uncertainty(out)
+    print_corrections(out, _)
+    print_uncertainty(out, _)
     if "stopped_by" in out:
-        print(
-            f"stopped by: {out['stopped_by']} after {out['elapsed_s']:.1f} s; "
-            f"recorded in {out['run_file']}"
-        )
-    print_check(out)
+        print(_("stopped by: {why} after {seconds} s; recorded in {run}").format(
+            why=_(out["stopped_by"]), seconds=_n(f"{out['elapsed_s']:.1f}", _),
+            run=out["run_file"]))  # fmt: skip
+    print_check(out, _)
     for w in out["warnings"]:
-        print(f"warning: {w}", file=sys.stderr)
+        print(_("warning: {message}").format(message=_(w)), file=sys.stderr)
 
 
-def show(out: dict[str, Any], as_json: bool) -> None:
-    """Print a result: one strict JSON object, or the text."""
+def show(out: dict[str, Any], as_json: bool, _: Language = ENGLISH) -> None:
+    """Print a result: one strict JSON object (English, whatever ``_``), or the text."""
     if as_json:
         dump_json(out)
     else:
-        print_result(out)
+        print_result(out, _)
 
 
 def print_summary(out: dict[str, Any]) -> None:

@@ -12,6 +12,7 @@ from stand.cli.common import (
 )
 from stand.cli.format import show
 from stand.cli.panel import archive_live, measure_live_from_args
+from stand.report.language import language
 from stand.solve import to_json
 
 
@@ -24,6 +25,6 @@ def run(args: argparse.Namespace) -> int:
     result, cfg, _ = measure_live_from_args(
         args, "measure", targets_from(args), solve_options(args)
     )
-    show(to_json(result), args.json)
+    show(to_json(result), args.json, language(args.lang))
     archive_live(args, result, cfg)
     return 0

@@ -28,29 +28,30 @@ from stand.errors import ArchiveError, UsageError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.live import live_source, measure_live
 from stand.report import Display
+from stand.report.language import ENGLISH, N_, Language, language
 from stand.sim import Mass
 from stand.solve import Job
 from stand.solve.recordings import correction_masses
 from stand.solve.verdict import tolerance_of
 
-ANGLE_HELP = "angles from the reference mark, against the direction of rotation"
+ANGLE_HELP = N_("angles from the reference mark, against the direction of rotation")
 
 
-def progress_line(p: Any, units: Display | None = None) -> str:
+def progress_line(p: Any, units: Display | None = None, _: Language = ENGLISH) -> str:
     """One line of the live display (when stderr is not a terminal)."""
     u = units or Display()
     m = p.measurement
     planes = "  ".join(
-        f"plane {i + 1}: {u.unbalance(abs(m.solution.U_kg_m[i]) * 1e6)} "
-        f"+- {u.number(m.radius95_kg_m[i] * 1e6)} (precision goal "
-        f"+- {u.number(p.targets_kg_m[i] * 1e6)})"
+        _("plane {plane}: {unbalance} +- {r95} (precision goal +- {goal})").format(
+            plane=i + 1, unbalance=u.unbalance(abs(m.solution.U_kg_m[i]) * 1e6),
+            r95=u.number(m.radius95_kg_m[i] * 1e6), goal=u.number(p.targets_kg_m[i] * 1e6))
         for i in range(2)
-    )
-    amps = " ".join(f"{abs(ph.A_m_s2):.3f}" for ph in m.supports)
+    )  # fmt: skip
+    amps = " ".join(u._n(f"{abs(ph.A_m_s2):.3f}") for ph in m.supports)
     rpm = float(rad_s_to_rpm(m.omega_rad_s))
-    why = getattr(p, "waiting_for", ())
-    more = f"  (still measuring: waiting for {' and '.join(why)})" if why else ""
-    return f"  {p.elapsed_s:5.1f} s  {rpm:7.1f} rpm  1x {amps} m/s2  {planes}{more}"
+    more = "".join(f"  ({w})" for w in _waits(p, "", _))
+    speed = _("{rpm} rpm").format(rpm=f"{rpm:7.1f}")
+    return u._n(f"  {p.elapsed_s:5.1f} s  {speed}") + f"  1x {amps} m/s2  {planes}{more}"
 
 
 def panel(
@@ -62,6 +63,7 @@ def panel(
     units: Display,
     waiting: str = "",
     elapsed_s: float = 0.0,
+    _: Language = ENGLISH,
 ) -> Any:
     """The panel for the latest solve (``progress``; None before the first)."""
     from rich.console import Group
@@ -74,17 +76,17 @@ def panel(
     head = Text("")
     if progress is not None:
         rpm = float(rad_s_to_rpm(progress.measurement.omega_rad_s))
-        head.append(f"{rpm:.1f} rpm   ", style="bold cyan")
-    head.append(f"{t:.1f} s   ")
-    head.append(f"measuring on {where}", style="dim")
+        head.append(u._n(f"{rpm:.1f}") + " rpm   ", style="bold cyan")
+    head.append(u._n(f"{t:.1f}") + " s   ")
+    head.append(_("measuring on {where}").format(where=_(where)), style="dim")
     table = Table(box=None, expand=False, pad_edge=False, header_style="bold")
     for name, justify, width in (
-        ("plane", "center", 5),
-        (f"unbalance\n[{u.unbalance_unit}]", "right", 9),
-        ("angle\n[deg]", "right", 5),
-        ("95 %\ninterval", "right", 8),
-        ("precision\ngoal", "right", 9),
-        (f"tolerance\n[{u.unbalance_unit}]", "right", 9),
+        (_("plane"), "center", 5),
+        (_("unbalance") + f"\n[{u.unbalance_unit}]", "right", 9),
+        (_("angle") + "\n[deg]", "right", 5),
+        (_("95 %\ninterval"), "right", 8),
+        (_("precision\ngoal"), "right", 9),
+        (_("tolerance") + f"\n[{u.unbalance_unit}]", "right", 9),
         ("", "left", 14),
     ):
         table.add_column(Text(name), justify=justify, no_wrap=True, min_width=width)  # type: ignore[arg-type]
@@ -96,48 +98,53 @@ def panel(
             per = None if tolerance_kg_m is None else tolerance_kg_m[i]
             angle = float(unbalance_to_polar([m.solution.U_kg_m[i]])[1][0])
             precise = r95 <= goal
-            state = Text("precise", style="green") if precise else Text("measuring", style="yellow")
+            state = (Text(_("precise"), style="green") if precise
+                     else Text(_("measuring"), style="yellow"))  # fmt: skip
             if per is not None and U + r95 <= per:
-                state = Text("within tolerance", style="bold green")
+                state = Text(_("within tolerance"), style="bold green")
             elif per is not None and U - r95 > per:
-                state.append("\nover tolerance", style="red")
+                state.append("\n" + _("over tolerance"), style="red")
             rows.append(
                 (
                     str(i + 1),
                     Text(u.number(U * 1e6), style="bold"),
-                    "-" if U <= r95 else f"{angle:.1f}",
+                    "-" if U <= r95 else u._n(f"{angle:.1f}"),
                     f"± {u.number(r95 * 1e6)}",
                     f"± {u.number(goal * 1e6)}",
                     "-" if per is None else u.number(per * 1e6),
                     state,
                 )
             )
-        amps = " and ".join(f"{abs(ph.A_m_s2):.4f}" for ph in m.supports)
+        amps = _(" and ").join(u._n(f"{abs(ph.A_m_s2):.4f}") for ph in m.supports)
     for row in rows or [("1", "", "", "", "", "", ""), ("2", "", "", "", "", "", "")]:
         table.add_row(*row)
-    parts: list[Any] = [head, Text(f"recording into {run_path} (Ctrl-C stops)", style="dim"), table]
+    recording = _("recording into {run} (Ctrl-C stops)").format(run=run_path)
+    parts: list[Any] = [head, Text(recording, style="dim"), table]
     if progress is not None:
-        parts.append(Text(f"1x at supports 1 and 2: {amps} m/s²\n{ANGLE_HELP}", style="dim"))
-    parts += [Text(line, style="yellow") for line in _waits(progress, waiting)]
+        parts.append(Text(_("1x at supports 1 and 2: {amps} m/s²").format(amps=amps) + "\n"
+                          + _(ANGLE_HELP), style="dim"))  # fmt: skip
+    parts += [Text(line, style="yellow") for line in _waits(progress, waiting, _)]
     return Panel(Group(*parts), title="stand", title_align="left")
 
 
-def _waits(progress: Any | None, waiting: str) -> list[str]:
+def _waits(progress: Any | None, waiting: str, _: Language = ENGLISH) -> list[str]:
     """What the run waits for, in words: what the estimate still lacks, and the bus."""
     why = getattr(progress, "waiting_for", ())
-    out = [f"still measuring: waiting for {' and '.join(why)}"] if why else []
-    return out + ([f"waiting: {waiting}"] if waiting else [])
+    out = ([_("still measuring: waiting for {what}").format(what=_(" and ").join(map(_, why)))]
+           if why else [])  # fmt: skip
+    return out + ([_("waiting: {why}").format(why=_(waiting))] if waiting else [])
 
 
 class LiveDisplay:
     """The live progress: :func:`panel` redrawn in place on a terminal,
     one line per solve elsewhere, nothing with ``--quiet``."""
 
-    def __init__(self, source: Any, path: str, *, quiet: bool) -> None:
+    def __init__(self, source: Any, path: str, *, quiet: bool, words: Language = ENGLISH) -> None:
 
         tol = tolerance_of(source.cfg, source.params)
         self.tolerance = None if tol is None else tol.per_plane_kg_m
-        self.units = Display(source.cfg.display.mass, source.cfg.display.length)
+        self.units = Display(source.cfg.display.mass, source.cfg.display.length, words.decimal)
+        self._ = words
         self.path, self.quiet = path, quiet
         self.where, self.last, self.waiting, self.elapsed = "", None, "", 0.0
         self.live: Any = None
@@ -159,7 +166,7 @@ class LiveDisplay:
     def _redraw(self) -> None:
         view = panel(
             self.where, self.path, self.last, tolerance_kg_m=self.tolerance, units=self.units,
-            waiting=self.waiting, elapsed_s=self.elapsed,
+            waiting=self.waiting, elapsed_s=self.elapsed, _=self._,
         )  # fmt: skip
         self.live.update(view, refresh=True)
 
@@ -171,19 +178,21 @@ class LiveDisplay:
         self.where = where
         if self.live is not None:
             return self._redraw()
-        self._say(f"measuring on {where}, recording into {self.path} (Ctrl-C stops)")
+        self._say(self._("measuring on {where}, recording into {run} (Ctrl-C stops)").format(
+            where=self._(where), run=self.path))  # fmt: skip
 
     def progress(self, p: Any) -> None:
         self.last, self.waiting = p, ""
         if self.live is not None:
             return self._redraw()
-        self._say(progress_line(p, self.units))
+        self._say(progress_line(p, self.units, self._))
 
     def wait(self, elapsed: float, why: str) -> None:
         self.waiting, self.elapsed = why, elapsed
         if self.live is not None:
             return self._redraw()
-        self._say(f"  {elapsed:5.1f} s  waiting: {why}")
+        self._say(self.units._n(f"  {elapsed:5.1f} s  ")
+                  + self._("waiting: {why}").format(why=self._(why)))  # fmt: skip
 
 
 def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
@@ -228,7 +237,7 @@ def measure_live_from_args(
         kwargs = bus_kwargs(args, source.bus_table)
     path = run_path(args)
     job = mes_job(args, source.cfg) if getattr(args, "job", None) else job_from(args)
-    show = LiveDisplay(source, path, quiet=args.quiet)
+    show = LiveDisplay(source, path, quiet=args.quiet, words=language(getattr(args, "lang", None)))
     with show:
         result, session = measure_live(
             source,
@@ -280,8 +289,9 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
             "stand archive import it later)",
             url=exc.url,
         ) from exc
+    _ = language(getattr(args, "lang", None))
     if not args.quiet:
-        print(f"archived as run {run_id}", file=sys.stderr)
+        print(_("archived as run {id}").format(id=run_id), file=sys.stderr)
 
     said = publish_archived(result, run_id, cfg)
     if said and (not args.quiet or said.startswith("not")):

@@ -16,6 +16,7 @@ from typing import Any
 from stand.cli.common import (
     add_across_speeds_arguments,
     add_force_argument,
+    add_language_argument,
     add_measure_arguments,
     add_uncertainty_arguments,
     solve_options,
@@ -25,6 +26,7 @@ from stand.cli.format import dump_json, print_speeds, show
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
+from stand.report.language import language
 from stand.solve import json_text, to_json
 from stand.solve.recordings import solve_many, solve_recording
 
@@ -49,6 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_uncertainty_arguments(p)
     add_force_argument(p, "--summary")
     add_across_speeds_arguments(p)
+    add_language_argument(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,7 +76,8 @@ def _run(args: argparse.Namespace) -> int:
     if len(args.runs) > 1 or args.summary:
         return run_batch(args, options)
 
-    show(to_json(solve_recording(args.runs[0], args.config, options)), args.json)
+    result = solve_recording(args.runs[0], args.config, options)
+    show(to_json(result), args.json, language(args.lang))
     return 0
 
 

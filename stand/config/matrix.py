@@ -26,6 +26,7 @@ from stand.core.influence import InfluenceMap
 from stand.drivers.runs.recording import MATRIX_ATTR
 from stand.errors import ConfigError, ModelError, RecordingError
 from stand.files import check_input
+from stand.words import said
 
 KIND = "stand influence matrix"
 SAME_SPEED = 0.05
@@ -128,10 +129,16 @@ class LoadedMatrix:
             return None
         return Diagnostic(
             "matrix_speed",
-            f"the influence matrix {self.path} was measured at {self.stored.rpm:.0f} rpm, this "
-            f"run is at {rpm:.0f} rpm ({100 * off:+.0f} %): the stand answers differently at "
-            "another speed, so the correction may be off; run at the matrix's speed or make "
-            "trial runs at this one",
+            said(
+                "the influence matrix {path} was measured at {rpm_then} rpm, this run is at "
+                "{rpm} rpm ({off} %): the stand answers differently at another speed, so the "
+                "correction may be off; run at the matrix's speed or make trial runs at this "
+                "one",
+                path=self.path,
+                rpm_then=f"{self.stored.rpm:.0f}",
+                rpm=f"{rpm:.0f}",
+                off=f"{100 * off:+.0f}",
+            ),
             off,
         )
 

@@ -35,6 +35,7 @@ from stand.core.inverse import RESONANCE_BAND, Diagnostic, UnbalanceSolution, sp
 from stand.core.model import ComplexArray, StandParameters, rad_s_to_rpm
 from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
 from stand.errors import ModelError
+from stand.words import said
 
 
 @dataclass(frozen=True)
@@ -240,10 +241,15 @@ def solve_beam(
         notes.append(
             Diagnostic(
                 "near_bending_mode",
-                f"speed {rad_s_to_rpm(omega_rad_s):.0f} rpm is within a factor "
-                f"{RESONANCE_BAND:g} of the rotor's first bending mode in the stand, "
-                f"{wn[2] / (2 * math.pi):.3g} Hz ({rad_s_to_rpm(wn[2]):.0f} rpm): the answer "
-                "rests on the shaft's description there; balance well below it",
+                said(
+                    "speed {rpm} rpm is within a factor {k} of the rotor's first bending "
+                    "mode in the stand, {hz} Hz ({rpm_n} rpm): the answer rests on the shaft's "
+                    "description there; balance well below it",
+                    rpm=f"{rad_s_to_rpm(omega_rad_s):.0f}",
+                    k=f"{RESONANCE_BAND:g}",
+                    hz=f"{wn[2] / (2 * math.pi):.3g}",
+                    rpm_n=f"{rad_s_to_rpm(wn[2]):.0f}",
+                ),
                 float(omega_rad_s / wn[2]),
             )
         )

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from stand.core.inverse import Diagnostic, UnbalanceSolution, propagate_covariance
 from stand.core.model import ComplexArray
 from stand.errors import ModelError
+from stand.words import said
 
 COND_WARN = 10.0
 """An influence matrix with a condition number above this draws a warning."""
@@ -118,9 +119,12 @@ def solve_influence(
         notes.append(
             Diagnostic(
                 "ill_conditioned",
-                f"the influence matrix has condition number {cond:.3g}: the planes act almost "
-                "alike on the sensors, and reading errors are magnified that much in the "
-                "correction; choose planes further apart or sensors that tell them apart",
+                said(
+                    "the influence matrix has condition number {cond}: the planes act almost "
+                    "alike on the sensors, and reading errors are magnified that much in the "
+                    "correction; choose planes further apart or sensors that tell them apart",
+                    cond=f"{cond:.3g}",
+                ),
                 cond,
             )
         )

@@ -36,6 +36,7 @@ from stand.core.model import (
     support_matrix,
 )
 from stand.errors import ModelError, PlanesTooCloseError
+from stand.words import said
 
 #: Default largest split condition number accepted: the planes' split then
 #: multiplies relative measurement error by at most 1000 (planes closer
@@ -218,10 +219,15 @@ def speed_diagnostics(
         out.append(
             Diagnostic(
                 "near_resonance",
-                f"speed {rad_s_to_rpm(w):.1f} rpm is {100 * (ratios[k] - 1):+.1f} % from "
-                f"natural frequency {wn[k] / (2 * math.pi):.3g} Hz "
-                f"({rad_s_to_rpm(wn[k]):.0f} rpm) of stand + rotor: the response is "
-                "dominated by the stand there and small errors in C, M or speed move the result",
+                said(
+                    "speed {rpm} rpm is {off} % from natural frequency {hz} Hz ({rpm_n} rpm) "
+                    "of stand + rotor: the response is dominated by the stand there and small "
+                    "errors in C, M or speed move the result",
+                    rpm=f"{rad_s_to_rpm(w):.1f}",
+                    off=f"{100 * (ratios[k] - 1):+.1f}",
+                    hz=f"{wn[k] / (2 * math.pi):.3g}",
+                    rpm_n=f"{rad_s_to_rpm(wn[k]):.0f}",
+                ),
                 float(ratios[k]),
             )
         )
@@ -229,10 +235,14 @@ def speed_diagnostics(
         out.append(
             Diagnostic(
                 "below_support_resonance",
-                f"speed {rad_s_to_rpm(w):.1f} rpm is below the highest natural frequency "
-                f"{wn[-1] / (2 * math.pi):.3g} Hz ({rad_s_to_rpm(wn[-1]):.0f} rpm): "
-                "a soft-bearing stand should run well above it; here the result rests on "
-                "C1, C2 and noise is amplified about C/omega^4",
+                said(
+                    "speed {rpm} rpm is below the highest natural frequency {hz} Hz ({rpm_n} "
+                    "rpm): a soft-bearing stand should run well above it; here the result "
+                    "rests on C1, C2 and noise is amplified about C/omega^4",
+                    rpm=f"{rad_s_to_rpm(w):.1f}",
+                    hz=f"{wn[-1] / (2 * math.pi):.3g}",
+                    rpm_n=f"{rad_s_to_rpm(wn[-1]):.0f}",
+                ),
                 float(w / wn[-1]),
             )
         )
@@ -308,9 +318,13 @@ def solve_unbalance(
         diagnostics.append(
             Diagnostic(
                 "planes_close",
-                f"correction planes {p.plane_separation * 1e3:.4g} mm apart on a "
-                f"{p.L * 1e3:.4g} mm span: the two-plane split multiplies measurement error "
-                f"by up to {kappa_split:.3g}",
+                said(
+                    "correction planes {d} mm apart on a {span} mm span: the two-plane split "
+                    "multiplies measurement error by up to {k}",
+                    d=f"{p.plane_separation * 1e3:.4g}",
+                    span=f"{p.L * 1e3:.4g}",
+                    k=f"{kappa_split:.3g}",
+                ),
                 kappa_split,
             )
         )

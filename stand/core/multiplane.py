@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core.inverse import Diagnostic
 from stand.errors import ModelError
+from stand.words import said
 
 METHODS = ("ls", "wls", "minmax")
 """The criteria: least squares, weighted least squares, min-max."""
@@ -221,9 +222,14 @@ def _notes(sig: NDArray[np.float64], keep: NDArray[Any], cond: float) -> list[Di
     notes = [
         Diagnostic(
             "dependent_plane",
-            f"plane {j + 1} is not independent of the others (Darlow's significance factor "
-            f"{sig[j]:.3f}, at most {SIGNIFICANCE_MIN:g}): the others can do what it does, so it "
-            "is left out and the correction uses the remaining planes",
+            said(
+                "plane {plane} is not independent of the others (Darlow's significance "
+                "factor {sig}, at most {most}): the others can do what it does, so it is left "
+                "out and the correction uses the remaining planes",
+                plane=j + 1,
+                sig=f"{sig[j]:.3f}",
+                most=f"{SIGNIFICANCE_MIN:g}",
+            ),
             float(sig[j]),
         )
         for j in range(len(sig))
@@ -233,9 +239,12 @@ def _notes(sig: NDArray[np.float64], keep: NDArray[Any], cond: float) -> list[Di
         notes.append(
             Diagnostic(
                 "ill_conditioned",
-                f"the influence matrix has condition number {cond:.3g}: the planes act almost "
-                "alike on the readings, and reading errors are magnified that much in the "
-                "correction",
+                said(
+                    "the influence matrix has condition number {cond}: the planes act almost "
+                    "alike on the readings, and reading errors are magnified that much in the "
+                    "correction",
+                    cond=f"{cond:.3g}",
+                ),
                 cond,
             )
         )

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.core.model import StandParameters
+from stand.words import N_, said
 
 SHARE_MIN, SHARE_MAX = 0.3, 0.7
 """ISO 21940-11's limits on a bearing plane's share of ``U_per``."""
@@ -156,7 +157,8 @@ def plane_criteria(limits: ArrayLike) -> tuple[Criterion, ...]:
     """Each correction plane against its own limit [kg m]."""
     u = np.asarray(limits, dtype=float)
     return tuple(
-        Criterion(f"plane {i + 1}", (1.0 - i, float(i)), float(u[i]), i + 1) for i in range(2)
+        Criterion(said("plane {plane}", plane=i + 1), (1.0 - i, float(i)), float(u[i]), i + 1)
+        for i in range(2)
     )
 
 
@@ -165,7 +167,9 @@ def bearing_criteria(x_m: ArrayLike, z_m: ArrayLike, limits: ArrayLike) -> tuple
     T = transfer(x_m, z_m)
     s = np.asarray(limits, dtype=float)
     return tuple(
-        Criterion(f"bearing plane {n}", (float(T[i, 0]), float(T[i, 1])), float(s[i]))
+        Criterion(
+            said("bearing plane {name}", name=n), (float(T[i, 0]), float(T[i, 1])), float(s[i])
+        )
         for i, n in enumerate("AB")
     )
 
@@ -177,8 +181,8 @@ def static_couple_criteria(
     ``sum U_i (x_i - x_cm)`` [kg m^2] against their limits."""
     arm = np.asarray(x_m, dtype=float) - x_cm_m
     return (
-        Criterion("resultant", (1.0, 1.0), float(static)),
-        Criterion("moment", (float(arm[0]), float(arm[1])), float(couple)),
+        Criterion(N_("resultant"), (1.0, 1.0), float(static)),
+        Criterion(N_("moment"), (float(arm[0]), float(arm[1])), float(couple)),
     )
 
 

@@ -40,6 +40,7 @@ from stand.core.drift import (
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.health.data import Group, groups
 from stand.solve.pipeline import calibration_radius
+from stand.words import said
 
 SCATTER_PCT = 2.0
 """The operator's placement scatter assumed: each mass off by 2 % ..."""
@@ -264,12 +265,15 @@ def with_drift(rows: Sequence[Any], result: Any, cfg: Config, params: Any, optio
     if not bands:
         return result
     radius = calibration_radius(result.measurement, cfg, params, options, drifted=bands)
-    parts = ", ".join(f"{k} {100 * v:.1f} %" for k, v in bands.items())
+    parts = ", ".join(f"{k} {100 * v:.1f} %" for k, v in bands.items())  # names and figures
     note = Diagnostic(
         "stand_drifted",
-        f"stand health: this stand no longer matches its calibration ({parts}): the "
-        "calibration's interval is widened to hold it; recalibrate (stand calibrate "
-        "--from-archive)",
+        said(
+            "stand health: this stand no longer matches its calibration ({parts}): the "
+            "calibration's interval is widened to hold it; recalibrate (stand calibrate "
+            "--from-archive)",
+            parts=parts,
+        ),
         max(bands.values()),
     )
     return dataclasses.replace(

@@ -48,6 +48,7 @@ from stand.solve.pipeline import (
 )
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
+from stand.words import N_, said
 
 FIRST_CHECK_S = 1.0
 """The first solve of a live run comes after this long [s]."""
@@ -84,12 +85,12 @@ def waiting_for(m: Any, goal: tuple[float, float], settled: bool) -> tuple[str, 
     out = []
     if any(w.code == "short_window" for w in m.warnings):
         revs = min(int(w.revolutions) for w in m.windows)
-        out.append(f"more revolutions ({revs} of {MIN_REVS})")
+        out.append(said("more revolutions ({n} of {want})", n=revs, want=MIN_REVS))
     for i in range(2):
         if m.radius95_kg_m[i] > goal[i]:
-            out.append(f"plane {i + 1}'s 95 % interval to shrink to its goal")
+            out.append(said("plane {plane}'s 95 % interval to shrink to its goal", plane=i + 1))
     if not settled:
-        out.append("the ball balancer's balls to settle")
+        out.append(said("the ball balancer's balls to settle"))
     return tuple(out)
 
 
@@ -128,20 +129,20 @@ def measure_until_precise(
     estimate at least so often) [s].
     """
 
-    stopped_by = "time limit"
+    stopped_by = N_("time limit")
     next_check = FIRST_CHECK_S
     last = None
     estimates = Estimates(session, cfg, params, options)
     while session.elapsed_s < max_seconds:
         session.read(0.1)
         if session.failure is not None:
-            stopped_by = "frames stopped" if session.frames_received else "no frames"
+            stopped_by = N_("frames stopped") if session.frames_received else N_("no frames")
             break
         if session.stop_signal is not None:
-            stopped_by = "interrupted"
+            stopped_by = N_("interrupted")
             break
         if stop is not None and stop.is_set():
-            stopped_by = "stopped by hand"
+            stopped_by = N_("stopped by hand")
             break
         elapsed = session.elapsed_s
         if elapsed < next_check:
@@ -164,7 +165,7 @@ def measure_until_precise(
         if on_progress:
             on_progress(Progress(elapsed, m, goal, why))
         if not why:
-            stopped_by = "precision"
+            stopped_by = N_("precision")
             break
         next_check = _next_check(elapsed, m, goal, MIN_REVS, max_interval_s)
     return _final_result(session, cfg, params, options, targets, last, stopped_by)
@@ -275,8 +276,9 @@ def replay_estimates(
 def _kept_estimate(last: Any, exc: Exception) -> Any:
     """The last estimate made while the run went on, kept as the answer because the whole
     run could not be measured again, saying so (never in silence)."""
-    why = f"the whole run could not be measured again ({exc}): the answer is the last estimate"
-    note = Diagnostic("last_estimate", why + " made while it ran", None)
+    why = said("the whole run could not be measured again ({why}): the answer is the last "
+               "estimate made while it ran", why=exc)  # fmt: skip
+    note = Diagnostic("last_estimate", why, None)
     return replace(last, warnings=[*last.warnings, note])
 
 

@@ -29,6 +29,7 @@ from stand.drivers.runs.run_writer import RunWriter
 from stand.errors import BusError
 from stand.solve.acquisition import Acquired, default_acquisition
 from stand.solve.pipeline import SOFTWARE
+from stand.words import said
 
 
 class LiveSession:
@@ -227,7 +228,9 @@ class LiveSession:
                 notes.append(
                     Diagnostic(
                         "host_overrun",
-                        f"{self.reader.overruns} frames dropped: the host did not keep up",
+                        said(
+                            "{n} frames dropped: the host did not keep up", n=self.reader.overruns
+                        ),
                         float(self.reader.overruns),
                     )
                 )

@@ -19,6 +19,7 @@ from stand.core.dsp import median
 from stand.core.fitsums import block_fits
 from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
+from stand.words import said
 
 SPEED_TOLERANCE = 0.03
 """A revolution is at steady speed within 3 % of the steady part's median."""
@@ -146,7 +147,7 @@ def steady_revolutions(pos: np.ndarray, rev: np.ndarray) -> tuple[int, int, list
     if b - a < 2:
         raise MeasurementError("the speed is never steady for two revolutions in a row")
     if a > 0 or b < len(steady):
-        notes.append(f"speed steady over revolutions {a}..{b} of {len(steady)}")
+        notes.append(said("speed steady over revolutions {a}..{b} of {n}", a=a, b=b, n=len(steady)))
     return a, b, notes
 
 

@@ -40,6 +40,7 @@ from stand.measuring.gate import (
 )
 from stand.measuring.passes import NodeFit, node_phasor
 from stand.process import Beside, can_fork
+from stand.words import said
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 
@@ -119,25 +120,23 @@ def _nonlinear_supports(
 def _nonlinear_note(found: Nonlinearity, p: StandParameters) -> Diagnostic:
     f = found.fit
     if f.kind == "friction":
-        what = "dry friction of {:.2g} N and {:.2g} N at supports 1 and 2".format(*f.size_n)
-        cure = "free the supports (dry friction)"
+        what = said("dry friction of {f1} N and {f2} N at supports 1 and 2",
+                    f1=f"{f.size_n[0]:.2g}", f2=f"{f.size_n[1]:.2g}")  # fmt: skip
+        cure = said("free the supports (dry friction)")
     else:
         gaps = f.size_n / np.array([p.C1, p.C2]) * 1e6
-        what = "a clearance of about {:.2g} and {:.2g} micrometres at supports 1 and 2".format(
-            *gaps
-        )
-        cure = "take up the clearance in the supports"
-    moves = " and ".join(
-        f"{abs(d) * 1e6:.3g} g mm ({e:.1f} deg) in plane {i + 1}"
-        for i, (d, e) in enumerate(zip(found.dU_kg_m, found.error_deg, strict=True))
-    )
-    return Diagnostic(
-        "nonlinear_support",
-        f"the supports do not move linearly: their 3x and 5x are what {what} makes; it "
-        f"moves the answer by about {moves}; the interval is widened by "
-        f"{NONLINEAR_WIDEN:g} times that; {cure} and measure again",
-        float(found.error_deg.max()),
-    )
+        what = said("a clearance of about {g1} and {g2} micrometres at supports 1 and 2",
+                    g1=f"{gaps[0]:.2g}", g2=f"{gaps[1]:.2g}")  # fmt: skip
+        cure = said("take up the clearance in the supports")
+    d, e = abs(found.dU_kg_m) * 1e6, found.error_deg
+    moves = said("{d1} g mm ({e1} deg) in plane 1 and {d2} g mm ({e2} deg) in plane 2",
+                 d1=f"{d[0]:.3g}", e1=f"{e[0]:.1f}",
+                 d2=f"{d[1]:.3g}", e2=f"{e[1]:.1f}")  # fmt: skip
+    return Diagnostic("nonlinear_support", said(
+        "the supports do not move linearly: their 3x and 5x are what {what} makes; it moves the "
+        "answer by about {moves}; the interval is widened by {k} times that; {cure} and measure "
+        "again", what=what, moves=moves, k=f"{NONLINEAR_WIDEN:g}", cure=cure),
+        float(found.error_deg.max()))  # fmt: skip
 
 
 JITTER_NOTE = 0.1
@@ -175,15 +174,10 @@ def _with_edge_jitter(
     ]
     if var > 0 and max(share) > JITTER_NOTE:
         rms_deg = math.degrees(float(np.mean([w.edge_jitter_rad for w in windows])))
-        notes.append(
-            Diagnostic(
-                "edge_jitter",
-                f"the reference edges jitter by {rms_deg:.2g} deg of shaft angle (rms): the "
-                "interval is widened for it; a cleaner reference signal (sensor gap, "
-                "mark edge) narrows it",
-                rms_deg,
-            )
-        )
+        notes.append(Diagnostic("edge_jitter", said(
+            "the reference edges jitter by {deg} deg of shaft angle (rms): the interval is "
+            "widened for it; a cleaner reference signal (sensor gap, mark edge) narrows it",
+            deg=f"{rms_deg:.2g}"), rms_deg))  # fmt: skip
     return out, cov, notes
 
 
@@ -210,7 +204,8 @@ def _support(
     ph, warnings = judge_support(node, ph, window, ratio, sensor)
     if fit is not None:
         fit = replace(fit, scatter=ratio)
-    return ph, window, [Diagnostic("gate", f"node {node}: {n}") for n in notes] + warnings, fit
+    gated = [Diagnostic("gate", said("node {node}: {note}", node=node, note=n)) for n in notes]
+    return ph, window, gated + warnings, fit
 
 
 FORK_SAMPLES = 500_000
@@ -249,14 +244,10 @@ def judge_support(
     strong 3x."""
     warnings: list[Diagnostic] = []
     if window.revolutions < MIN_REVS:
-        warnings.append(
-            Diagnostic(
-                "short_window",
-                f"node {node}: only {window.revolutions} steady, settled revolutions "
-                f"(want {MIN_REVS} or more): measure longer",
-                float(window.revolutions),
-            )
-        )
+        warnings.append(Diagnostic("short_window", said(
+            "node {node}: only {n} steady, settled revolutions (want {want} or more): measure "
+            "longer", node=node, n=window.revolutions, want=MIN_REVS),
+            float(window.revolutions)))  # fmt: skip
     gain, delay = sensor
     if gain != 1.0 or delay != 0.0:
         # the node reads gain * a(t - delay): the support's own phasor is A / (g e^{-i w d})
@@ -264,30 +255,21 @@ def judge_support(
         R = np.array([[turn.real, -turn.imag], [turn.imag, turn.real]]) / abs(turn) ** 2
         ph = replace(ph, A_m_s2=complex(ph.A_m_s2 / turn), cov_m2_s4=R.T @ ph.cov_m2_s4 @ R)
     if ratio > SCATTER_LIMIT:
-        warnings.append(
-            Diagnostic(
-                "unsteady_1x",
-                f"node {node}: the 1x reading wanders between blocks of {BLOCK_REVS} "
-                f"revolutions {math.sqrt(ratio):.1f} times more than the noise explains: a "
-                "vibration close to 1x (a neighbouring machine beating with it) or unsteady "
-                "conditions; the interval is widened to match; measure longer, or --taper",
-                ratio,
-            )
-        )
+        warnings.append(Diagnostic("unsteady_1x", said(
+            "node {node}: the 1x reading wanders between blocks of {block} revolutions {k} times "
+            "more than the noise explains: a vibration close to 1x (a neighbouring machine "
+            "beating with it) or unsteady conditions; the interval is widened to match; measure "
+            "longer, or --taper", node=node, block=BLOCK_REVS, k=f"{math.sqrt(ratio):.1f}"),
+            ratio))  # fmt: skip
         ph = replace(ph, cov_m2_s4=ph.cov_m2_s4 * ratio)
     odd, odd_low = harmonic_ratio(ph)
     # against a real 1x only, and judged with its interval: two noise levels never warn
     if abs(ph.A_m_s2) > ph.radius95_m_s2 and odd_low > HARMONIC_WARN:
-        warnings.append(
-            Diagnostic(
-                "strong_3x",
-                f"node {node}: 3x is {100 * odd:.0f} % of 1x (at least {100 * odd_low:.0f} % "
-                "within the 95 % intervals): the supports may not be linear (dry friction, a "
-                "clearance) or the drive is misaligned; the model assumes linear supports, "
-                "so the result may be off",
-                odd,
-            )
-        )
+        warnings.append(Diagnostic("strong_3x", said(
+            "node {node}: 3x is {pct} % of 1x (at least {low} % within the 95 % intervals): the "
+            "supports may not be linear (dry friction, a clearance) or the drive is misaligned; "
+            "the model assumes linear supports, so the result may be off", node=node,
+            pct=f"{100 * odd:.0f}", low=f"{100 * odd_low:.0f}"), odd))  # fmt: skip
     return ph, warnings
 
 

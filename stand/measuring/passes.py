@@ -49,6 +49,7 @@ from stand.measuring.gate import (
     settled_block,
     steady_revolutions,
 )
+from stand.words import said
 
 CHUNK = 1 << 16
 """Samples per chunk (about): a chunk holds whole blocks of revolutions."""
@@ -364,7 +365,7 @@ def node_phasor(
     blocks, chunks, kept = _first_pass(run, starts, end, n_full, w0)
     first = settled_block(blocks) if gate else 0
     if first > 0:
-        notes.append(f"supports settled after {first * BLOCK_REVS} revolutions")
+        notes.append(said("supports settled after {n} revolutions", n=first * BLOCK_REVS))
     e0 = a + BLOCK_REVS * first
     window = Window(
         start=float(pos[e0]),

@@ -24,7 +24,7 @@ def _uncertainty(out: dict[str, Any], _: Language) -> str:
     if pu is None:
         return ""
     t = pu["tolerances"]
-    d = Display.of(out)
+    d = Display.of(out, _)
     rows = "".join(
         f"<tr><td>{p['plane']}</td><td>±{d.number(p['radius95_monte_carlo_g_mm'])}</td>"
         f"<td>±{d.number(p['radius95_linear_g_mm'])}</td>"
@@ -55,7 +55,7 @@ def appendix(out: dict[str, Any], result: Result, _: Language) -> str:
         for s in out["supports"]
     )
     warnings = (
-        "".join(f'<div class="warn">{e(w)}</div>' for w in out["warnings"])
+        "".join(f'<div class="warn">{e(_(w))}</div>' for w in out["warnings"])
         or f"<p class=muted>{e(_('no warnings'))}</p>"
     )
     spectrum, speed = spectrum_and_speed(result.traces, out["rpm"], _)
@@ -89,7 +89,7 @@ def appendix(out: dict[str, Any], result: Result, _: Language) -> str:
 
 def _parameters(out: dict[str, Any], _: Language = ENGLISH) -> dict[str, str]:
     """The few parameters a customer needs (the rest stays in the archive)."""
-    d = Display.of(out)
+    d = Display.of(out, _)
     got = {_("speed [rpm]"): f"{out['rpm']:.0f}"}
     for x in out.get("planes", []):
         if x.get("radius_mm") is not None:

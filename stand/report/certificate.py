@@ -13,7 +13,6 @@ comes from the run's :class:`~stand.solve.result.Result`.
 
 from __future__ import annotations
 
-import datetime as dt
 import html
 from typing import Any
 
@@ -56,21 +55,6 @@ pre { font-size: 0.8em; background: #f6f6f6; padding: 0.6em; white-space: pre-wr
 """
 
 
-def local_time(iso_utc: str) -> str:
-    """``2026-11-22 15:03 CET`` from an ISO 8601 UTC time (as given if unreadable).
-
-    >>> local_time("")
-    ''
-    """
-    if not iso_utc:
-        return ""
-    try:
-        t = dt.datetime.fromisoformat(iso_utc)
-    except ValueError:
-        return iso_utc
-    return t.astimezone().strftime("%Y-%m-%d %H:%M %Z")
-
-
 BADGES = {
     "pass": ("pass", N_("IN TOLERANCE")),
     "fail": ("fail", N_("OUT OF TOLERANCE")),
@@ -96,7 +80,7 @@ def _job(out: dict[str, Any], result: Result, _: Language) -> str:
         (_("rotor type"), j.get("rotor_type")), (_("serial number"), j.get("serial")),
         (_("order"), j.get("order")), (_("operator"), j.get("operator")),
         (_("balancing stand"), st.get("name") or st.get("id")),
-        (_("date"), local_time(result.provenance.start_time)),
+        (_("date"), _.when(result.provenance.start_time)),
     ]  # fmt: skip
     row = "".join(f"<th>{e(k)}</th><td>{e(v or '–')}</td>" for k, v in cells[:3])
     row2 = "".join(f"<th>{e(k)}</th><td>{e(v or '–')}</td>" for k, v in cells[3:])
@@ -106,7 +90,7 @@ def _job(out: dict[str, Any], result: Result, _: Language) -> str:
 
 
 def _basis(out: dict[str, Any], _: Language) -> str:
-    t, d, e = out.get("tolerance"), Display.of(out), html.escape
+    t, d, e = out.get("tolerance"), Display.of(out, _), html.escape
     if t is None:
         return "<p>" + e(_("Tolerance: none set (the configuration has no [tolerance] "
                            "table).")) + "</p>"  # fmt: skip
@@ -114,7 +98,7 @@ def _basis(out: dict[str, Any], _: Language) -> str:
     if "permissible_g_mm" in t:
         per = f": U<sub>per</sub> = {d.unbalance(t['permissible_g_mm'])}"
     rows = "".join(
-        f"<tr><td>{e(c['name'])}</td><td>{e(_value(c, d))}</td><td>{e(_limit(c, d))}</td>"
+        f"<tr><td>{e(_(c['name']))}</td><td>{e(_value(c, d))}</td><td>{e(_limit(c, d))}</td>"
         f"<td><span class={'pass' if c['verdict'] == 'pass' else 'fail'}>"
         f"{_verdict_word(c['verdict'], _)}</span></td></tr>"
         for c in t["criteria"]
@@ -124,10 +108,10 @@ def _basis(out: dict[str, Any], _: Language) -> str:
         for h in (_("criterion"), _("value ± combined error"), _("permissible"), _("verdict"))
     )
     return (
-        f"<p><b>{e(_('Tolerance:'))}</b> {e(t['source'])}{per}; "
+        f"<p><b>{e(_('Tolerance:'))}</b> {e(_(t['source']))}{per}; "
         + e(_("judged in {where}. Balancing speed {rpm} rpm.").format(
-            where=t["judged_in"], rpm=_.number(out["rpm"], 0)))
-        + f"<br><b>{e(_('Rule:'))}</b> {e(t['rule'])}.</p>"
+            where=_(t["judged_in"]), rpm=_.number(out["rpm"], 0)))
+        + f"<br><b>{e(_('Rule:'))}</b> {e(_(t['rule']))}.</p>"
         + (  # planes judged alone show in the table of planes below
             f"<table><tr>{heads}</tr>{rows}</table>"
             if any(c["plane"] is None for c in t["criteria"])
@@ -142,14 +126,14 @@ def _keys(out: dict[str, Any], _: Language) -> str:
     keys = out.get("keys") or []
     if not keys:
         return ""
-    d, e = Display.of(out), html.escape
+    d, e = Display.of(out, _), html.escape
     items = "".join(
         "<li>" + e(_("keyway at {angle}°, key {mass} at radius {radius}: balanced with "
                      "{convention} ({fitted} fitted on the stand, the difference counted); "
                      ).format(angle=f"{k['angle_deg']:g}", mass=d.mass(k["mass_g"]),
                               radius=d.length(k["radius_mm"]),
-                              convention=CONVENTION_WORDS[k["convention"]],
-                              fitted=FITTED_WORDS[k["fitted"]]))
+                              convention=_(CONVENTION_WORDS[k["convention"]]),
+                              fitted=_(FITTED_WORDS[k["fitted"]])))
         + f"<b>{e(_('mark the part {marking}').format(marking=k['marking']))}</b></li>"
         for k in keys
     )  # fmt: skip
@@ -169,7 +153,7 @@ def _limit(c: dict[str, Any], d: Display) -> str:
 
 
 def _results(out: dict[str, Any], _: Language) -> str:
-    d, e = Display.of(out), html.escape
+    d, e = Display.of(out, _), html.escape
     crit = out.get("tolerance", {}).get("criteria", [])
     tol = {c["plane"]: c for c in crit if c["plane"] is not None}
     check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}
@@ -232,7 +216,7 @@ def _machined(plane: dict[str, Any], c: dict[str, Any], d: Display, _: Language)
 
 
 def _corrections(out: dict[str, Any], _: Language) -> str:
-    d, e = Display.of(out), html.escape
+    d, e = Display.of(out, _), html.escape
     items = []
     for plane, c in zip(out["planes"], out["corrections"], strict=True):
         i = plane["plane"]
@@ -278,7 +262,7 @@ def _calibration(out: dict[str, Any], result: Result, _: Language) -> str:
     matrix = e(_("; influence matrix {matrix}").format(matrix=p.matrix)) if p.matrix else ""
     t = out.get("tooling")
     if t:
-        d = Display.of(out)
+        d = Display.of(out, _)
         parts = ", ".join(
             _("plane {i} {unbalance} at {angle}°").format(
                 i=x["plane"], unbalance=d.unbalance(x["unbalance_g_mm"]),

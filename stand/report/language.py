@@ -12,11 +12,15 @@ A plant adds a language by adding a catalogue (docs/people.md says how).
 from __future__ import annotations
 
 import datetime as dt
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from stand.errors import UsageError
+from stand.words import N_
+
+__all__ = ["ENGLISH", "LANGUAGES", "N_", "Language", "catalogue_path", "language"]
 
 LANGUAGES = {"en": "English", "uk": "Українська", "de": "Deutsch"}
 """The languages shipped: code and name in the language itself."""
@@ -29,11 +33,6 @@ def catalogue_path(code: str) -> Path:
     return LOCALE_DIR / code / "LC_MESSAGES" / f"{DOMAIN}.po"
 
 
-def N_(msgid: str) -> str:
-    """Mark a message for the catalogues where it is named, not shown (no translation)."""
-    return msgid
-
-
 @dataclass(frozen=True)
 class Language:
     """One language: its messages, and its way of writing numbers and times.
@@ -44,9 +43,36 @@ class Language:
 
     code: str = "en"
     messages: Mapping[str, str] = field(default_factory=dict)
+    patterns: tuple[tuple[re.Pattern[str], str], ...] = ()
+    """The messages with placeholders, as patterns that find them in a sentence."""
 
     def __call__(self, msgid: str) -> str:
-        return self.messages.get(msgid) or msgid
+        found = self.messages.get(msgid)
+        if found:
+            return found
+        return self._sentence(msgid) if self.patterns and "{" not in msgid else msgid
+
+    def _sentence(self, text: str) -> str:
+        """A sentence the engine wrote (:func:`stand.words.said`), in this language: its
+        message found by pattern, its values put back (a number with this language's
+        decimal sign, a value that is a message itself translated)."""
+        for pattern, msgstr in self.patterns:
+            if (m := pattern.fullmatch(text)) is not None:
+                values = {k: self._value(v) for k, v in m.groupdict().items()}
+                return msgstr.format(**values)
+        return text
+
+    def _value(self, v: str) -> str:
+        return v.replace(".", self.decimal) if _DECIMAL.fullmatch(v) else self(v)
+
+    @property
+    def decimal(self) -> str:
+        """This language's decimal sign (``.`` in English, ``,`` in German and Ukrainian)."""
+        if self.code == "en":
+            return "."
+        from babel.numbers import get_decimal_symbol
+
+        return str(get_decimal_symbol(self.code))
 
     def number(self, value: float, digits: int = 1) -> str:
         """``1234.5`` as this language writes it (``1,234.5``; ``1.234,5``; ``1 234,5``)."""
@@ -55,12 +81,25 @@ class Language:
         pattern = "#,##0" + ("." + "0" * digits if digits > 0 else "")
         return str(format_decimal(value, format=pattern, locale=self.code))
 
-    def when(self, t: dt.datetime) -> str:
-        """A time with its zone as this language writes it (local time)."""
-        from babel.dates import format_datetime
+    def when(self, t: dt.datetime | str, *, seconds: bool = False) -> str:
+        """A time in local time with its zone, its date as this language writes it
+        (``27 Nov 2026 15:04 CET``, ``27.11.2026 15:04 CET``, ``27 лист. 2026 р. 15:04
+        CET``); an ISO 8601 text is read first (one that does not read is given as it is).
 
-        return str(format_datetime(t.astimezone(), "medium", locale=self.code)) + " " + (
-            t.astimezone().strftime("%Z"))  # fmt: skip
+        >>> ENGLISH.when("")
+        ''
+        """
+        if isinstance(t, str):
+            try:
+                t = dt.datetime.fromisoformat(t)
+            except ValueError:
+                return str(t)
+        from babel.dates import format_date
+
+        local = t.astimezone()
+        day = format_date(local, "medium", locale="en_GB" if self.code == "en" else self.code)
+        clock = local.strftime("%H:%M:%S" if seconds else "%H:%M")
+        return f"{day} {clock} {local:%Z}"
 
 
 ENGLISH = Language()
@@ -82,4 +121,28 @@ def language(code: str | None) -> Language:
     except (OSError, ValueError) as exc:
         raise UsageError(f"{path}: the {LANGUAGES[code]} catalogue does not read ({exc})") from exc
     found = {str(m.id): str(m.string) for m in catalog if m.id and m.string and not m.fuzzy}
-    return Language(code, found)
+    sentences = sorted((str(m.id) for m in catalog if m.id and SENTENCE in m.auto_comments
+                        and str(m.id) in found), key=len, reverse=True)  # fmt: skip
+    return Language(code, found, tuple((_pattern(k), found[k]) for k in sentences))
+
+
+SENTENCE = "engine sentence"
+"""The comment (``#. engine sentence``) a catalogue gives a message the engine writes with
+:func:`stand.words.said`: only these are found again in a sentence by their words (the
+longest first), so that a screen's own text is never taken apart."""
+_PLACEHOLDER = re.compile(r"\{(\w+)\}")
+_DECIMAL = re.compile(r"[-+]?\d+\.\d+")
+
+
+def _pattern(msgid: str) -> re.Pattern[str]:
+    """The message ``msgid`` as a pattern: its words as they are, each placeholder any
+    text (the same placeholder twice: the same text)."""
+    out, seen, at = [], set(), 0
+    for m in _PLACEHOLDER.finditer(msgid):
+        out.append(re.escape(msgid[at : m.start()]))
+        name = m.group(1)
+        out.append(f"(?P={name})" if name in seen else f"(?P<{name}>.+?)")
+        seen.add(name)
+        at = m.end()
+    out.append(re.escape(msgid[at:]))
+    return re.compile("".join(out), re.DOTALL)

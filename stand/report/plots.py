@@ -112,7 +112,7 @@ def polar(out: dict[str, Any], _: Language = ENGLISH) -> str:
     """Each plane: tolerance, unbalance (before and after a check), correction, holes."""
     import matplotlib.pyplot as plt
 
-    d = Display.of(out)
+    d = Display.of(out, _)
     fig, axes = plt.subplots(1, 2, subplot_kw={"projection": "polar"}, figsize=(9.5, 5.0))
     tol = _plane_limits(out)
     check = {p["plane"]: p for p in out.get("check", {}).get("planes", [])}

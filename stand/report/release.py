@@ -8,7 +8,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass
 
-from stand.report.certificate import RELEASE_END, RELEASE_START, local_time
+from stand.report.certificate import RELEASE_END, RELEASE_START
 from stand.report.language import ENGLISH, Language
 
 
@@ -43,7 +43,7 @@ def released(page: str, r: Release, words: Language = ENGLISH) -> str:
     role = f" ({e(_(r.role))})" if r.role else ""
     rows = (
         (_("released by"), f"{e(r.who)}{role}"),
-        (_("on"), e(local_time(r.at_utc)) + f" ({e(r.at_utc[:19].replace('T', ' '))} UTC)"),
+        (_("on"), e(_.when(r.at_utc)) + f" ({e(r.at_utc[:19].replace('T', ' '))} UTC)"),
         (_("meaning"), e(_("released: the rotor was balanced and measured as this "
                            "certificate states"))),
         (_("run file SHA-256"), f"<span class=digest>{e(r.run_sha256)}</span>"),

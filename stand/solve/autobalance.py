@@ -19,6 +19,7 @@ from stand.core import Diagnostic, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.autobalance import antiresonance, balanced, driving_point, windows, with_balls
 from stand.core.model import StandParameters, natural_frequencies
 from stand.errors import UsageError
+from stand.words import said
 
 SPAN_OVER_MODES = 4.0
 """Without a given top speed the windows are sought up to this many times the upper
@@ -123,15 +124,26 @@ def balls_note(cfg: Config, p: StandParameters, m: Any) -> Any:
     q = balls_stand(p, table)
     rpm = float(rad_s_to_rpm(omega_rad_s))
     if driving_point(q, table.plane, omega_rad_s).real >= 0:
-        return Diagnostic("balls_outside_window", f"the ball balancer cannot balance at "
-                          f"{rpm:.0f} rpm (Re H_PP >= 0: below its first window or in the gap, "
-                          "stand autobalance says where): its balls gather on the heavy side, "
-                          "and this run measures the rotor with them there")  # fmt: skip
+        return Diagnostic(
+            "balls_outside_window",
+            said(
+                "the ball balancer cannot balance at {rpm} rpm (Re H_PP >= 0: below its first "
+                "window or in the gap, stand autobalance says where): its balls gather on the "
+                "heavy side, and this run measures the rotor with them there",
+                rpm=f"{rpm:.0f}",
+            ),
+        )
     if "unsteady_1x" in codes or (drift[0] > BALLS_DRIFT and drift[0] > 4 * drift[1]):
         moved = 100 * drift[0]
-        return Diagnostic("balls_unsettled", f"the 1x still moves through the run ({moved:.1f} "
-                          "% across it): the balancer's balls have not settled, so this answer "
-                          "averages a changing state; measure again once they have")  # fmt: skip
+        return Diagnostic(
+            "balls_unsettled",
+            said(
+                "the 1x still moves through the run ({pct} % across it): the balancer's balls have "
+                "not settled, so this answer averages a changing state; measure again once they "
+                "have",
+                pct=f"{moved:.1f}",
+            ),
+        )
     return None
 
 

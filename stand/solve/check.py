@@ -24,6 +24,7 @@ from stand.solve.pipeline import (
 )
 from stand.solve.recordings import named_errors, read_run, solve_recording
 from stand.solve.result import Check, Result
+from stand.words import said
 
 
 def check_against(
@@ -61,11 +62,13 @@ def check_against(
             "(or say --check-any)"
         )
     b, a = before.solution.U_kg_m, after.solution.U_kg_m
-    said = tuple(
-        replace(w, message=f"the run before ({previous}): {w.message}")
+    notes = tuple(
+        replace(
+            w, message=said("the run before ({run}): {message}", run=previous, message=w.message)
+        )
         for w in (*rec.warnings, *streams.warnings)
     )
-    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])), said)
+    return Check(previous, (complex(b[0]), complex(b[1])), (complex(a[0]), complex(a[1])), notes)
 
 
 SAME_STAND = ("M1", "M2", "C1", "C2", "H1", "H2")
@@ -101,10 +104,14 @@ def check_notes(check: Check) -> list[Diagnostic]:
     return [
         Diagnostic(
             "correction_made_worse",
-            f"plane {i + 1}: the unbalance grew after the correction (URR {100 * u:.0f} %): "
-            "was it added where material should have come off (or the other way round), at "
-            "the mirrored angle (the angle counts against the direction of rotation), or in "
-            "the other plane?",
+            said(
+                "plane {plane}: the unbalance grew after the correction (URR {urr} %): was "
+                "it added where material should have come off (or the other way round), at "
+                "the mirrored angle (the angle counts against the direction of rotation), or "
+                "in the other plane?",
+                plane=i + 1,
+                urr=f"{100 * u:.0f}",
+            ),
             float(u),
         )
         for i, u in enumerate(check.urr)

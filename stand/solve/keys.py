@@ -20,14 +20,15 @@ import numpy as np
 from stand.config.tolerance import KeyTable
 from stand.core import Diagnostic, StandParameters
 from stand.core.tolerance import KEY_SHARE, key_unbalance, transfer
+from stand.words import N_, said
 
 MARKING = {"half": "H", "full": "F", "none": "N"}
 """The letter a part balanced under each convention is marked with (ISO 21940-32, as
 ISO 8821 before it: H half key, F full key, N no key)."""
-CONVENTION_WORDS = {"half": "the half-key convention", "full": "the full-key convention",
-                    "none": "no key"}  # fmt: skip
+CONVENTION_WORDS = {"half": N_("the half-key convention"), "full": N_("the full-key convention"),
+                    "none": N_("no key")}  # fmt: skip
 """Each convention as the operator's text and the certificate say it."""
-FITTED_WORDS = {"none": "no key", "half": "a half-key", "full": "the full key"}
+FITTED_WORDS = {"none": N_("no key"), "half": N_("a half-key"), "full": N_("the full key")}
 """What is in the keyway on the stand, in words."""
 
 
@@ -74,13 +75,19 @@ def with_keys(m: Any, effects: tuple[KeyEffect, ...]) -> Any:
     U = np.asarray(m.solution.U_kg_m) + add
     sol = replace(m.solution, U_kg_m=U, static_kg_m=complex(U[0] + U[1]))
     what = "; ".join(
-        f"{e.convention} key counted, {FITTED_WORDS[e.fitted]} fitted at {e.angle_deg:g} deg"
+        said("{convention} key counted, {fitted} fitted at {angle} deg", convention=e.convention,
+             fitted=FITTED_WORDS[e.fitted], angle=f"{e.angle_deg:g}")
         for e in effects
         if e.convention != e.fitted
-    )
+    )  # fmt: skip
     note = Diagnostic(
         "keys_counted",
-        f"ISO 21940-32: {what}; the answer is the part as its convention has it "
-        f"(+{abs(add[0]) * 1e6:.1f} g mm in plane 1, +{abs(add[1]) * 1e6:.1f} g mm in plane 2)",
+        said(
+            "ISO 21940-32: {what}; the answer is the part as its convention has it (+{u1} g "
+            "mm in plane 1, +{u2} g mm in plane 2)",
+            what=what,
+            u1=f"{abs(add[0]) * 1e6:.1f}",
+            u2=f"{abs(add[1]) * 1e6:.1f}",
+        ),
     )
     return replace(m, solution=sol, warnings=[*m.warnings, note])

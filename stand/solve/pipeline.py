@@ -48,6 +48,7 @@ from stand.solve.result import (
 )
 from stand.solve.tooling import compensate, folder, load_tooling, tooling_file
 from stand.solve.verdict import combined_error, judged, plane_passes, tolerance_of
+from stand.words import said
 
 SOFTWARE = f"stand {__version__}"
 SPECTRUM_MAX_SAMPLES = 1 << 18
@@ -231,9 +232,13 @@ def _floor_notes(m: Measurement, noise: Sequence[bool], provenance: Provenance) 
     floor = [
         Diagnostic(
             "within_noise",
-            f"plane {i + 1}: {abs(U) * 1e6:.1f} g mm is inside its own 95 % interval "
-            f"(+-{m.radius95_kg_m[i] * 1e6:.1f} g mm): its angle is undefined, so no correction "
-            "is prescribed",
+            said(
+                "plane {plane}: {u} g mm is inside its own 95 % interval (+-{r} g mm): its angle "
+                "is undefined, so no correction is prescribed",
+                plane=i + 1,
+                u=f"{abs(U) * 1e6:.1f}",
+                r=f"{m.radius95_kg_m[i] * 1e6:.1f}",
+            ),
             float(abs(U) / m.radius95_kg_m[i]),
         )
         for i, U in enumerate(m.solution.U_kg_m)
@@ -243,9 +248,13 @@ def _floor_notes(m: Measurement, noise: Sequence[bool], provenance: Provenance) 
         floor.append(
             Diagnostic(
                 "tooling_config",
-                f"the tooling {m.tooling.name!r} was measured with another configuration "
-                f"(on {m.tooling.measured[:10]}): if the stand was calibrated since, measure "
-                "the tooling again (stand tooling measure)",
+                said(
+                    "the tooling {name} was measured with another configuration (on "
+                    "{date}): if the stand was calibrated since, measure the tooling again "
+                    "(stand tooling measure)",
+                    name=repr(m.tooling.name),
+                    date=m.tooling.measured[:10],
+                ),
             )
         )
     return floor
@@ -354,8 +363,12 @@ def _finish(m: Any, cfg: Config, params: StandParameters, options: SolveOptions)
         else:  # its own index runs come first: measured, and said loudly
             note = Diagnostic(
                 "tooling_not_measured",
-                f"the tooling {cfg.tooling.name!r} has not been measured: its unbalance is NOT "
-                "subtracted from this answer (measure it: stand tooling measure RUN_0 RUN_180)",
+                said(
+                    "the tooling {name} has not been measured: its unbalance is NOT "
+                    "subtracted from this answer (measure it: stand tooling measure RUN_0 "
+                    "RUN_180)",
+                    name=repr(cfg.tooling.name),
+                ),
             )
             m = replace(m, warnings=[*m.warnings, note])
     if options.compensate:  # the tooling's own index runs measure the tooling, not the part
@@ -376,20 +389,16 @@ def rigid_note(cfg: Config, params: StandParameters, omega_rad_s: float) -> Diag
         return None
     limit = rigid_limit_rpm(f_ff)
     floor = float(rad_s_to_rpm(natural_frequencies(params).max())) * RESONANCE_BAND
-    return Diagnostic(
-        "flexible_rotor",
-        f"the rotor bends: at {60 * f:.0f} rpm, {100 * f / f_ff:.1f} % "
-        f"of its first bending frequency ({f_ff:g} Hz), the rigid model's answer may be off "
-        f"by {100 * lo:.1f} to {100 * hi:.1f} % (mostly in the static part); "
-        + (
-            f"balance at {limit:.0f} rpm or below for 1 %"
-            if limit > floor
-            else f"within 1 % it needs {limit:.0f} rpm or less, below this stand's natural "
-            f"frequencies ({floor:.0f} rpm with their margin): the rotor needs a flexible "
-            "model, or a stiffer stand"
-        ),
-        hi,
-    )
+    cure = (said("balance at {rpm} rpm or below for 1 %", rpm=f"{limit:.0f}") if limit > floor
+            else said("within 1 % it needs {rpm} rpm or less, below this stand's natural "
+                      "frequencies ({floor} rpm with their margin): the rotor needs a flexible "
+                      "model, or a stiffer stand",
+                      rpm=f"{limit:.0f}", floor=f"{floor:.0f}"))  # fmt: skip
+    return Diagnostic("flexible_rotor", said(
+        "the rotor bends: at {rpm} rpm, {pct} % of its first bending frequency ({hz} Hz), the "
+        "rigid model's answer may be off by {lo} to {hi} % (mostly in the static part); {cure}",
+        rpm=f"{60 * f:.0f}", pct=f"{100 * f / f_ff:.1f}", hz=f"{f_ff:g}", lo=f"{100 * lo:.1f}",
+        hi=f"{100 * hi:.1f}", cure=cure), hi)  # fmt: skip
 
 
 def check_matrix(options: SolveOptions, cfg: Config, *, live: bool) -> None:

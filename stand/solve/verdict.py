@@ -31,12 +31,16 @@ from stand.core.tolerance import (
     static_couple_limits,
 )
 from stand.solve.result import Judgement, Tolerance
+from stand.words import N_, said
 
 RULES = {
-    "after_balancing": "ISO 21940-14, directly after balancing: pass if U + dU <= limit, "
-    "fail if U - dU > limit, else undecided (dU: combined error)",
-    "later_check": "ISO 21940-14, later check by the user: pass if U <= limit + dU "
-    "(dU: combined error)",
+    "after_balancing": N_(
+        "ISO 21940-14, directly after balancing: pass if U + dU <= limit, "
+        "fail if U - dU > limit, else undecided (dU: combined error)"
+    ),
+    "later_check": N_(
+        "ISO 21940-14, later check by the user: pass if U <= limit + dU (dU: combined error)"
+    ),
 }
 """The rule of each moment, as the outputs quote it."""
 
@@ -57,16 +61,20 @@ def tolerance_of(
     x = _planes_x(params)
     x_cm = params.a + params.b
     z = (0.0, params.L) if t.bearing_planes_m is None else tuple(t.bearing_planes_m)
-    where = "the supports" if t.bearing_planes_m is None else f"{z[0]:g} m and {z[1]:g} m"
+    where = (
+        N_("the supports")
+        if t.bearing_planes_m is None
+        else said("{z1} m and {z2} m", z1=f"{z[0]:g}", z2=f"{z[1]:g}")
+    )
     if t.form == "per_plane":
         per = tuple(u * 1e-6 for u in t.per_plane_g_mm or ())
-        src = t.source or "drawing"
-        return Tolerance("per_plane", src, "correction planes", moment, plane_criteria(per),
+        src = t.source or N_("drawing")
+        return Tolerance("per_plane", src, N_("correction planes"), moment, plane_criteria(per),
                          (per[0], per[1]))  # fmt: skip
     if t.form == "static_couple":
         S, P = (t.static_g_mm or 0) * 1e-6, (t.couple_g_mm2 or 0) * 1e-9
-        src = t.source or "ISO 21940-11, resultant and moment limits"
-        return Tolerance("static_couple", src, "resultant and moment about the centre of mass",
+        src = t.source or N_("ISO 21940-11, resultant and moment limits")
+        return Tolerance("static_couple", src, N_("resultant and moment about the centre of mass"),
                          moment, static_couple_criteria(x, x_cm, S, P),
                          static_couple_limits(x, x_cm, S, P))  # fmt: skip
     omega = float(rpm_to_rad_s(t.max_speed_rpm or 1.0))  # grade and API forms give it
@@ -74,24 +82,29 @@ def tolerance_of(
         W = t.api_journal_kg or ()
         limits = tuple(api_permissible(w, float(t.max_speed_rpm or 1)) for w in W)
         U_per, G = sum(limits), None
-        src = t.source or (
-            f"API 610/617/687: 6350 W / N at {t.max_speed_rpm:g} rpm, journals "
-            + " and ".join(f"{w:g} kg" for w in W)
+        src = t.source or said(
+            "API 610/617/687: 6350 W / N at {rpm} rpm, journals {journals}",
+            rpm=f"{t.max_speed_rpm:g}",
+            journals=" and ".join(f"{w:g} kg" for w in W),
         )
     else:
         G = (t.grade_mm_s or 0) * 1e-3
         U_per = permissible_unbalance(params.M3, G, omega)
         s = lever_shares(x_cm, z)
         limits = (s[0] * U_per, s[1] * U_per)
-        src = t.source or f"ISO 21940-11, G {t.grade_mm_s:g} at {t.max_speed_rpm:g} rpm"
+        src = t.source or said(
+            "ISO 21940-11, G {grade} at {rpm} rpm",
+            grade=f"{t.grade_mm_s:g}",
+            rpm=f"{t.max_speed_rpm:g}",
+        )
     if t.bearing_planes_m is None and t.form == "grade":  # today's: the supports, worst phase
         per = plane_tolerances(params, U_per)
         crit = plane_criteria(per)
-        judged_in = "correction planes (bearing-plane shares at the supports, any phase)"
+        judged_in = N_("correction planes (bearing-plane shares at the supports, any phase)")
     else:
         per = carried_limits(x, z, limits)
         crit = bearing_criteria(x, z, limits)
-        judged_in = f"bearing planes at {where}"
+        judged_in = said("bearing planes at {where}", where=where)
     bearing = None if t.bearing_planes_m is None else (z[0], z[1])
     return Tolerance(t.form, src, judged_in, moment, crit, per, G, omega, U_per, bearing)
 

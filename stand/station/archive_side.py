@@ -24,10 +24,11 @@ from stand.archive.query import Filters, history, run_digest, run_file
 from stand.config import load_config
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
+from stand.files import output
 from stand.health import datum_row, health, health_json
 from stand.plant import export_qdas
-from stand.report import Release, released, render_speeds, write_pdf
-from stand.report.language import Language
+from stand.report import Release, released, render, render_speeds, write_pdf
+from stand.report.language import LANGUAGES, Language
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
@@ -40,6 +41,7 @@ class ArchiveSide:
     runs_dir: Path
     archive_url: str
     config_dir: Path
+    default_language: str
     _printing: threading.Lock
     _state: Snapshot
 
@@ -136,9 +138,29 @@ class ArchiveSide:
         stand = Filters(stand=self.stand_id())  # one file names one machine (K1081)
         return export_qdas(self.archive_url, rotor_type, stand, None, timezone=zone).data
 
-    def report_file(self, run_id: int) -> Path:
-        """The report of archived run ``run_id``, if it lies inside the runs folder."""
+    def report_file(self, run_id: int, code: str | None = None) -> Path:
+        """The report of archived run ``run_id`` (in the station's language, or in the
+        language ``code``), if it lies inside the runs folder."""
 
+        report = self._report(run_id)
+        if code is None or code == self.default_language:
+            return report
+        words = self.language(code)  # UsageError for a language not shipped
+        other = report.with_suffix(f".{code}.html")  # written once, from the run's Result
+        with self._printing:
+            if not other.is_file():
+                s = self._state
+                if s.run_id != run_id or s.result is None:
+                    raise UsageError(
+                        f"run {run_id} has no certificate in {LANGUAGES[code]}: it is "
+                        "written while the run is on the station (else: stand report RUN "
+                        f"--lang {code})")  # fmt: skip
+                data = render(s.result, words).encode("utf-8")
+                with output(other, need_bytes=len(data)) as tmp:
+                    tmp.write_bytes(data)
+        return other
+
+    def _report(self, run_id: int) -> Path:
         found = run_file(self.archive_url, run_id)
         if found is None:
             raise UsageError(f"no run {run_id} in the archive")
@@ -165,12 +187,13 @@ class ArchiveSide:
             paths.append(str(path))
         return render_speeds(speeds_json(balance_speeds(paths)))
 
-    def released_pdf(self, run_id: int, who: str, role: str | None) -> Path:
+    def released_pdf(self, run_id: int, who: str, role: str | None, code: str | None = None
+                     ) -> Path:  # fmt: skip
         """The certificate of archived run ``run_id`` released by the account ``who``: its
         signature block the release (:func:`stand.report.released`), printed once as
         ``<run>.released.pdf`` and journaled (the PDF's SHA-256); the first release
         stands, later asks get it."""
-        report = self.report_file(run_id)
+        report = self.report_file(run_id, code)
         pdf = report.with_suffix(".released.pdf")
         with self._printing:
             if not pdf.is_file():
@@ -178,18 +201,18 @@ class ArchiveSide:
                 now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
                 page = released(report.read_text(encoding="utf-8"),
                                 Release(who, role, now, digest),
-                                self.language(None))  # the report's language  # fmt: skip
+                                self.language(code))  # the report's language  # fmt: skip
                 write_pdf(page, pdf, inputs=[str(report)])
                 record(self.archive_url, Change(
                     "release", f"certificate of run {run_id} ({report.stem})", digest,
                     file_sha256(pdf), None, who=who))  # fmt: skip
         return pdf
 
-    def certificate_pdf(self, run_id: int) -> Path:
+    def certificate_pdf(self, run_id: int, code: str | None = None) -> Path:
         """The report of archived run ``run_id`` as a PDF beside it, printed by Chromium
         the first time it is asked for, and again if the report changed since
         (:func:`stand.report.printing.write_pdf`, written safely); not released."""
-        report = self.report_file(run_id)
+        report = self.report_file(run_id, code)
         pdf = report.with_suffix(".pdf")
         with self._printing:
             stale = pdf.is_file() and pdf.stat().st_mtime_ns < report.stat().st_mtime_ns

@@ -8,7 +8,6 @@ comes from :class:`stand.station.service.Station`.
 
 from __future__ import annotations
 
-import datetime as dt
 import html
 from collections.abc import Callable
 from typing import Any, Literal
@@ -18,7 +17,7 @@ from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
 from stand.report import Display
-from stand.report.language import ENGLISH, N_, Language
+from stand.report.language import ENGLISH, LANGUAGES, N_, Language
 from stand.station.login import forbidden, session_of, words
 from stand.station.service import Station
 
@@ -136,7 +135,10 @@ def history_screen(station: Station) -> None:
         except StandError as exc:
             notify(str(exc), "negative")
             return
-        units = {t: Display(*station.display_units(t)) for t in {r["rotor_type"] for r in rows}}
+        units = {
+            t: Display(*station.display_units(t), _.decimal)
+            for t in {r["rotor_type"] for r in rows}
+        }
         table.rows = [_history_row(r, units[r["rotor_type"]], _) for r in rows]
         table.update()
 
@@ -159,7 +161,7 @@ def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH) -> di
     planes = {p["plane"]: plane(p) for p in r["planes"]}
     return {
         "run": r["id"],
-        "time": _local(r["start_time"]),
+        "time": _.when(r["start_time"], seconds=True),
         "serial": r["serial"] or "",
         "rotor type": r["rotor_type"] or "",
         "verdict": _(VERDICT_WORDS.get(r["verdict"], r["verdict"] or ""))
@@ -169,16 +171,6 @@ def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH) -> di
         "note": r.get("note") or "",  # a balancer test's verdict, the operator's note
         "report": f"/report/{r['id']}",
     }
-
-
-def _local(iso: str) -> str:
-    """An archived start time (UTC) in the station's local time with its zone, to the
-    second (``2026-11-27 15:04:09 CET``)."""
-
-    try:
-        return dt.datetime.fromisoformat(iso).astimezone().strftime("%Y-%m-%d %H:%M:%S %Z")
-    except ValueError:
-        return iso
 
 
 def add_routes(station: Station) -> None:
@@ -201,9 +193,11 @@ def add_routes(station: Station) -> None:
         )
 
     @app.get("/report/{run_id}")
-    def report(run_id: int) -> Any:
+    def report(run_id: int, lang: str | None = None) -> Any:
+        if (bad := _bad_language(lang)) is not None:
+            return bad
         try:
-            return FileResponse(station.report_file(run_id), media_type="text/html")
+            return FileResponse(station.report_file(run_id, lang), media_type="text/html")
         except StandError as exc:
             return PlainTextResponse(str(exc), status_code=404)
 
@@ -223,16 +217,27 @@ def add_routes(station: Station) -> None:
             return PlainTextResponse(str(exc), status_code=422)
 
     @app.get("/report/{run_id}/pdf")
-    def certificate_pdf(run_id: int, request: Request) -> Any:
+    def certificate_pdf(run_id: int, request: Request, lang: str | None = None) -> Any:
         refused = forbidden(station, request, "release", N_("release a certificate"))
         if refused is not None:
             return refused
+        if (bad := _bad_language(lang)) is not None:
+            return bad
         session = session_of(station, request)
         try:
-            pdf = (station.certificate_pdf(run_id) if session is None
-                   else station.released_pdf(run_id, session.name, session.role))  # fmt: skip
+            pdf = (station.certificate_pdf(run_id, lang) if session is None
+                   else station.released_pdf(run_id, session.name, session.role, lang))  # fmt: skip
         except UsageError as exc:  # no such run, or outside the folders
             return PlainTextResponse(str(exc), status_code=404)
         except StandError as exc:  # Chromium missing or failing, a full disk
             return PlainTextResponse(str(exc), status_code=503)
         return FileResponse(pdf, media_type="application/pdf", filename=pdf.name)
+
+
+def _bad_language(lang: str | None) -> Any | None:
+    """A 400 answer for ``?lang=`` naming no shipped language (None: it names one, or none)."""
+    from fastapi.responses import PlainTextResponse
+
+    if lang is None or lang in LANGUAGES:
+        return None
+    return PlainTextResponse(f"lang {lang[:16]!r}: one of {', '.join(LANGUAGES)}", status_code=400)

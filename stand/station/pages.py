@@ -15,7 +15,7 @@ from nicegui import app, ui
 
 from stand.plant import TokenGate
 from stand.report import Display
-from stand.report.language import N_, Language
+from stand.report.language import LANGUAGES, N_, Language
 from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, guard, history_screen, notify
@@ -60,10 +60,10 @@ STYLE = """
 """
 
 
-def _units(station: Station) -> Display:
+def _units(station: Station, _: Language) -> Display:
     s = station.snapshot()
     out = _out(s.result)
-    return Display.of(out) if out else Display()
+    return Display.of(out or {}, _)
 
 
 def _out(result: Any) -> dict[str, Any] | None:
@@ -130,8 +130,8 @@ def _waiting(s: Any, head: str, sub: str, _: Language) -> tuple[str, str]:
     return head, sub
 
 
-def _show_warnings(column: Any, s: Any) -> None:
-    """The run's warnings and the station's notes, each once, in words."""
+def _show_warnings(column: Any, s: Any, _: Language) -> None:
+    """The run's warnings and the station's notes, each once, in words (the screen's)."""
     column.clear()
     with column:
         live = s.phase == "measuring"  # a short window: the line of what it waits for says it
@@ -139,9 +139,9 @@ def _show_warnings(column: Any, s: Any) -> None:
                 if not (live and w.code == "short_window")]  # fmt: skip
         msgs += [w.message for w in (s.result.warnings if s.result else ())]
         for msg in dict.fromkeys(msgs):
-            ui.label(f"⚠ {msg}").classes("text-h6 text-orange-10")
+            ui.label(f"⚠ {_(msg)}").classes("text-h6 text-orange-10")
         for msg in s.notes:
-            ui.label(msg).classes("text-h6 text-orange-10")
+            ui.label(_(msg)).classes("text-h6 text-orange-10")
 
 
 class _PlaneView:
@@ -152,7 +152,9 @@ class _PlaneView:
     def __init__(self, plane: int, _: Language) -> None:
         self.plane, self._ = plane, _
         with ui.column().classes("w-1/2 items-center"):
-            self.chart = ui.echart(polar_chart(plane, None, Display(), _)).classes("w-full h-96")
+            self.chart = ui.echart(polar_chart(plane, None, Display(decimal=_.decimal), _)).classes(
+                "w-full h-96"
+            )
             self.text = ui.label().classes("text-h6").mark(f"plane{plane}-live")
             bar = ui.linear_progress(value=0, show_value=False, size="14px")
             self.bar = bar.props("color=primary track-color=grey-4").mark(f"plane{plane}-goal")
@@ -201,7 +203,7 @@ def measure_screen(station: Station) -> None:
         if s.seq == seen["seq"]:
             return
         seen["seq"] = s.seq
-        units = _units(station)
+        units = _units(station, _)
         stop.set_visibility(s.phase == "measuring")
         onward.set_visibility(s.phase == "done")
         onward.text = _("See the check") if s.kind == "check" else _("Go to the correction")
@@ -219,12 +221,12 @@ def measure_screen(station: Station) -> None:
                 kind=_(RUN_KINDS.get(s.kind, s.kind)), rotor=s.job.serial or _("the rotor"),
                 a1=_.number(n["support1_m_s2"], 3), a2=_.number(n["support2_m_s2"], 3))
             + (f"; {s.waiting}" if s.waiting else "")
-            + (_(". Still measuring: waiting for {what}").format(what=_(" and ").join(why))
+            + (_(". Still measuring: waiting for {what}").format(what=_(" and ").join(map(_, why)))
                if why and s.phase == "measuring" else "")
         )  # fmt: skip
         for view, p in zip(planes, planes_live(s.progress, s.tolerance_kg_m), strict=True):
             view.show(p, units)
-        _show_warnings(warn, s)
+        _show_warnings(warn, s, _)
 
     note.set_visibility(True)
     redraw()
@@ -323,7 +325,7 @@ def check_screen(station: Station) -> None:
         t = out["tolerance"]
         ui.label(
             _("Tolerance: {source}; judged in {where}. Rule: {rule}.").format(
-                source=t["source"], where=t["judged_in"], rule=t["rule"]
+                source=_(t["source"]), where=_(t["judged_in"]), rule=_(t["rule"])
             )
         )
     names = {
@@ -349,7 +351,8 @@ def check_screen(station: Station) -> None:
 def _certificate_links(station: Station, result: Any, _: Language) -> None:
     """The certificate's links once the run is filed (the answer shows before: the report
     and the archive are written while the operator reads it)."""
-    box = ui.row().classes("gap-4")
+    box = ui.row().classes("gap-4 items-center")
+    chosen = {"lang": _.code}  # the certificate's language: the customer's
 
     def fill() -> None:
         s = station.snapshot()
@@ -362,13 +365,19 @@ def _certificate_links(station: Station, result: Any, _: Language) -> None:
         box.clear()
         if s.result is not result or s.run_id is None:  # moved on, or not archived (notes)
             return
+        lang = "" if chosen["lang"] == station.default_language else f"?lang={chosen['lang']}"
         with box:
-            ui.link(_("Open the certificate"), f"/report/{s.run_id}", new_tab=True).classes(
-                "text-h5"
-            ).mark("certificate")
-            ui.link(_("as PDF"), f"/report/{s.run_id}/pdf", new_tab=True).classes("text-h5").mark(
-                "certificate-pdf"
-            )
+            ui.link(_("Open the certificate"), f"/report/{s.run_id}{lang}", new_tab=True).classes(
+                "text-h5").mark("certificate")  # fmt: skip
+            ui.link(_("as PDF"), f"/report/{s.run_id}/pdf{lang}", new_tab=True).classes(
+                "text-h5").mark("certificate-pdf")  # fmt: skip
+
+            def choose(e: Any) -> None:
+                chosen["lang"] = e.value
+                fill()
+
+            ui.select(dict(LANGUAGES), value=chosen["lang"], label=_("certificate language"),
+                      on_change=choose).classes("w-48").mark("certificate-language")  # fmt: skip
 
     timer = ui.timer(REFRESH_S, fill)
     fill()

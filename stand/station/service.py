@@ -43,6 +43,7 @@ from stand.solve.verdict import tolerance_of
 from stand.station.archive_side import ArchiveSide
 from stand.station.sessions import Sessions
 from stand.station.snapshot import BUS, Snapshot
+from stand.words import said
 
 log = logging.getLogger(__name__)
 
@@ -376,17 +377,17 @@ class Station(ArchiveSide):
             with output(run.with_suffix(".html"), need_bytes=len(data)) as tmp:
                 tmp.write_bytes(data)
         except StandError as exc:
-            notes.append(f"no report: {exc}")
+            notes.append(said("no report: {why}", why=exc))
         run_id = None
         try:
             run_id = archive_result(result, self.archive_url, config=str(config))
         except StandError as exc:
-            notes.append(f"not archived ({exc}); the run is kept in {run}")
+            notes.append(said("not archived ({why}); the run is kept in {run}", why=exc, run=run))
             return run_id, tuple(notes)
 
-        said = publish_archived(result, run_id, load_config_text(str(config))[0])
-        if said and said.startswith("not"):
-            notes.append(said)
+        told = publish_archived(result, run_id, load_config_text(str(config))[0])
+        if told and told.startswith("not"):
+            notes.append(told)
         return run_id, tuple(notes)
 
 

@@ -198,7 +198,7 @@ def _machined(i: int, plane: dict[str, Any], u: Display, _: Language) -> Instruc
 
 def instructions(out: dict[str, Any], _: Language = ENGLISH) -> list[Instruction]:
     """The correction of each plane of a result's JSON form, in the operator's words."""
-    u = Display.of(out)
+    u = Display.of(out, _)
     verb = _("ADD") if out["correction_mode"] == "add" else _("REMOVE")
     found = []
     planes = out.get("planes") or [{} for _ in out["corrections"]]
@@ -247,7 +247,7 @@ def instructions(out: dict[str, Any], _: Language = ENGLISH) -> list[Instruction
 
 def check_rows(out: dict[str, Any], _: Language = ENGLISH) -> list[dict[str, Any]]:
     """Per plane: before, after, URR [%] and the verdict of a check run's JSON form."""
-    u = Display.of(out)
+    u = Display.of(out, _)
     crit = (out.get("tolerance") or {}).get("criteria", [])
     tol = {c["plane"]: c for c in crit if c["plane"] is not None}
     rows = []

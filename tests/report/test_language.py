@@ -9,37 +9,10 @@ from pathlib import Path
 
 import pytest
 from babel.messages.pofile import read_po
+from messages import SENTENCE, used
 
 from stand.errors import UsageError
 from stand.report.language import LANGUAGES, catalogue_path, language
-
-ROOT = Path(__file__).resolve().parents[2]
-REPORT = ("certificate", "appendix", "release", "plots", "units")
-TRANSLATED = [*sorted((ROOT / "stand" / "station").glob("*.py")),
-              *(ROOT / "stand" / "report" / f"{m}.py" for m in REPORT)]  # fmt: skip
-"""The modules whose messages are marked: the station's screens and the certificate (the
-operator's CLI text is not yet: docs/people.md)."""
-
-
-def marked(path: Path) -> set[str]:
-    """The messages a module marks: ``_("...")`` and ``N_("...")`` with a literal text,
-    in f-strings too (Python's own parser: Babel's extractor skips an f-string's inside
-    before Python 3.12)."""
-    import ast
-
-    found = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-                and node.func.id in ("_", "N_") and node.args
-                and isinstance(node.args[0], ast.Constant)
-                and isinstance(node.args[0].value, str)):  # fmt: skip
-            found.add(node.args[0].value)
-    return found
-
-
-def used() -> set[str]:
-    """Every message the translated modules mark."""
-    return set().union(*(marked(p) for p in TRANSLATED))
 
 
 def placeholders(text: str) -> set[str]:
@@ -54,9 +27,14 @@ def test_every_message_translated_and_none_unused(code: str) -> None:
     need = used()
     assert not need - set(have), f"{code}: untranslated: {sorted(need - set(have))}"
     assert not set(have) - need, f"{code}: unused: {sorted(set(have) - need)}"
+    sentences = used(("said",))
     for msgid, m in have.items():
         assert m.string and not m.fuzzy, f"{code}: {msgid!r} has no translation"
         assert placeholders(msgid) == placeholders(str(m.string)), (code, msgid, m.string)
+        assert (SENTENCE in m.auto_comments) == (msgid in sentences and "{" in msgid), (
+            f"{code}: {msgid!r}: '#. {SENTENCE}' marks exactly the engine's sentences with "
+            "placeholders"
+        )
     print(f"{code}: {len(have)} messages, all translated")
 
 

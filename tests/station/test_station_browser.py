@@ -517,30 +517,44 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
 @pytest.mark.realtime
 def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> None:
     """An account in Ukrainian works the station in Ukrainian (Start, Measure, Correct);
-    a lone stand started with --lang de speaks German."""
+    a lone stand started with --lang de speaks German; a certificate in another language
+    than the screen's."""
+    from stand.archive.query import Filters, history
     from stand.cli import main
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
     assert main(["users", "add", "olena", "--role", "operator", "--language", "uk",
                  "--password-file", str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
-    with served(tmp_path) as base:
+    strict = tmp_path / "rotors"  # a grade no run proves: it measures until stopped
+    strict.mkdir()
+    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    (strict / "demo-auger.toml").write_text(text.replace("grade_mm_s = 6.3", "grade_mm_s = 0.1"))
+    with served(tmp_path, "--config-dir", str(strict)) as base:
         browser.get(base + "/")
         _see(browser, "Log in")
         _log_in(browser, "olena", "a-long-password")
         _see(browser, "Новий ротор")
         _type(browser, "серійний номер", "U-1")
         _button(browser, "Почати вимірювання").click()
+        _see(browser, "вібрація опор")  # the first estimate, in Ukrainian
+        _see(browser, "звуження інтервалу 95 % площини 1 до цілі")  # the engine's words too
+        _stop_on_screen(browser, "СТОП")  # the longest header of the three leaves Stop in view
+        _button(browser, "Стоп").click()
         _button(browser, "До корекції", 60).click()
         _see(browser, "Корекція U-1")
         _see(browser, "опорна мітка")
         _shot(browser, tmp_path, "correct-uk")
+        end = time.monotonic() + 60  # filed after the answer is shown: a hang guard
+        while not (found := history(url, Filters(serial="U-1"))) and time.monotonic() < end:
+            time.sleep(0.2)
+        (run,) = found  # the certificate in the customer's language, not the screen's
+        status, page = _fetch(base, f"/report/{run['id']}?lang=de", browser.get_cookies())
+        assert status == 200 and b'<html lang="de">' in page and b"Wuchtprotokoll" in page
+        status, page = _fetch(base, f"/report/{run['id']}?lang=xx", browser.get_cookies())
+        assert status == 400 and b"lang" in page, page
     german = tmp_path / "de"
     german.mkdir()
-    strict = german / "rotors"  # a grade no run proves: it measures until stopped
-    strict.mkdir()
-    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
-    (strict / "demo-auger.toml").write_text(text.replace("grade_mm_s = 6.3", "grade_mm_s = 0.1"))
     with served(german, "--lang", "de", "--config-dir", str(strict)) as base:
         browser.get(base + "/")
         _see(browser, "Neuer Rotor")
