@@ -9,6 +9,7 @@ from pathlib import Path
 from stand.archive import url_for
 from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
 from stand.config import data_folder
+from stand.config.paths import SHIPPED_ROTORS
 from stand.errors import UsageError
 from stand.plant import ResultServer, check_bind, read_token
 from stand.report.language import LANGUAGES
@@ -64,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     if not args.max_seconds > 0:
         raise UsageError(f"--max-seconds must be > 0, got {args.max_seconds}")
-    config_dir = Path(args.config_dir or Path(__file__).parents[1] / "data" / "rotors")
+    config_dir = Path(args.config_dir or SHIPPED_ROTORS)
     if not config_dir.is_dir():
         raise UsageError(f"--config-dir {config_dir}: not a folder")
 

@@ -16,6 +16,7 @@ from stand.config.schema import (
     config_toml,
     default_stand_id,
     load_config,
+    parse_toml,
     read_toml,
     validate,
 )
@@ -30,6 +31,7 @@ __all__ = [
     "default_stand_id",
     "load_config",
     "parse_matrix",
+    "parse_toml",
     "read_matrix",
     "read_toml",
     "rotor_types_in",

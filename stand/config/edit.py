@@ -30,3 +30,15 @@ def updated_toml(text: str, cfg: Config) -> str:
         for key, value in changed.items():
             doc[name][key] = value
     return tomlkit.dumps(doc)
+
+
+def without_table(text: str, name: str) -> str:
+    """The configuration text ``text`` without its table ``[name]`` (the rest, comments
+    included, as it was); ``text`` itself when it has none."""
+    import tomlkit
+
+    doc = tomlkit.parse(text)
+    if name not in doc:
+        return text
+    del doc[name]
+    return tomlkit.dumps(doc)

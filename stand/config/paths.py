@@ -17,6 +17,11 @@ def data_folder() -> Path:
     return platformdirs.user_data_path("stand", appauthor=False)
 
 
+SHIPPED_ROTORS = Path(__file__).resolve().parents[1] / "data" / "rotors"
+"""The demo rotor types shipped with the product (the station's folder without
+``--config-dir``): read, never changed in place."""
+
+
 def rotor_types_in(folder: Path) -> list[str]:
     """The rotor types of a station's folder: its configuration files (``*.toml``), by
     name (the file's stem), sorted."""

@@ -320,17 +320,23 @@ def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
         raise ConfigError(
             f"cannot read the configuration: {exc.strerror}", source=str(path)
         ) from None
+    return parse_toml(raw, str(path))
+
+
+def parse_toml(raw: bytes, source: str) -> tuple[str, dict[str, Any]]:
+    """The text of a configuration's bytes and its parsed content (:class:`ConfigError`,
+    naming ``source``, if they are not UTF-8 TOML)."""
     try:
         text = raw.decode("utf-8")
         return text, tomllib.loads(text)
     except UnicodeDecodeError as exc:
         raise ConfigError(
-            f"not UTF-8 text ({exc.reason} at byte {exc.start})", source=str(path)
+            f"not UTF-8 text ({exc.reason} at byte {exc.start})", source=source
         ) from None
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", source=str(path)) from None
+        raise ConfigError(f"not valid TOML: {exc}", source=source) from None
     except RecursionError:
-        raise ConfigError("nested too deep to be a configuration", source=str(path)) from None
+        raise ConfigError("nested too deep to be a configuration", source=source) from None
 
 
 def load_config(path: str | Path) -> tuple[Config, StandParameters]:

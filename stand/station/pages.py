@@ -28,6 +28,7 @@ from stand.station.login import (
     words,
 )
 from stand.station.service import Station
+from stand.station.setup import setup_screen
 from stand.station.start import start_screen
 from stand.station.views import (
     ANGLE_NOTE,
@@ -43,7 +44,8 @@ from stand.station.views import (
 REFRESH_S = 0.25
 """How often a live screen looks at the station's state [s]."""
 SCREENS = (("/", N_("Start")), ("/measure", N_("Measure")), ("/correct", N_("Correct")),
-           ("/check", N_("Check")), ("/history", N_("History")))  # fmt: skip
+           ("/check", N_("Check")), ("/history", N_("History")),
+           ("/setup", N_("Setup")))  # fmt: skip
 RUN_KINDS = {"initial": N_("initial"), "check": N_("check")}
 """A run's kind, as the screens name it."""
 STYLE = """
@@ -112,6 +114,7 @@ def frame(station: Station) -> None:
         "/correct": lambda: correct_screen(station),
         "/check": lambda: check_screen(station),
         "/history": lambda: history_screen(station),
+        "/setup": lambda: setup_screen(station),
     }).classes("w-full q-pa-md")  # fmt: skip
 
 

@@ -566,3 +566,50 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         _button(browser, "Stopp").click()
         _button(browser, "Zur Korrektur", 60).click()
         _see(browser, "Korrektur für D-1")
+
+
+@pytest.mark.realtime
+def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
+    """A setter loads a rotor type from a file at the Setup screen (the upload, the reason,
+    the table), journaled as the account; the tolerance panel tells the setter why not."""
+    from selenium.webdriver.common.by import By
+
+    from stand.archive.audit import entries
+    from stand.cli import main
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    (tmp_path / "pw").write_text("a-long-password\n")
+    assert main(["users", "add", "ana", "--role", "setter", "--password-file",
+                 str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
+    (folder / "demo-auger.toml").write_text(text)
+    new = tmp_path / "auger-b.toml"
+    new.write_text(text.replace('type = "demo-auger"', 'type = "auger-b"'))
+    with served(tmp_path, "--config-dir", str(folder)) as base:
+        browser.get(base + "/")
+        _see(browser, "Log in")
+        _log_in(browser, "ana", "a-long-password")
+        _see(browser, "ana (setter)")
+        _button(browser, "Setup").click()
+        _see(browser, "Load a rotor type")
+        _see(browser, "ana (setter) may not change a tolerance: it takes engineer")
+        browser.find_element(By.CSS_SELECTOR, "input[type=file]").send_keys(str(new))
+        _see(browser, "auger-b.toml")  # uploaded: the uploader names the file
+        _type(browser, "reason", "order 4711 needs it")
+        _button(browser, "Load").click()
+        _see(browser, "rotor type loaded and journaled")
+        cells = browser.execute_script(
+            "return [...document.querySelectorAll('.q-table tbody tr td:first-child')]"
+            ".map(c => c.innerText.trim());"
+        )
+        assert cells == ["auger-b", "demo-auger"], cells
+        _shot(browser, tmp_path, "setup")
+    assert (folder / "auger-b.toml").read_text() == new.read_text()
+    (entry,) = entries(url, action="config")
+    assert (entry["who"], entry["subject"], entry["reason"]) == (
+        "ana",
+        "auger-b.toml",
+        "order 4711 needs it",
+    )
