@@ -104,7 +104,7 @@ def config_seen(url: str, path: str | Path, user: str | None = None) -> int | No
     new = file_sha256(path)
     with Archive(url) as archive, archive.transaction() as conn:
         last = conn.execute(sa.select(audit.c.new_sha256).where(
-            audit.c.action == "config", audit.c.subject == name)
+            audit.c.action.in_(("config", "calibration")), audit.c.subject == name)
             .order_by(audit.c.id.desc()).limit(1)).scalar()  # fmt: skip
     if new is None or last == new:
         return None

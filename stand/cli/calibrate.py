@@ -29,8 +29,8 @@ from stand.config.schema import STRICT, load_config, read_toml, validate
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.files import check_output
 from stand.health.monitor import answers, refit
+from stand.health.recalibrate import fits_json, kept_line, refitted_config, significant
 from stand.solve import measure_recording
-from stand.solve.words import counted
 
 
 class MassTable(BaseModel):
@@ -269,49 +269,14 @@ def _journaled(args: argparse.Namespace, cfg: Config, path: str, text: str,
 FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
 
 
-def _refitted_config(cfg: Config, r: Any, original: str) -> tuple[list[str], str]:
-    """The config with the refitted values (stiffnesses, masses, gains; today's date), its
-    header of comments with the fits, and its text (the user's comments kept)."""
-
-    stand = cfg.stand.model_copy(
-        update={n: getattr(r.after, n) for n in ("C1", "C2", "M1", "M2")}
-        | {"calibrated": dt.date.today().isoformat()}
-    )
-    gain = list(cfg.sensors.gain)
-    for f in r.fits:
-        if f.name.startswith("gain"):
-            gain[int(f.name[-1]) - 1] *= 1 + f.change
-    new = cfg.model_copy(
-        update={"stand": stand, "sensors": cfg.sensors.model_copy(update={"gain": gain})}
-    )
-    header = [
-        f"# recalibrated by stand calibrate --from-archive from {len(r.group.rows) - r.start} "
-        f"corrected rotors (from datum {r.start + 1} of {len(r.group.rows)}):",
-        *(
-            f"#   {f.name} {100 * f.change:+.3f} +- {100 * f.interval95:.3f} % (95 %)"
-            for f in r.fits
-        ),
-    ]
-    return header, "\n".join(header) + "\n" + updated_toml(original, new)
-
-
-def _fits_json(r: Any) -> list[dict[str, Any]]:
-    return [{"parameter": f.name, "change_pct": round(100 * f.change, 4),
-             "interval95_pct": round(100 * f.interval95, 4)} for f in r.fits]  # fmt: skip
-
-
 def _no_change(r: Any, as_json: bool) -> bool:
     """Say "no significant change" where every fitted change lies inside its own 95 %
     interval (then nothing is written); whether it did."""
-    if any(abs(f.change) > f.interval95 for f in r.fits):
+    if significant(r):
         return False
-    fits = "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
-                     for f in r.fits)  # fmt: skip
-    used = counted(len(r.group.rows) - r.start, "corrected rotor")
-    said = (f"no significant change: keep the calibration ({fits}, 95 %: each change inside "
-            f"its interval, from {used}); nothing written (--force writes it)")  # fmt: skip
+    said = kept_line(r) + "; nothing written (--force writes it)"
     if as_json:
-        dump_json({"significant": False, "said": said, "config": None, "fits": _fits_json(r)})
+        dump_json({"significant": False, "said": said, "config": None, "fits": fits_json(r)})
     else:
         print(said)
     return True
@@ -342,7 +307,7 @@ def _from_archive(args: argparse.Namespace) -> int:
     if not args.force and _no_change(r, args.json):
         return 0
     original, _ = read_toml(args.config)
-    header, text = _refitted_config(cfg, r, original)
+    header, text = refitted_config(cfg, r, original)
     _journaled(args, cfg, out_path, text, [args.config])
     diff = list(
         difflib.unified_diff(
@@ -357,8 +322,8 @@ def _from_archive(args: argparse.Namespace) -> int:
     if args.json:
         dump_json(
             {
-                "significant": any(abs(f.change) > f.interval95 for f in r.fits),
-                "fits": _fits_json(r),
+                "significant": significant(r),
+                "fits": fits_json(r),
                 "data": len(r.group.rows) - r.start,
                 "config": out_path,
                 "diff": diff,

@@ -24,6 +24,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from stand.archive import correction_rows
 from stand.archive.audit import Change, file_sha256, os_user, record, sha256_of
 from stand.config import Config, config_from_dict, load_config, parse_toml
 from stand.config.edit import updated_toml, without_table
@@ -32,6 +33,8 @@ from stand.config.schema import ToolingTable
 from stand.core import StandParameters
 from stand.errors import StandError, UsageError
 from stand.files import output
+from stand.health.monitor import Refit, refit
+from stand.health.recalibrate import kept_line, refitted_config, significant
 from stand.report.language import Language
 from stand.solve.tooling import folder, stored_toolings
 from stand.solve.verdict import tolerance_of
@@ -159,6 +162,18 @@ def _same_stand(station: Station, cfg: Config, name: str, _: Language) -> None:
                            "station archives in its own").format(type=name))  # fmt: skip
 
 
+def grade_of(station: Station, rotor_type: str) -> tuple[float | None, float | None, str]:
+    """A rotor type's tolerance as the Tolerance panel edits it: G [mm/s], the maximum
+    speed [rpm], the source (None, None, "" where it has none or its file does not load)."""
+    try:
+        t = load_config(str(station.config_path(rotor_type)))[0].tolerance
+    except StandError:
+        return None, None, ""
+    if t is None:
+        return None, None, ""
+    return t.grade_mm_s, t.max_speed_rpm, t.source or ""
+
+
 def set_tolerance(station: Station, session: Session | None, rotor_type: str, *,
                   grade_mm_s: float, max_speed_rpm: float, source: str, reason: str,
                   _: Language) -> None:  # fmt: skip
@@ -214,8 +229,35 @@ def set_tooling(station: Station, session: Session | None, rotor_type: str,
     _replace(station, path, updated_toml(text, new), session, reason)
 
 
+def recalibration(station: Station, rotor_type: str) -> Refit:
+    """The stand re-identified from the archive's corrected rotors of this stand and
+    rotor type (:func:`stand.health.monitor.refit`; UsageError when the data do not
+    allow it)."""
+    params = load_config(str(station.config_path(rotor_type)))[1]
+    rows = correction_rows(station.archive_url, station.stand_id(), rotor_type)
+    return refit(rows, params)
+
+
+def recalibrate(station: Station, session: Session | None, rotor_type: str, *, reason: str,
+                _: Language) -> str:  # fmt: skip
+    """Write the recalibration in place when it is significant (journaled as a
+    ``calibration``); what was done, in words (the kept line when it is not)."""
+    _allow(station, session, "calibrate", _("change the stand's calibration"), _)
+    reason = _reason(station, reason, _)
+    r = recalibration(station, rotor_type)
+    if not significant(r):
+        return _(kept_line(r))
+    path = station.config_path(rotor_type)
+    cfg = load_config(str(path))[0]
+    text = refitted_config(cfg, r, path.read_text(encoding="utf-8"))[1]
+    _replace(station, path, text, session, reason, action="calibration")
+    fits = "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
+                     for f in r.fits)  # fmt: skip
+    return _("calibration written and journaled: {fits} (95 %)").format(fits=fits)
+
+
 def _replace(station: Station, path: Path, text: str, session: Session | None,
-             reason: str) -> int:  # fmt: skip
+             reason: str, action: str = "config") -> int:  # fmt: skip
     """Keep the file ``path`` replaces in ``.history/``, write ``text`` in its place
     (a temporary name, then a rename), and journal it; the audit entry's id."""
     old = file_sha256(path)
@@ -229,5 +271,5 @@ def _replace(station: Station, path: Path, text: str, session: Session | None,
     with output(path, force=True, need_bytes=len(data)) as tmp:
         tmp.write_bytes(data)
     who = session.name if session is not None else os_user()
-    return record(station.archive_url, Change("config", path.name, old, sha256_of(text),
+    return record(station.archive_url, Change(action, path.name, old, sha256_of(text),
                                               reason, who=who))  # fmt: skip

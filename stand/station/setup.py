@@ -18,7 +18,9 @@ from stand.report.language import N_, Language
 from stand.station.history import notify
 from stand.station.login import current, refused, words
 from stand.station.rotor_types import (
+    grade_of,
     load_rotor_type,
+    recalibrate,
     rotor_type_rows,
     set_tolerance,
     set_tooling,
@@ -52,7 +54,11 @@ def setup_screen(station: Station) -> None:
     refresh()
     with ui.row().classes("w-full gap-4 items-start"):
         _load_panel(station, _, refresh)
-        selects += [_tooling_panel(station, _, refresh), _tolerance_panel(station, _, refresh)]
+        selects += [
+            _tooling_panel(station, _, refresh),
+            _tolerance_panel(station, _, refresh),
+            _calibration_panel(station, _, refresh),
+        ]
     selects[:] = [s for s in selects if s is not None]
 
 
@@ -150,9 +156,15 @@ def _tolerance_panel(station: Station, _: Language, refresh: Any) -> Any:
         if not _may(station, "tolerance", _("change a tolerance"), _):
             return None
         rotor = _rotor_choice(station, _, "tolerance-type")
-        grade = ui.number(_("G [mm/s]"), value=6.3, min=0.01, max=4000).mark("grade")
-        speed = ui.number(_("maximum speed [rpm]"), value=1500, min=1).mark("max-speed")
+        grade = ui.number(_("G [mm/s]"), min=0.01, max=4000).mark("grade")
+        speed = ui.number(_("maximum speed [rpm]"), min=1).mark("max-speed")
         source = ui.input(_("source (drawing, standard)")).classes("w-full").mark("source")
+
+        def show() -> None:  # the chosen type's tolerance as it is
+            grade.value, speed.value, source.value = grade_of(station, str(rotor.value))
+
+        rotor.on_value_change(lambda _e: show())
+        show()
         reason = ui.input(_("reason")).classes("w-full").mark("tolerance-reason")
 
         def save() -> None:
@@ -166,4 +178,29 @@ def _tolerance_panel(station: Station, _: Language, refresh: Any) -> Any:
                 _("tolerance changed and journaled"), refresh)  # fmt: skip
 
         ui.button(_("Save the tolerance"), on_click=save).props("size=lg").mark("save-tolerance")
+    return rotor
+
+
+def _calibration_panel(station: Station, _: Language, refresh: Any) -> Any:
+    """The stand recalibrated from the archive's corrected rotors of a type; its
+    rotor-type choice (None: not this account's)."""
+    with ui.card().classes("w-96").mark("calibration-panel"):
+        ui.label(_("Calibration")).classes("text-h5")
+        if not _may(station, "calibrate", _("change the stand's calibration"), _):
+            return None
+        rotor = _rotor_choice(station, _, "calibration-type")
+        reason = ui.input(_("reason")).classes("w-full").mark("calibration-reason")
+        said = ui.label().classes("text-body1").mark("calibration-said")
+
+        def run() -> None:
+            try:
+                said.text = recalibrate(station, current(station), str(rotor.value),
+                                        reason=reason.value or "", _=_)  # fmt: skip
+            except StandError as exc:
+                notify(str(exc), "negative", multi_line=True, timeout=10000)
+                return
+            refresh()
+
+        button = ui.button(_("Recalibrate from the archive"), on_click=run)
+        button.props("size=lg").mark("recalibrate")
     return rotor

@@ -165,3 +165,47 @@ def test_the_shipped_demo_rotor_types_are_never_changed(tmp_path: Path) -> None:
     with pytest.raises(StandError, match="shipped demo rotor types: start the station with"):
         load_rotor_type(st, None, "x.toml", _file(), replace=False, reason="r", _=ENGLISH)
     assert st.rotor_types() == ["demo-auger", "demo-auger-drilled"]
+
+
+@pytest.mark.parametrize(("from_rotor", "written"), [(100000, False), (1, True)])
+def test_an_engineer_recalibrates_from_the_archive_when_the_change_is_significant(
+    tmp_path: Path, from_rotor: int, written: bool
+) -> None:
+    """Twelve corrected rotors archived: on a stand as calibrated the refit keeps the
+    calibration and writes nothing; on one whose support 1 is 8 % softer it writes the
+    new calibration in place, journaled as a calibration (the Start finds nothing new)."""
+    from stand.cli import main
+    from stand.config import config_toml
+    from stand.sim import load_scene
+    from stand.station.rotor_types import recalibrate
+
+    scene = tmp_path / "drift.toml"
+    scene.write_text((Path(__file__).resolve().parents[2] / "stand" / "data" / "scenes"
+                      / "production-drift.toml").read_text()
+                     .replace("from_rotor = 100", f"from_rotor = {from_rotor}"))  # fmt: skip
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    assert main(["simulate", str(scene), "--series", "12", "--out-dir", str(tmp_path / "runs"),
+                 "--archive", url]) == 0  # fmt: skip
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    cfg = load_scene(str(scene))[0].config()
+    (folder / f"{cfg.rotor.type}.toml").write_text(config_toml(cfg))
+    add_account(url, "eva", "engineer", "a-long-password")
+    add_account(url, "ana", "setter", "a-long-password")
+    st = Station(folder, tmp_path / "st-runs", url, _targets)
+    with pytest.raises(StandError, match="may not change the stand's calibration"):
+        recalibrate(st, _who("setter"), cfg.rotor.type, reason="drift", _=ENGLISH)
+    before = (folder / f"{cfg.rotor.type}.toml").read_text()
+    said = recalibrate(st, Session("eva", "engineer", "t", None, 1e18), cfg.rotor.type,
+                       reason="stand health alarm", _=ENGLISH)  # fmt: skip
+    path = folder / f"{cfg.rotor.type}.toml"
+    if not written:
+        assert said.startswith("no significant change: keep the calibration (C1 ")
+        assert path.read_text() == before and not entries(url, action="calibration")
+        return
+    assert said.startswith("calibration written and journaled: C1 -")
+    c1 = load_config(path)[0].stand.C1
+    assert c1 == pytest.approx(0.92 * cfg.stand.C1, rel=0.03)  # 8 % softer, found
+    (entry,) = entries(url, action="calibration")
+    assert entry["who"] == "eva" and entry["new_sha256"] == file_sha256(path)
+    assert config_seen(url, path, "eva") is None

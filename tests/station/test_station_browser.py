@@ -571,7 +571,8 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
 @pytest.mark.realtime
 def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
     """A setter loads a rotor type from a file at the Setup screen (the upload, the reason,
-    the table), journaled as the account; the tolerance panel tells the setter why not."""
+    the table), journaled as the account; the tolerance panel tells the setter why not; an
+    engineer sees the tolerance and calibration panels."""
     from selenium.webdriver.common.by import By
 
     from stand.archive.audit import entries
@@ -579,8 +580,9 @@ def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
-    assert main(["users", "add", "ana", "--role", "setter", "--password-file",
-                 str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    for name, role in (("ana", "setter"), ("eva", "engineer")):
+        assert main(["users", "add", name, "--role", role, "--password-file",
+                     str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
     folder = tmp_path / "rotors"
     folder.mkdir()
     text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
@@ -606,6 +608,14 @@ def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
         )
         assert cells == ["auger-b", "demo-auger"], cells
         _shot(browser, tmp_path, "setup")
+        _button(browser, "Log out").click()
+        _see(browser, "Log in")
+        _log_in(browser, "eva", "a-long-password")
+        _see(browser, "eva (engineer)")
+        _button(browser, "Setup").click()
+        _button(browser, "Recalibrate from the archive")  # an engineer's panels: all four
+        _button(browser, "Save the tolerance")
+        _shot(browser, tmp_path, "setup-engineer")
     assert (folder / "auger-b.toml").read_text() == new.read_text()
     (entry,) = entries(url, action="config")
     assert (entry["who"], entry["subject"], entry["reason"]) == (
