@@ -31,15 +31,10 @@ def dump_json(obj: Any, out: TextIO | None = None) -> None:
     print(json_text(obj), file=out or sys.stdout)
 
 
-def _n(text: str, _: Language) -> str:
-    """Figures written with the language's decimal sign."""
-    return text if _.decimal == "." else text.replace(".", _.decimal)
-
-
 def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
     """Speed, unbalance per plane, supports."""
     u = Display.of(out, _)
-    print(_("speed {rpm} rpm").format(rpm=_n(f"{out['rpm']:.1f}", _)))
+    print(_("speed {rpm} rpm").format(rpm=u.decimals(f"{out['rpm']:.1f}")))
     print(_("plane  unbalance [{unit}]    95 % +-   angle [deg]   mass [{mass}] at radius "
             "[{length}]").format(unit=u.unbalance_unit, mass=u.mass_unit,
                                  length=u.length_unit))  # fmt: skip
@@ -47,7 +42,7 @@ def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
         figures = f"{p['angle_deg']:13.2f} {u.mass_value(p['mass_g']):10.3f}"
         print(
             f"  {p['plane']}  {u.number(p['unbalance_g_mm']):>16} "
-            f"{u.number(p['uncertainty_g_mm']):>10} {_n(figures, _)} {_('at')} "
+            f"{u.number(p['uncertainty_g_mm']):>10} {u.decimals(figures)} {_('at')} "
             f"{u.length(p['radius_mm']).split()[0]}"
         )
     cal = [p.get("calibration_interval_g_mm") for p in out["planes"]]
@@ -60,11 +55,11 @@ def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
     for s in out["supports"]:
         line = (f"  {s['node']}  {s['amplitude_m_s2']:17.5f} {s['phase_deg']:12.2f} "
                 f"{s['uncertainty_m_s2']:9.5f} {s['revolutions']:10.1f}")  # fmt: skip
-        print(_n(line, _))
+        print(u.decimals(line))
     cost = out["supports"][0]["noise_cost"]
     if cost > 1.0:
         print(_("(taper: the noise variance is {k} times that of the plain fit)").format(
-            k=_n(f"{cost:.2f}", _)))  # fmt: skip
+            k=u.decimals(f"{cost:.2f}")))  # fmt: skip
 
 
 def _pieces(w: dict[str, Any], u: Display) -> str:
@@ -73,7 +68,7 @@ def _pieces(w: dict[str, Any], u: Display) -> str:
     if len(p) < 2:
         return ""
     if u.mass_unit == "g":
-        return f" ({' + '.join(u._n(f'{x:g}') for x in p)} g)"
+        return f" ({' + '.join(u.decimals(f'{x:g}') for x in p)} g)"
     return f" ({' + '.join(u.mass(x) for x in p)})"
 
 
@@ -83,7 +78,7 @@ def weights_text(c: dict[str, Any], u: Display | None = None, _: Language = ENGL
     return (
         " + ".join(
             _("{mass} at {angle} deg").format(mass=f"{u.mass(w['mass_g'])}{_pieces(w, u)}",
-                                              angle=u._n(f"{w['angle_deg']:.1f}"))
+                                              angle=u.decimals(f"{w['angle_deg']:.1f}"))
             + ("" if w["position"] is None
                else " " + _("(position {n})").format(n=w["position"]))
             for w in c["weights"]
@@ -147,12 +142,13 @@ def print_corrections(out: dict[str, Any], _: Language = ENGLISH) -> None:
     s, cp = out["static"], out["couple"]
     print("  " + _("static part {static} at {a1} deg; couple part +-{couple} at {a2} deg "
                    "(plane 1 / plane 2)").format(
-        static=u.unbalance(s["unbalance_g_mm"]), a1=u._n(f"{s['angle_deg']:.1f}"),
-        couple=u.unbalance(cp["unbalance_g_mm"]), a2=u._n(f"{cp['angle_deg']:.1f}")))  # fmt: skip
+        static=u.unbalance(s["unbalance_g_mm"]), a1=u.decimals(f"{s['angle_deg']:.1f}"),
+        couple=u.unbalance(cp["unbalance_g_mm"]),
+        a2=u.decimals(f"{cp['angle_deg']:.1f}")))  # fmt: skip
     for k in out.get("keys") or []:
         print(_("key at {angle} deg ({mass}): balanced with {convention}, {fitted} fitted "
                 "(ISO 21940-32); mark the part {marking}").format(
-            angle=u._n(f"{k['angle_deg']:g}"), mass=u.mass(k["mass_g"]),
+            angle=u.decimals(f"{k['angle_deg']:g}"), mass=u.mass(k["mass_g"]),
             convention=_(CONVENTION_WORDS[k["convention"]]), fitted=_(FITTED_WORDS[k["fitted"]]),
             marking=k["marking"]))  # fmt: skip
     print_tolerance(out, u, _)
@@ -225,8 +221,9 @@ def print_uncertainty(out: dict[str, Any], _: Language = ENGLISH) -> None:
     t = pu["tolerances"]
     print(_("parameter tolerances (uniform): C +-{c} %, M and J3 +-{m} %, lengths +-{length}, "
             "sensor gains +-{gain} %").format(
-        c=u._n(f"{t['C_pct']:g}"), m=u._n(f"{t['M_pct']:g}"), length=u.length(t["length_mm"]),
-        gain=u._n(f"{t['gain_pct']:g}")))  # fmt: skip
+        c=u.decimals(f"{t['C_pct']:g}"), m=u.decimals(f"{t['M_pct']:g}"),
+        length=u.length(t["length_mm"]),
+        gain=u.decimals(f"{t['gain_pct']:g}")))  # fmt: skip
     for p in pu["planes"]:
         top = ", ".join(f"{k} {100 * s:.0f} %" for k, s in p["largest_shares"])
         print("  " + _("plane {plane}: 95 % +-{mc} (Monte Carlo, {draws} draws; linearised "
@@ -245,7 +242,7 @@ def print_check(out: dict[str, Any], _: Language = ENGLISH) -> None:
     print(_("check against the run before the correction ({run}):").format(
         run=c["previous_run"]))  # fmt: skip
     for p in c["planes"]:
-        urr = "-" if p["urr"] is None else u._n(f"{100 * p['urr']:.1f}") + " %"
+        urr = "-" if p["urr"] is None else u.decimals(f"{100 * p['urr']:.1f}") + " %"
         print("  " + _("plane {plane}: {before} -> {after} residual, reduction ratio URR "
                        "{urr}").format(plane=p["plane"], before=u.number(p["before_g_mm"]),
                                        after=u.unbalance(p["after_g_mm"]), urr=urr))  # fmt: skip
@@ -260,7 +257,7 @@ def tooling_line(out: dict[str, Any], _: Language = ENGLISH) -> str | None:
     planes = "; ".join(
         _("plane {plane} {unbalance} at {angle} deg").format(
             plane=p["plane"], unbalance=u.unbalance(p["unbalance_g_mm"]),
-            angle=u._n(f"{p['angle_deg']:.1f}"))
+            angle=u.decimals(f"{p['angle_deg']:.1f}"))
         for p in t["subtracted"]
     )  # fmt: skip
     return _("tooling {name} subtracted (measured {date}): {planes}").format(
@@ -276,7 +273,8 @@ def print_result(out: dict[str, Any], _: Language = ENGLISH) -> None:
     print_uncertainty(out, _)
     if "stopped_by" in out:
         print(_("stopped by: {why} after {seconds} s; recorded in {run}").format(
-            why=_(out["stopped_by"]), seconds=_n(f"{out['elapsed_s']:.1f}", _),
+            why=_(out["stopped_by"]),
+            seconds=Display.of(out, _).decimals(f"{out['elapsed_s']:.1f}"),
             run=out["run_file"]))  # fmt: skip
     print_check(out, _)
     for w in out["warnings"]:

@@ -47,11 +47,11 @@ def progress_line(p: Any, units: Display | None = None, _: Language = ENGLISH) -
             r95=u.number(m.radius95_kg_m[i] * 1e6), goal=u.number(p.targets_kg_m[i] * 1e6))
         for i in range(2)
     )  # fmt: skip
-    amps = " ".join(u._n(f"{abs(ph.A_m_s2):.3f}") for ph in m.supports)
+    amps = " ".join(u.decimals(f"{abs(ph.A_m_s2):.3f}") for ph in m.supports)
     rpm = float(rad_s_to_rpm(m.omega_rad_s))
     more = "".join(f"  ({w})" for w in _waits(p, "", _))
     speed = _("{rpm} rpm").format(rpm=f"{rpm:7.1f}")
-    return u._n(f"  {p.elapsed_s:5.1f} s  {speed}") + f"  1x {amps} m/s2  {planes}{more}"
+    return u.decimals(f"  {p.elapsed_s:5.1f} s  {speed}") + f"  1x {amps} m/s2  {planes}{more}"
 
 
 def panel(
@@ -76,8 +76,8 @@ def panel(
     head = Text("")
     if progress is not None:
         rpm = float(rad_s_to_rpm(progress.measurement.omega_rad_s))
-        head.append(u._n(f"{rpm:.1f}") + " rpm   ", style="bold cyan")
-    head.append(u._n(f"{t:.1f}") + " s   ")
+        head.append(u.decimals(f"{rpm:.1f}") + " rpm   ", style="bold cyan")
+    head.append(u.decimals(f"{t:.1f}") + " s   ")
     head.append(_("measuring on {where}").format(where=_(where)), style="dim")
     table = Table(box=None, expand=False, pad_edge=False, header_style="bold")
     for name, justify, width in (
@@ -108,14 +108,14 @@ def panel(
                 (
                     str(i + 1),
                     Text(u.number(U * 1e6), style="bold"),
-                    "-" if U <= r95 else u._n(f"{angle:.1f}"),
+                    "-" if U <= r95 else u.decimals(f"{angle:.1f}"),
                     f"± {u.number(r95 * 1e6)}",
                     f"± {u.number(goal * 1e6)}",
                     "-" if per is None else u.number(per * 1e6),
                     state,
                 )
             )
-        amps = _(" and ").join(u._n(f"{abs(ph.A_m_s2):.4f}") for ph in m.supports)
+        amps = _(" and ").join(u.decimals(f"{abs(ph.A_m_s2):.4f}") for ph in m.supports)
     for row in rows or [("1", "", "", "", "", "", ""), ("2", "", "", "", "", "", "")]:
         table.add_row(*row)
     recording = _("recording into {run} (Ctrl-C stops)").format(run=run_path)
@@ -191,7 +191,7 @@ class LiveDisplay:
         self.waiting, self.elapsed = why, elapsed
         if self.live is not None:
             return self._redraw()
-        self._say(self.units._n(f"  {elapsed:5.1f} s  ")
+        self._say(self.units.decimals(f"  {elapsed:5.1f} s  ")
                   + self._("waiting: {why}").format(why=self._(why)))  # fmt: skip
 
 

@@ -52,7 +52,8 @@ class Display:
         d = out.get("display") or {}
         return cls(d.get("mass", "g"), d.get("length", "mm"), _.decimal)
 
-    def _n(self, text: str) -> str:
+    def decimals(self, text: str) -> str:
+        """Figures written with this display's decimal sign (``30.0`` -> ``30,0``)."""
         return text if self.decimal == "." else text.replace(".", self.decimal)
 
     @property
@@ -71,25 +72,25 @@ class Display:
     def mass(self, g: float) -> str:
         """``55.55 g`` or ``1.959 oz``."""
         digits = 3 if self.mass_unit == "oz" else 2
-        return self._n(f"{self.mass_value(g):.{digits}f}") + f" {self.mass_unit}"
+        return self.decimals(f"{self.mass_value(g):.{digits}f}") + f" {self.mass_unit}"
 
     def length(self, mm: float) -> str:
         """``90 mm`` or ``3.543 in``."""
         if self.length_unit == "in":
-            return self._n(f"{self.length_value(mm):.3f}") + " in"
-        return self._n(f"{mm:g}") + " mm"
+            return self.decimals(f"{self.length_value(mm):.3f}") + " in"
+        return self.decimals(f"{mm:g}") + " mm"
 
     def depth(self, mm: float) -> str:
         """A depth to machine: ``16.5 mm`` (to 0.01 mm) or ``0.6496 in``."""
         if self.length_unit == "in":
-            return self._n(f"{self.length_value(mm):.4f}") + " in"
-        return self._n(f"{round(mm, 2):g}") + " mm"
+            return self.decimals(f"{self.length_value(mm):.4f}") + " in"
+        return self.decimals(f"{round(mm, 2):g}") + " mm"
 
     def hole(self, h: dict[str, Any], _: Language = ENGLISH) -> str:
         """One drilled hole of a result's JSON form, in the machinist's words."""
         return _("hole {n} at {angle} deg: {diameter} drill ({point} deg point), {depth} deep "
                  "to the tip ({mass})").format(
-            n=h["number"], angle=self._n(f"{h['angle_deg']:.1f}"),
+            n=h["number"], angle=self.decimals(f"{h['angle_deg']:.1f}"),
             diameter=self.length(h["diameter_mm"]),
             point=f"{h['point_angle_deg']:g}", depth=self.depth(h["depth_mm"]),
             mass=self.mass(h["mass_g"]))  # fmt: skip
@@ -98,7 +99,7 @@ class Display:
         """A milled slot of a result's JSON form, in the machinist's words."""
         return _("slot centred at {angle} deg over {arc} deg ({length} of arc): {width} wide, "
                  "{depth} deep ({mass})").format(
-            angle=self._n(f"{s['angle_deg']:.1f}"), arc=self._n(f"{s['arc_deg']:.1f}"),
+            angle=self.decimals(f"{s['angle_deg']:.1f}"), arc=self.decimals(f"{s['arc_deg']:.1f}"),
             length=self.depth(s["arc_length_mm"]), width=self.length(s["width_mm"]),
             depth=self.depth(s["depth_mm"]), mass=self.mass(s["mass_g"]))  # fmt: skip
 
@@ -136,7 +137,7 @@ class Display:
         about 4 significant digits in other units (0.0001 at least)."""
         value = self.unbalance_value(g_mm)
         if self.unbalance_unit == "g mm":
-            return self._n(f"{value:.1f}")
+            return self.decimals(f"{value:.1f}")
         size = abs(value)
         digits = 1 if size >= 1000 else 2 if size >= 10 else 3 if size >= 1 else 4
-        return self._n(f"{value:.{digits}f}")
+        return self.decimals(f"{value:.{digits}f}")

@@ -191,8 +191,8 @@ class ArchiveSide:
                      ) -> Path:  # fmt: skip
         """The certificate of archived run ``run_id`` released by the account ``who``: its
         signature block the release (:func:`stand.report.released`), printed once as
-        ``<run>.released.pdf`` and journaled (the PDF's SHA-256); the first release
-        stands, later asks get it."""
+        ``<run>.released.pdf`` (``<run>.de.released.pdf`` in the language ``de``) and
+        journaled (the PDF's SHA-256); the first release stands, later asks get it."""
         report = self.report_file(run_id, code)
         pdf = report.with_suffix(".released.pdf")
         with self._printing:

@@ -22,8 +22,10 @@ from stand.station.login import forbidden, session_of, words
 from stand.station.service import Station
 
 TOAST: Literal["top-right"] = "top-right"
-"""Where the screens' notes appear: the header's corner, never over a control (the
-screens' buttons are at their foot, where Quasar's default put the notes)."""
+"""Where the screens' notes appear: the top right corner, below the header (class
+``below-header``, :data:`stand.station.pages.STYLE`), never over a control (the screens'
+buttons are at their foot, where Quasar's default put the notes; the header's right end
+holds Log out)."""
 Kind = Literal["positive", "negative", "warning"]
 COLUMNS = (N_("report"), N_("run"), N_("time"), N_("serial"), N_("rotor type"), N_("verdict"),
            N_("plane 1"), N_("plane 2"), N_("note"))  # fmt: skip
@@ -34,7 +36,8 @@ VERDICT_WORDS = {"pass": N_("pass"), "fail": N_("fail"), "undecided": N_("undeci
 
 def notify(text: str, kind: Kind, *, multi_line: bool = False, timeout: int = 5000) -> None:
     """A note on the screen, at :data:`TOAST`."""
-    ui.notify(text, type=kind, position=TOAST, multi_line=multi_line, timeout=timeout)
+    ui.notify(text, type=kind, position=TOAST, multi_line=multi_line, timeout=timeout,
+              classes="below-header")  # fmt: skip
 
 
 def guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], None]:

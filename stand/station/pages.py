@@ -58,6 +58,7 @@ STYLE = """
   .q-btn { font-size: 1.2rem; }
   .q-table th, .q-table td { font-size: 1.2rem !important; }
   .q-table a { color: #1565c0; text-decoration: underline; }
+  .below-header { margin-top: 6rem; }
 </style>
 """
 

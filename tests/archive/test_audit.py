@@ -144,6 +144,26 @@ def test_exactly_the_commands_that_change_things_journal() -> None:
     assert set(calls) == set(JOURNALED)
 
 
+def test_exactly_the_station_screens_that_change_things_journal() -> None:
+    """The station's writers: a released certificate (archive_side), a rotor type, tooling,
+    tolerance or calibration changed at Setup (rotor_types: every change goes through its
+    one ``_replace``; tests/station/test_rotor_types.py counts one entry per change), a
+    config found edited on disk at Start (service, :func:`config_seen`)."""
+    calls = {}
+    for path in (ROOT / "stand" / "station").glob("*.py"):
+        tree = ast.parse(path.read_text())
+        n = sum(isinstance(c, ast.Call) and getattr(c.func, "id", None) in (
+            "record", "journal", "config_seen") for c in ast.walk(tree))  # fmt: skip
+        if n:
+            calls[path.stem] = n
+    assert calls == {"archive_side": 1, "rotor_types": 1, "service": 1}
+    tree = ast.parse((ROOT / "stand" / "station" / "rotor_types.py").read_text())
+    writers = {f.name for f in ast.walk(tree) if isinstance(f, ast.FunctionDef)
+               and any(getattr(c.func, "id", None) == "_replace"
+                       for c in ast.walk(f) if isinstance(c, ast.Call))}  # fmt: skip
+    assert writers == {"load_rotor_type", "set_tolerance", "set_tooling", "recalibrate"}
+
+
 @pytest.mark.parametrize(("statement", "command", "says"), [
     ("UPDATE accounts SET role = 'god'", ["users", "list"], "role"),
     ("UPDATE accounts SET name = 'a b'", ["users", "list"], "name"),
