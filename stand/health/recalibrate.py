@@ -19,10 +19,15 @@ def significant(r: Refit) -> bool:
     return any(abs(f.change) > f.interval95 for f in r.fits)
 
 
+def fits_text(r: Refit) -> str:
+    """``C1 -0.71 +- 2.69 %; C2 ...``: each fitted change and its 95 % interval."""
+    return "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
+                     for f in r.fits)  # fmt: skip
+
+
 def kept_line(r: Refit) -> str:
     """``no significant change: keep the calibration (C1 -0.71 +- 2.69 %, ...)``."""
-    fits = "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
-                     for f in r.fits)  # fmt: skip
+    fits = fits_text(r)
     n = len(r.group.rows) - r.start
     return said("no significant change: keep the calibration ({fits}, 95 %: each change "
                 "inside its interval, from {n} corrected rotors)", fits=fits, n=n)  # fmt: skip

@@ -10,11 +10,14 @@ them at the station, each asked of the account's rights and journaled.
   ``stand tooling measure``), or none.
 - :func:`set_tolerance` (an engineer: right ``tolerance``): a grade tolerance's G, the
   maximum speed and the source.
+- :func:`recalibrate` (an engineer: right ``calibrate``): the stand re-identified from
+  the archive's corrected rotors, written only when the change is significant.
 
 Every change needs a reason; it keeps the file it replaces in ``<config dir>/.history/``
-(named by the time, UTC) and writes one ``config`` entry in the audit trail (who, the
-reason, the file's SHA-256 before and after), the entry the Start screen then finds
-(:func:`stand.archive.audit.config_seen`).
+(named by the time, UTC) and writes one entry in the audit trail (``config``, or
+``calibration`` for a recalibration: who, the reason, the file's SHA-256 before and
+after), the entry the Start screen then finds (:func:`stand.archive.audit.config_seen`).
+The shipped demo rotor types are never changed.
 """
 
 from __future__ import annotations
@@ -31,10 +34,10 @@ from stand.config.edit import updated_toml, without_table
 from stand.config.paths import SHIPPED_ROTORS
 from stand.config.schema import ToolingTable
 from stand.core import StandParameters
-from stand.errors import StandError, UsageError
+from stand.errors import StandError, UsageError, WriteError
 from stand.files import output
 from stand.health.monitor import Refit, refit
-from stand.health.recalibrate import kept_line, refitted_config, significant
+from stand.health.recalibrate import fits_text, kept_line, refitted_config, significant
 from stand.report.language import Language
 from stand.solve.tooling import folder, stored_toolings
 from stand.solve.verdict import tolerance_of
@@ -251,9 +254,7 @@ def recalibrate(station: Station, session: Session | None, rotor_type: str, *, r
     cfg = load_config(str(path))[0]
     text = refitted_config(cfg, r, path.read_text(encoding="utf-8"))[1]
     _replace(station, path, text, session, reason, action="calibration")
-    fits = "; ".join(f"{f.name} {100 * f.change:+.2f} +- {100 * f.interval95:.2f} %"
-                     for f in r.fits)  # fmt: skip
-    return _("calibration written and journaled: {fits} (95 %)").format(fits=fits)
+    return _("calibration written and journaled: {fits} (95 %)").format(fits=fits_text(r))
 
 
 def _replace(station: Station, path: Path, text: str, session: Session | None,
@@ -264,7 +265,11 @@ def _replace(station: Station, path: Path, text: str, session: Session | None,
     if old is not None:
         stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%fZ")
         kept = station.config_dir / ".history" / f"{path.stem}-{stamp}.toml"
-        kept.parent.mkdir(exist_ok=True)
+        try:
+            kept.parent.mkdir(exist_ok=True)
+        except OSError as exc:
+            raise WriteError(f"cannot keep the file it replaces here ({exc.strerror}): "
+                             "nothing changed", path=str(kept.parent)) from exc  # fmt: skip
         with output(kept) as tmp:
             tmp.write_bytes(path.read_bytes())
     data = text.encode("utf-8")

@@ -209,3 +209,13 @@ def test_an_engineer_recalibrates_from_the_archive_when_the_change_is_significan
     (entry,) = entries(url, action="calibration")
     assert entry["who"] == "eva" and entry["new_sha256"] == file_sha256(path)
     assert config_seen(url, path, "eva") is None
+
+
+def test_a_history_folder_that_cannot_be_made_changes_nothing(station: Station) -> None:
+    (station.config_dir / ".history").write_text("a file where the folder goes")
+    stricter = _file("demo-auger", **{"grade_mm_s = 6.3": "grade_mm_s = 2.5"})
+    with pytest.raises(StandError, match="cannot keep the file it replaces here") as caught:
+        _load(station, "engineer", stricter, replace=True)
+    assert "\n" not in str(caught.value)
+    assert (station.config_dir / "demo-auger.toml").read_text() == DEMO
+    assert not entries(station.archive_url, action="config")
