@@ -7,8 +7,9 @@ from the module's EDS (read with the ``canopen`` library: its TPDO1 mapping 0x1A
 COB-ID 0x1800 sub 1, the mapped objects' types); the frames are decoded here with numpy.
 A TPDO's sample index is the number of SYNCs before it, less one (the SYNC it answers);
 a TPDO missing between two SYNCs is a lost sample with its index kept; one delayed past
-the next SYNC is put back on its own SYNC when that SYNC has none, else dropped and
-counted.  Mark edges are the mark input's interpolated threshold crossings (as
+the next SYNC is put back on its own SYNC when that SYNC has none; a backlog (three or more
+on one SYNC, or two where the SYNC before is taken) is left out and counted, never placed
+by guess.  Mark edges are the mark input's interpolated threshold crossings (as
 :mod:`stand.drivers.scan`), moved into the accelerometer's time by the channels' known
 delays.  The module's own word becomes the streams' flags: an input's AI status (CiA 404
 0x6150, when mapped) drops a sample marked not valid (``sensor_fault``) and flags an
@@ -43,24 +44,30 @@ from stand.drivers.checks import (
 )
 from stand.drivers.frames import FLAG_EXTENDED, Frames
 from stand.drivers.one_clock import BlockBuilder, Blocks, kept, mark_edges, one_clock_stream
-from stand.drivers.streams import NodeStream, RunStreams
+from stand.drivers.streams import LATE_FLAG, LATE_SHARE, NodeStream, RunStreams
 
 EMCY_BASE, BOOT_BASE = 0x80, 0x700
 """CiA 301's EMCY and NMT error control (boot-up) COB-IDs: the base plus the node id."""
 
 
 def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_], int, int]:
-    """Each TPDO's SYNC (``k``: SYNCs before it, less one), a TPDO that came after the next
-    SYNC put back where its own SYNC has none; which are kept; how many were put back; how
-    many dropped (a second TPDO on one SYNC)."""
-    twice = np.flatnonzero(np.diff(k) == 0)
-    k = k.copy() if len(twice) else k
-    moved = 0
-    for j in twice:  # two on one SYNC: the first came late?
-        if k[j] - 1 >= 0 and (j == 0 or k[j - 1] < k[j] - 1):
-            k[j] -= 1
+    """Each TPDO's SYNC (``k``: SYNCs before it, less one): of exactly two on one SYNC whose
+    SYNC before has none, the first came late and is put back on it (one TPDO late by
+    less than two SYNCs); three or more on one SYNC (a backlog: which SYNC each answered
+    is not known) are all left out, never placed by guess (a sample put on a later SYNC
+    than its own would lag the 1x: a bias no interval holds).  Returns the indices, which
+    are kept, how many were put back, how many left out."""
+    if not len(k):
+        return k, np.zeros(0, bool), 0, 0
+    starts = np.flatnonzero(np.concatenate(([True], np.diff(k) != 0)))
+    runs = np.diff(np.concatenate((starts, [len(k)])))
+    k, keep, moved = k.copy(), np.ones(len(k), bool), 0
+    for s, n in zip(starts.tolist(), runs.tolist(), strict=True):
+        if n == 2 and k[s] >= 1 and (s == 0 or k[s - 1] < k[s] - 1):
+            k[s] -= 1  # the first came late: its own SYNC has none
             moved += 1
-    keep = np.concatenate(([True], np.diff(k) > 0)) if len(k) else np.zeros(0, bool)
+        elif n >= 2:
+            keep[s : s + n] = False
     keep &= k >= 0
     return k, keep, moved, int(np.count_nonzero(~keep))
 
@@ -194,8 +201,9 @@ class PdoBuilder(BlockBuilder):
         k, keep, moved, dropped = _indices(parts.joined(parts.k, first, consume).astype(np.int64))
         if moved or dropped:
             warn.append(Diagnostic("tpdo_late", f"node {n.node_id}: {moved} TPDO(s) came after "
-                                   f"the next SYNC (put back on their own), {dropped} a second "
-                                   "on one SYNC (dropped)", float(moved + dropped)))  # fmt: skip
+                                   f"the next SYNC (put back on their own), {dropped} in a "
+                                   "backlog on one SYNC (left out: which SYNC each answered is "
+                                   "not known)", float(moved + dropped)))  # fmt: skip
         index, t = kept(k, keep), kept(parts.joined(parts.t, first, consume), keep)
         if not len(index):
             return None  # nothing from this module: the measuring path says so
@@ -220,8 +228,9 @@ class PdoBuilder(BlockBuilder):
             warn.append(Diagnostic("ai_status", f"{name}: {invalid} sample(s) the module "
                                    "marked not valid (AI status), left out",
                                    float(invalid)))  # fmt: skip
+        late = [LATE_FLAG] if dropped > LATE_SHARE * (len(index) + dropped) else []
         return replace(stream, samples=len(index), invalid_samples=invalid,
-                       flags=tuple(dict.fromkeys([*flags, *said])))  # fmt: skip
+                       flags=tuple(dict.fromkeys([*flags, *said, *late])))  # fmt: skip
 
 
 def pdo_streams(frames: Frames, layout: PdoLayout) -> RunStreams:

@@ -17,7 +17,7 @@ import numpy as np
 
 from stand.core.dsp import median
 from stand.core.fitsums import block_fits
-from stand.drivers.streams import NodeStream
+from stand.drivers.streams import LATE_FLAG, LATE_SHARE, NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 from stand.words import said
 
@@ -95,6 +95,23 @@ FULL_SCALE_COUNT = 32767
 SATURATION_SHARE = 2e-3
 """A sensor is saturated when its extreme count recurs in more than 0.2 % of the samples
 (and at least 8): a sine's peak is met by a handful of samples, a clipped one by many."""
+
+
+def check_timing(s: NodeStream) -> None:
+    """Refuse a node whose samples' times are not known: a CANopen module whose TPDOs came
+    in backlogs for more than :data:`stand.drivers.streams.LATE_SHARE` of them
+    (flag ``late_backlog``): placed by guess they would lag the 1x, a shift no interval
+    holds."""
+    if LATE_FLAG not in s.flags:
+        return
+    total = s.samples + s.duplicate_frames
+    raise MeasurementError(
+        f"{s.duplicate_frames} of its {total} samples came late, in backlogs "
+        f"({100 * s.duplicate_frames / max(total, 1):.0f} %, more than "
+        f"{100 * LATE_SHARE:.0f} %): which SYNC each answered is not known for so many, "
+        "so no sample's time can be trusted; record again with a host that keeps the "
+        "SYNC's pace"
+    )
 
 
 def check_saturation(s: NodeStream) -> None:

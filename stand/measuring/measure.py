@@ -37,6 +37,7 @@ from stand.measuring.gate import (
     block_drift,
     block_scatter,
     check_saturation,
+    check_timing,
 )
 from stand.measuring.passes import NodeFit, node_phasor
 from stand.process import Beside, can_fork
@@ -194,6 +195,7 @@ def _support(
     (:func:`stand.measuring.passes.node_phasor`), then judged (:func:`judge_support`); its
     window, its warnings and what a live update extends."""
     try:
+        check_timing(s)
         check_saturation(s)
         ph, window, blocks, notes, fit = node_phasor(s, gamma, taper, gate)
     except MeasurementError as exc:  # name the node, keep the kind (fault or not yet)

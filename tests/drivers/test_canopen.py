@@ -83,6 +83,44 @@ def test_lost_and_late_tpdos_keep_their_place(
     assert len(said) == 1 and "1 TPDO(s)" in said[0], after["warnings"]
 
 
+def test_backlogs_are_left_out_and_too_many_refuse_the_node(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Node 1's TPDOs come three at a time after the SYNC of the last (a host that fell
+    behind): which SYNC each answered is not known, so all three are left out, never
+    placed by guess; a few such backlogs leave the answer in its circles, more than a
+    fifth of the TPDOs refuse the node in one line, naming the share."""
+    run = tmp_path / "c.h5"
+    assert main(["simulate", str(short_scene(tmp_path, "demo-canopen")), "--out", str(run)]) == 0
+
+    def backlog(share: float, step: int):  # type: ignore[no-untyped-def]
+        def change(frames):  # type: ignore[no-untyped-def]
+            node1 = np.flatnonzero(frames.can_id == 0x181)
+            pos = np.arange(len(frames), dtype=float)
+            groups = node1[: 3 * int(share * len(node1) / 3)].reshape(-1, 3)
+            for g in groups[::step]:
+                pos[g[0]], pos[g[1]] = pos[g[2]] - 0.2, pos[g[2]] - 0.1  # after g[2]'s SYNC
+            return frames.take(np.argsort(pos, kind="stable"))
+
+        return change
+
+    few, many = tmp_path / "few.h5", tmp_path / "many.h5"
+    _rewrite(run, few, backlog(0.9, 20))  # every 20th group of three: about 4.5 %
+    _rewrite(run, many, backlog(0.3, 1))  # 30 % of them
+    capsys.readouterr()
+    out = solve_json(few, capsys)
+    holds_the_demo(out)
+    said = [w for w in out["warnings"] if "in a backlog on one SYNC" in w]
+    assert said and said[0].startswith("node 1: 0 TPDO(s) came after"), said
+    assert main(["solve", str(many)]) == 2
+    err = capsys.readouterr().err
+    assert (
+        err.startswith("stand: error: ")
+        and "node 1: " in err
+        and "came late, in backlogs (30 %" in err
+    ), err
+
+
 def test_the_spread_sits_at_the_cramer_rao_bound() -> None:
     """100 runs of 2 s at 2 kHz without SYNC jitter: the support 1 phasor's spread within
     1.2x of sqrt(2 sigma^2 / N) (noise and quantization), as the scan module's."""

@@ -145,7 +145,11 @@ def test_canopen_modules_in_another_process_answer_the_set_up_and_the_sync(
     answer `stand record --config examples/canopen-stand.toml` over SDO, then each of the
     recorder's SYNCs at 2 kHz; the run solves to the scene's unbalance within twice its
     95 % radius.  Across two Python processes on two cores some TPDOs miss their SYNC's
-    window: the run says how many (``tpdo_late``), and the answer widens, never shifts."""
+    window: the run says how many (``tpdo_late``); a backlog's TPDOs are left out, never
+    placed on a guessed SYNC (placed late they lagged the 1x by 2 deg under load: a shift
+    no interval held).  A run the busy host disturbed beyond measuring (more than a fifth
+    of a node's TPDOs in backlogs, or what they leave unsteady) is refused in one line that
+    names the backlog."""
     import subprocess
     import sys
 
@@ -175,7 +179,10 @@ def test_canopen_modules_in_another_process_answer_the_set_up_and_the_sync(
             sim.kill()
     assert sim.returncode == 0
     capsys.readouterr()
-    assert main(["solve", str(out), "--json"]) == 0
+    if main(["solve", str(out), "--json"]) == 2:  # refused: only a run the host disturbed
+        err = capsys.readouterr().err
+        assert err.startswith("stand: error: ") and "backlog" in err, err  # said why
+        return
     res = json.loads(capsys.readouterr().out)
     for p, truth, deg in zip(res["planes"], (5000.0, 3000.0), (30.0, 200.0), strict=True):
         got = p["unbalance_g_mm"] * cmath.exp(-1j * math.radians(p["angle_deg"]))
