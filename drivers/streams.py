@@ -15,14 +15,15 @@ from stand.drivers.frame_index import FrameIndex
 from stand.drivers.frames import BadFrame
 
 SUPPORT_NODES = (1, 2)
+"""The streams a measurement needs: support 1's and support 2's (a v1 node's id is its
+support's number)."""
 LATE_SHARE = 0.2
 """More than this share of a node's frames in backlogs (left out: which sample each holds
 is not known) and no sample's time of that node is trusted: its stream is flagged
 :data:`LATE_FLAG` and not measured (a conforming CANopen module never answers past CiA
 301's synchronous window; a host too busy to keep the SYNC's pace makes such runs)."""
 LATE_FLAG = "late_backlog"
-"""The streams a measurement needs: support 1's and support 2's (a v1 node's id is its
-support's number)."""
+"""The flag of a stream whose samples' times are not known (:data:`LATE_SHARE`)."""
 
 
 @dataclass(frozen=True)
