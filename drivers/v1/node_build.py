@@ -13,6 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
+from stand.core.words import said
 from stand.drivers.frame_index import FrameIndex
 from stand.drivers.streams import SUPPORT_NODES, NodeStream
 from stand.drivers.v1.protocol import (
@@ -24,7 +25,6 @@ from stand.drivers.v1.protocol import (
     Decoded,
 )
 from stand.errors import NoStatusError
-from stand.words import said
 
 STATUS_WITHIN_S = 1.5
 """A node's first STATUS must come within this time of its first frame [s]."""
@@ -158,27 +158,13 @@ def _node_warnings(
         starts = np.flatnonzero(on & ~np.concatenate(([False], on[:-1])))
         ends = np.flatnonzero(on & ~np.concatenate((on[1:], [False])))
         for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
-            when = said("at {t} s", t=f"{st_t[a] - t0:.2f}")
-            if b > a:
-                when = said(
-                    "at {t} s (in {n} STATUS frames, until {until} s)",
-                    t=f"{st_t[a] - t0:.2f}",
-                    n=b - a + 1,
-                    until=f"{st_t[b] - t0:.2f}",
-                )
-            out.append(
-                Diagnostic(
-                    f"status_{name}",
-                    said(
-                        "node {node}: STATUS reports {flag} {when}",
-                        node=node,
-                        flag=name.replace("_", " "),
-                        when=when,
-                    ),
-                    float(b - a + 1),
-                    float(st_t[a] - t0),
-                )
-            )
+            t, until = f"{st_t[a] - t0:.2f}", f"{st_t[b] - t0:.2f}"
+            when = (said("at {t} s (in {n} STATUS frames, until {until} s)", t=t, n=b - a + 1,
+                         until=until) if b > a else said("at {t} s", t=t))  # fmt: skip
+            out.append(Diagnostic(f"status_{name}", said(
+                "node {node}: STATUS reports {flag} {when}", node=node,
+                flag=name.replace("_", " "), when=when), float(b - a + 1),
+                float(st_t[a] - t0)))  # fmt: skip
     return out, tuple(seen)
 
 
@@ -250,31 +236,14 @@ def _frame_warnings(node: int, n_seg: int, lost: int, kept: int) -> list[Diagnos
     """Restarts and lost SAMPLES frames, in words."""
     warn = []
     if n_seg > 1:
-        warn.append(
-            Diagnostic(
-                "node_restart",
-                said(
-                    "node {node}: restarted {n} time(s); each part is timed on its own",
-                    node=node,
-                    n=n_seg - 1,
-                ),
-                float(n_seg - 1),
-            )
-        )
+        warn.append(Diagnostic("node_restart", said(
+            "node {node}: restarted {n} time(s); each part is timed on its own", node=node,
+            n=n_seg - 1), float(n_seg - 1)))  # fmt: skip
     if lost:
-        warn.append(
-            Diagnostic(
-                "lost_frames",
-                said(
-                    "node {node}: {n} SAMPLES frames lost ({pct} %): their samples are "
-                    "missing, the others keep their index",
-                    node=node,
-                    n=lost,
-                    pct=f"{100 * lost / (lost + kept):.2g}",
-                ),
-                float(lost),
-            )
-        )
+        warn.append(Diagnostic("lost_frames", said(
+            "node {node}: {n} SAMPLES frames lost ({pct} %): their samples are missing, the "
+            "others keep their index", node=node, n=lost,
+            pct=f"{100 * lost / (lost + kept):.2g}"), float(lost)))  # fmt: skip
     return warn
 
 
@@ -336,19 +305,10 @@ def _marks(
     good = consistent_edges(pos, mseg, rev)
     if not good.all():
         dropped = int(np.count_nonzero(~good))
-        warn.append(
-            Diagnostic(
-                "edges_dropped",
-                said(
-                    "node {node}: {n} reference edge(s) dropped: their position or "
-                    "revolution counter disagrees with their neighbours (a corrupt MARK "
-                    "frame)",
-                    node=node,
-                    n=dropped,
-                ),
-                float(dropped),
-            )
-        )
+        warn.append(Diagnostic("edges_dropped", said(
+            "node {node}: {n} reference edge(s) dropped: their position or revolution "
+            "counter disagrees with their neighbours (a corrupt MARK frame)", node=node,
+            n=dropped), float(dropped)))  # fmt: skip
         pos, mseg, rev = pos[good], mseg[good], rev[good]
     new_seg = np.ones(len(pos), dtype=bool)
     new_seg[1:] = mseg[1:] != mseg[:-1]

@@ -37,10 +37,10 @@ from stand.core.drift import (
     single_fits,
     whitened,
 )
+from stand.core.words import said
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.health.data import Group, groups
 from stand.solve.pipeline import calibration_radius
-from stand.words import said
 
 SCATTER_PCT = 2.0
 """The operator's placement scatter assumed: each mass off by 2 % ..."""

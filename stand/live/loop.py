@@ -26,6 +26,7 @@ import numpy as np
 
 from stand.config import Config
 from stand.core import Diagnostic
+from stand.core.words import N_, said
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, config_digest
 from stand.drivers.v1.build import StreamBuilder
 from stand.errors import (
@@ -48,7 +49,6 @@ from stand.solve.pipeline import (
 )
 from stand.solve.recordings import job_of
 from stand.solve.result import Job, LiveInfo, Provenance, Result
-from stand.words import N_, said
 
 FIRST_CHECK_S = 1.0
 """The first solve of a live run comes after this long [s]."""

@@ -28,6 +28,7 @@ from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.nonlinear import Nonlinearity, detect
+from stand.core.words import said
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.gate import (
@@ -41,7 +42,6 @@ from stand.measuring.gate import (
 )
 from stand.measuring.passes import NodeFit, node_phasor
 from stand.process import Beside, can_fork
-from stand.words import said
 
 __all__ = ["BLOCK_REVS", "MIN_REVS", "Measurement", "Window", "measure"]
 

@@ -40,6 +40,7 @@ from stand.core.fitsums import (
     side_band_sums,
 )
 from stand.core.trig import cos_sin
+from stand.core.words import said
 from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 from stand.measuring.gate import (
@@ -49,7 +50,6 @@ from stand.measuring.gate import (
     settled_block,
     steady_revolutions,
 )
-from stand.words import said
 
 CHUNK = 1 << 16
 """Samples per chunk (about): a chunk holds whole blocks of revolutions."""

@@ -15,6 +15,7 @@ from typing import Any
 
 from stand.config import SAME_SPEED, Config, config_toml
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
+from stand.core.words import said
 from stand.errors import UsageError
 from stand.measuring import Measurement
 from stand.solve.pipeline import (
@@ -24,7 +25,6 @@ from stand.solve.pipeline import (
 )
 from stand.solve.recordings import named_errors, read_run, solve_recording
 from stand.solve.result import Check, Result
-from stand.words import said
 
 
 def check_against(

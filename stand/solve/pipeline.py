@@ -31,6 +31,7 @@ from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_t
 from stand.core.balance import static_couple
 from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
 from stand.core.inverse import RESONANCE_BAND
+from stand.core.words import said
 from stand.errors import ConfigError
 from stand.measuring import Measurement
 from stand.measuring.live_fit import remeasure
@@ -48,7 +49,6 @@ from stand.solve.result import (
 )
 from stand.solve.tooling import compensate, folder, load_tooling, tooling_file
 from stand.solve.verdict import combined_error, judged, plane_passes, tolerance_of
-from stand.words import said
 
 SOFTWARE = f"stand {__version__}"
 SPECTRUM_MAX_SAMPLES = 1 << 18

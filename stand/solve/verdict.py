@@ -30,8 +30,8 @@ from stand.core.tolerance import (
     static_couple_criteria,
     static_couple_limits,
 )
+from stand.core.words import N_, said
 from stand.solve.result import Judgement, Tolerance
-from stand.words import N_, said
 
 RULES = {
     "after_balancing": N_(

@@ -27,6 +27,7 @@ from stand.archive.audit import config_seen
 from stand.archive.query import serials_starting
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.config.serials import next_serial, rule_prefix
+from stand.core.words import said
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.files import output
@@ -43,7 +44,6 @@ from stand.solve.verdict import tolerance_of
 from stand.station.archive_side import ArchiveSide
 from stand.station.sessions import Sessions
 from stand.station.snapshot import BUS, Snapshot
-from stand.words import said
 
 log = logging.getLogger(__name__)
 

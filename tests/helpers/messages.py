@@ -2,7 +2,7 @@
 
 ``python tests/helpers/messages.py`` lists, per shipped language, the messages its
 catalogue lacks (to translate) and those no code uses (to remove); a message the engine
-writes with :func:`stand.words.said` and placeholders goes in with the comment
+writes with :func:`stand.core.words.said` and placeholders goes in with the comment
 ``#. engine sentence`` (:data:`stand.report.language.SENTENCE`).
 """
 

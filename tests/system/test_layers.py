@@ -17,7 +17,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 
 FLOORS: list[set[str]] = [
-    {"stand", "stand.errors", "stand.words"},  # the version, the exception tree, said()
+    {"stand", "stand.errors"},  # the version, the one exception tree
     {"stand.files"},  # safe writes: a temporary name, then a rename
     {"stand.core"},  # pure numerics: arrays in, arrays out
     {"stand.process"},  # work forked beside, the allocator: process-level tricks
