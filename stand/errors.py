@@ -324,3 +324,35 @@ class TooLargeError(StandError, MemoryError):
             f"{what}: {message}: it would need about {needed_bytes / 1e9:.3g} GB of memory, "
             f"this machine has {available_bytes / 1e9:.3g} GB free"
         )
+
+
+class RefusedError(StandError, PermissionError):
+    """An action its account (or the operating system's user, on a stand with accounts)
+    may not take: refused before anything changed, and the refusal journaled.
+
+    Attributes
+    ----------
+    who : str
+        The account, or ``os:USER``.
+    right : str
+        The right the action takes (``accounts``, ``calibrate`` ...).
+    """
+
+    def __init__(self, message: str, *, who: str, right: str):
+        self.who, self.right = who, right
+        super().__init__(message)
+
+
+class KeyFileError(StandError, OSError):
+    """The stand's signing key (or the journal's anchor beside it) cannot be made or
+    read, or is not what this software wrote.
+
+    Attributes
+    ----------
+    path : str
+        The file.
+    """
+
+    def __init__(self, message: str, *, path: str):
+        self.path = path
+        super().__init__(f"{path}: {message}")

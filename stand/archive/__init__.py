@@ -12,15 +12,14 @@ SQLite file in the user's data directory (:func:`default_url`).
 """
 
 from stand.archive.results import (
-    add_result,
-    archive_result,
     correction_rows,
     drift_rows,
     file_digest,
     file_status,
-    import_runs,
+    insert_result,
     result_of,
     rows,
+    run_id_in,
     url_for,
     verdict,
     verify,
@@ -29,16 +28,15 @@ from stand.archive.store import Archive, default_url
 
 __all__ = [
     "Archive",
-    "add_result",
-    "archive_result",
     "correction_rows",
     "default_url",
     "drift_rows",
     "file_digest",
     "file_status",
-    "import_runs",
+    "insert_result",
     "result_of",
     "rows",
+    "run_id_in",
     "url_for",
     "verdict",
     "verify",

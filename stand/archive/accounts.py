@@ -10,7 +10,7 @@ Roles, each with the rights of the one before and more (:data:`RIGHTS`):
 
 Passwords are stored as argon2id hashes (argon2-cffi, the reference implementation's
 binding); a badge (a bar-code a scanner types) as its SHA-256.  Every change to an account
-is journaled (:mod:`stand.archive.audit`) by the caller.
+is made and journaled in one transaction by :mod:`stand.actions.accounts`.
 """
 
 from __future__ import annotations
@@ -38,8 +38,9 @@ NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._@-]{0,63}")
 MIN_PASSWORD = 8
 """The shortest password an account takes [characters]."""
 
-__all__ = ["MIN_PASSWORD", "NAME", "RIGHTS", "ROLES", "account", "accounts_of", "add_account",
-           "check_badge", "check_password", "may", "set_account"]  # fmt: skip
+__all__ = ["MIN_PASSWORD", "NAME", "RIGHTS", "ROLES", "account", "account_in", "accounts_in",
+           "accounts_of", "changes_of", "check_badge", "check_password", "digest", "insert_account",
+           "may", "new_row", "public", "state_of", "update_account"]  # fmt: skip
 
 
 def _hasher() -> Any:
@@ -67,31 +68,34 @@ def _checked(name: str, role: str | None, password: str | None) -> None:
         raise UsageError(f"a password of at least {MIN_PASSWORD} printable characters")
 
 
-def add_account(url: str, name: str, role: str, password: str, badge: str | None = None,
-                language: str | None = None) -> dict[str, Any]:  # fmt: skip
-    """A new account; the row as :func:`account` gives it (UsageError if the name is
-    taken or a field is refused)."""
-    import sqlalchemy as sa
-
+def new_row(name: str, role: str, password: str, badge: str | None = None,
+            language: str | None = None) -> dict[str, Any]:  # fmt: skip
+    """A new account's row, its password hashed (UsageError if a field is refused)."""
     from stand.archive.audit import sha256_of
 
     _checked(name, role, password)
-    row = {"name": name, "role": role, "password_hash": _hasher().hash(password),
-           "badge_sha256": None if badge is None else sha256_of(badge), "active": True,
-           "language": language,
-           "created_at": _now(), "changed_at": _now()}  # fmt: skip
-    with Archive(url) as archive, archive.transaction() as conn:
-        if conn.execute(sa.select(accounts.c.name).where(accounts.c.name == name)).first():
-            raise UsageError(f"account {name!r} exists already")
-        conn.execute(sa.insert(accounts).values(**row))
-    return _public(row)
+    return {"name": name, "role": role, "password_hash": _hasher().hash(password),
+            "badge_sha256": None if badge is None else sha256_of(badge), "active": True,
+            "language": language, "created_at": _now(), "changed_at": _now()}  # fmt: skip
 
 
-def set_account(url: str, name: str, *, role: str | None = None, password: str | None = None,
-                active: bool | None = None, language: str | None = None
-                ) -> tuple[dict[str, Any], dict[str, Any]]:  # fmt: skip
-    """Change an account; (before, after) as :func:`account` gives them."""
+def insert_account(conn: Any, row: dict[str, Any]) -> dict[str, Any]:
+    """Insert a new account's row (:func:`new_row`) in the open transaction ``conn``; the
+    account as :func:`account` gives it (UsageError if the name is taken)."""
     import sqlalchemy as sa
+
+    if conn.execute(sa.select(accounts.c.name).where(accounts.c.name == row["name"])).first():
+        raise UsageError(f"account {row['name']!r} exists already")
+    conn.execute(sa.insert(accounts).values(**row))
+    return public(row)
+
+
+def changes_of(name: str, *, role: str | None = None, password: str | None = None,
+               active: bool | None = None, language: str | None = None,
+               badge: str | None = None) -> dict[str, Any]:  # fmt: skip
+    """The columns a change of an account sets (a password hashed; UsageError if a field
+    is refused)."""
+    from stand.archive.audit import sha256_of
 
     _checked(name, role, password)
     changes: dict[str, Any] = {"changed_at": _now()}
@@ -103,13 +107,50 @@ def set_account(url: str, name: str, *, role: str | None = None, password: str |
         changes["active"] = active
     if language is not None:
         changes["language"] = language
-    with Archive(url) as archive, archive.transaction() as conn:
-        before = conn.execute(sa.select(accounts).where(accounts.c.name == name)).first()
-        if before is None:
-            raise UsageError(f"no account {name!r}")
-        conn.execute(sa.update(accounts).where(accounts.c.name == name).values(**changes))
-        after = conn.execute(sa.select(accounts).where(accounts.c.name == name)).one()
-    return _public(dict(before._mapping)), _public(dict(after._mapping))
+    if badge is not None:
+        changes["badge_sha256"] = sha256_of(badge)
+    return changes
+
+
+def update_account(conn: Any, name: str, changes: dict[str, Any]
+                   ) -> tuple[dict[str, Any], dict[str, Any]]:  # fmt: skip
+    """Change an account in the open transaction ``conn`` (``changes``:
+    :func:`changes_of`); (before, after) as :func:`account` gives them."""
+    import sqlalchemy as sa
+
+    before = account_in(conn, name)
+    if before is None:
+        raise UsageError(f"no account {name!r}")
+    conn.execute(sa.update(accounts).where(accounts.c.name == name).values(**changes))
+    return before, account_in(conn, name) or before
+
+
+def account_in(conn: Any, name: str) -> dict[str, Any] | None:
+    """One account without secrets, read in the open transaction ``conn`` (None: none)."""
+    row = conn.execute(_select().where(accounts.c.name == name)).first()
+    return None if row is None else public(account_row(row, shown_url(conn), ROLES))
+
+
+def accounts_in(conn: Any) -> list[dict[str, Any]]:
+    """Every account without secrets, read in the open transaction ``conn``, by name."""
+    shown = shown_url(conn)
+    rows = conn.execute(_select().order_by(accounts.c.name)).all()
+    return [public(account_row(r, shown, ROLES)) for r in rows]
+
+
+def digest(account: dict[str, Any] | None) -> str | None:
+    """An account (as :func:`public` gives it: no secrets) as the journal's SHA-256."""
+    import json
+
+    from stand.archive.audit import sha256_of
+
+    return None if account is None else sha256_of(json.dumps(account, sort_keys=True))
+
+
+def state_of(account: dict[str, Any]) -> dict[str, Any]:
+    """What the journal keeps of an account (no secrets: a digest of them): its role,
+    whether it is active, its language and its credentials' digest."""
+    return {k: account[k] for k in ("role", "active", "language", "credentials_sha256")}
 
 
 def _select() -> Any:
@@ -127,7 +168,7 @@ def _rows(url: str, *where: Any) -> list[dict[str, Any]]:
     return [account_row(r, shown, ROLES) for r in rows]
 
 
-def _public(row: dict[str, Any]) -> dict[str, Any]:
+def public(row: dict[str, Any]) -> dict[str, Any]:
     """An account without its secrets (a digest of them, for the journal)."""
     from stand.archive.audit import sha256_of
 
@@ -138,7 +179,7 @@ def _public(row: dict[str, Any]) -> dict[str, Any]:
 
 def accounts_of(url: str) -> list[dict[str, Any]]:
     """Every account, by name, without secrets."""
-    return [_public(r) for r in _rows(url)]
+    return [public(r) for r in _rows(url)]
 
 
 def account(url: str, name: str) -> dict[str, Any] | None:
@@ -159,7 +200,7 @@ def check_password(url: str, name: str, password: str) -> dict[str, Any] | None:
         _hasher().verify(found[0]["password_hash"], password)
     except (VerificationError, InvalidHashError):
         return None
-    return _public(found[0])
+    return public(found[0])
 
 
 def check_badge(url: str, code: str) -> dict[str, Any] | None:
@@ -176,4 +217,4 @@ def check_badge(url: str, code: str) -> dict[str, Any] | None:
                 accounts.c.badge_sha256 == sha256_of(code), accounts.c.active.is_(True)
             )
         ).first()
-    return None if row is None else _public(dict(row._mapping))
+    return None if row is None else public(dict(row._mapping))

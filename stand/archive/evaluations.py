@@ -15,11 +15,12 @@ from stand.solve.result import json_text
 
 
 def add_evaluation(
-    url: str, kind: str, stand_id: str | None, verdict: str, result: dict[str, Any], *,
+    conn: Any, kind: str, stand_id: str | None, verdict: str, result: dict[str, Any], *,
     simulated: bool, software: str, due: dt.date | None = None,
     performed_at: dt.datetime | None = None,
-) -> tuple[int, str]:  # fmt: skip
-    """Archive one evaluation; its id and the archive as messages show it."""
+) -> int:  # fmt: skip
+    """Archive one evaluation in the open transaction ``conn``; its id
+    (:func:`stand.actions.evaluations.archive_evaluation` journals it too)."""
     import sqlalchemy as sa
 
     when = (performed_at or dt.datetime.now(dt.UTC)).astimezone(dt.UTC)
@@ -28,10 +29,7 @@ def add_evaluation(
         "verdict": verdict, "due": None if due is None else due.isoformat(),
         "simulated": simulated, "software": software, "result_json": json_text(result),
     }  # fmt: skip
-    with Archive(url) as archive:
-        with archive.transaction() as conn:
-            key = conn.execute(sa.insert(evaluations).values(**row)).inserted_primary_key[0]
-        return int(key), archive.shown
+    return int(conn.execute(sa.insert(evaluations).values(**row)).inserted_primary_key[0])
 
 
 def latest_evaluations(url: str, stand: str | None = None) -> list[dict[str, Any]]:

@@ -54,26 +54,33 @@ def _select() -> Any:
 
 
 def store_job(archive: Archive, stand: str, fields: dict[str, Any], *, start: bool) -> str | None:
+    """:func:`insert_job` in a transaction of its own (unjournaled: the OPC UA server's
+    jobs go through :func:`stand.actions.receive_job`)."""
+    with archive.transaction() as conn:
+        return insert_job(conn, stand, fields, start=start)
+
+
+def insert_job(conn: Any, stand: str, fields: dict[str, Any], *, start: bool) -> str | None:
     """Keep a new job order (``fields``: ``job_id``, ``rotor_type``, ``serial``, ``order``,
     ``operator``, ``description``, checked by the caller) in the state AllowedToStart,
-    to be started at once when ``start``.  None when kept; else why not: ``duplicate``
-    (the stand has a job order of that id) or ``full`` (:data:`MAX_JOBS` kept)."""
+    to be started at once when ``start``, in the open transaction ``conn``.  None when
+    kept; else why not: ``duplicate`` (the stand has a job order of that id) or ``full``
+    (:data:`MAX_JOBS` kept)."""
     import sqlalchemy as sa
 
-    with archive.transaction() as conn:
-        if conn.execute(sa.select(jobs.c.id).where(_where(stand, fields["job_id"]))).first():
-            return "duplicate"
-        kept = conn.execute(
-            sa.select(sa.func.count()).select_from(jobs).where(jobs.c.stand_id == stand)
-        ).scalar_one()
-        if kept >= MAX_JOBS:
-            return "full"
-        conn.execute(sa.insert(jobs).values(
-            stand_id=stand, job_order_id=fields["job_id"], rotor_type=fields["rotor_type"],
-            serial=fields["serial"], order_no=fields.get("order"),
-            operator=fields.get("operator"), description=fields.get("description"),
-            state="AllowedToStart", start_requested=start, stored_at=_now(),
-        ))  # fmt: skip
+    if conn.execute(sa.select(jobs.c.id).where(_where(stand, fields["job_id"]))).first():
+        return "duplicate"
+    kept = conn.execute(
+        sa.select(sa.func.count()).select_from(jobs).where(jobs.c.stand_id == stand)
+    ).scalar_one()
+    if kept >= MAX_JOBS:
+        return "full"
+    conn.execute(sa.insert(jobs).values(
+        stand_id=stand, job_order_id=fields["job_id"], rotor_type=fields["rotor_type"],
+        serial=fields["serial"], order_no=fields.get("order"),
+        operator=fields.get("operator"), description=fields.get("description"),
+        state="AllowedToStart", start_requested=start, stored_at=_now(),
+    ))  # fmt: skip
     return None
 
 

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from stand import __version__
-from stand.archive.results import add_result, file_digest
+from stand.archive.results import file_digest
 from stand.archive.store import Archive
 from stand.config import Config, config_toml
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
@@ -31,7 +31,7 @@ from stand.errors import UsageError
 from stand.health import datum_row
 from stand.sim import Mass, load_scene, simulate, with_masses
 from stand.sim.tables import PlaneUnbalance
-from stand.solve import Job, solve_check, solve_recording
+from stand.solve import Job, Result, solve_check, solve_recording
 from stand.solve.acquisition import acquisition_of
 from stand.solve.recordings import result_masses
 
@@ -76,6 +76,7 @@ def simulate_series(
     count: int,
     out_dir: str,
     url: str,
+    archive_run: Callable[[Result], int],
     *,
     seed: int = 0,
     force: bool = False,
@@ -85,7 +86,9 @@ def simulate_series(
     """Simulate ``count`` rotors (see the module docstring); the data stored.  A run file
     already in ``out_dir`` is refused before the first rotor (replaced with ``force``).
     ``believed``: the config the software believes and its text, stored with each run (its
-    ``[stand] id`` the runs' stand); default the scene's own."""
+    ``[stand] id`` the runs' stand); default the scene's own.  ``archive_run`` archives a
+    run and journals it (:func:`stand.actions.runs.archive_run`, bound to the archive
+    ``url`` and to who simulates)."""
 
     scene, params, _ = load_scene(scene_name)
     believed = believed or (scene.config(), config_toml(scene.config()))
@@ -110,7 +113,7 @@ def simulate_series(
             first, check = folder / f"{serial}-a.h5", folder / f"{serial}-b.h5"
             _write(rotor, truth, first, believed, force, Job(serial=serial, note="first run"))
             before = solve_recording(str(first))
-            add_result(archive, before)
+            archive_run(before)
             masses = result_masses(before)
             sm = 0.0 if place is None else place.mass_pct / 100
             sa = 0.0 if place is None else place.angle_deg
@@ -123,7 +126,7 @@ def simulate_series(
                 Job(serial=serial, note="check run"),
             )  # fmt: skip
             after = solve_check(str(check), str(first))
-            add_result(archive, after)
+            archive_run(after)
             row = datum_row(
                 before,
                 after,

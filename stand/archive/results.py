@@ -1,7 +1,7 @@
-"""Results into the archive and back: one run written (:func:`archive_result`), the
-runs of a command's filters read as rows, a run file's digest, runs recorded before
-imported and every archived file verified; the calibration data the stand's health
-judges (:func:`correction_rows`)."""
+"""Results into the archive and back: one run written in an open transaction
+(:func:`insert_result`; :mod:`stand.actions.runs` journals it), the runs of a command's
+filters read as rows, a run file's digest, and every archived file verified; the
+calibration data the stand's health judges (:func:`correction_rows`)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive.jobs import job_ran
-from stand.archive.schema import runs
+from stand.archive.schema import planes, runs
 from stand.archive.store import Archive, default_url
 from stand.config import Config
 from stand.errors import RecordingError, StandError
 from stand.files import check_input
-from stand.solve import Result, json_text, solve_recording, to_json
+from stand.solve import Result, json_text, to_json
 
 READ_CHUNK = 1 << 20
 
@@ -120,52 +120,42 @@ def _passed(state: str) -> bool | None:
     return {"pass": True, "fail": False}.get(state)
 
 
-def archive_result(result: Result, url: str, *, config: str | None = None) -> int:
-    """Archive one run's result (and the run it checks, if not archived yet); its id."""
-    with Archive(url) as archive:
-        return add_result(archive, result, config=config)
+def insert_result(conn: Any, result: Result, file_sha256: str, checks_run_id: int | None
+                  ) -> tuple[int, bool]:  # fmt: skip
+    """Write one run's result and its planes in the open transaction ``conn`` (and move
+    the MES's job order it ran under on); (its id, True), or (the id it has, False) when
+    a run with the same file digest is archived already
+    (:func:`stand.actions.runs.archive_run` journals it)."""
+    import datetime as dt
 
+    import sqlalchemy as sa
 
-def add_result(archive: Archive, result: Result, *, config: str | None = None) -> int:
-    """:func:`archive_result` into an archive already open (a series of many runs)."""
-    run_file = result.provenance.run_file
-    if not run_file:
-        raise ValueError("only a recorded run is archived")
-    checks = None
-    if result.check is not None:
-        prev = result.check.previous_run
-        checks = archive.run_id(file_digest(prev))
-        if checks is None:
-            before = solve_recording(prev, config)
-            checks = archive.add(*rows(before, file_digest(prev), None))
-    run, planes = rows(result, file_digest(run_file), checks)
-    run_id = archive.add(run, planes)
+    found = run_id_in(conn, file_sha256)
+    if found is not None:
+        return found, False
+    run, plane_rows = rows(result, file_sha256, checks_run_id)
+    stamp = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    new = conn.execute(sa.insert(runs).values(**run, archived_at=stamp))
+    run_id = int(new.inserted_primary_key[0])
+    conn.execute(planes.insert(), [{**p, "run_id": run_id} for p in plane_rows])
     job, stand = result.provenance.job.job_id, result.provenance.stand_id
     if job and stand:  # the MES's job order it ran under: its state moves on
-        with archive.transaction() as conn:
-            job_ran(conn, stand, job, run_id, run["verdict"])
-    return run_id
+        job_ran(conn, stand, job, run_id, run["verdict"])
+    return run_id, True
+
+
+def run_id_in(conn: Any, file_sha256: str) -> int | None:
+    """The id of the run with this file digest (None: not archived), in ``conn``."""
+    import sqlalchemy as sa
+
+    found = conn.execute(sa.select(runs.c.id).where(runs.c.file_sha256 == file_sha256)).scalar()
+    return None if found is None else int(found)
 
 
 def result_of(row: Any) -> dict[str, Any]:
     """The archived result's JSON form."""
     out: dict[str, Any] = json.loads(row.result_json)
     return out
-
-
-def import_runs(paths: list[str], url: str, config: str | None = None) -> list[tuple[str, int]]:
-    """Archive runs recorded before (solved with their stored config, or ``config``):
-    ``(path, id)`` each; a run already archived keeps its id."""
-
-    done = []
-    with Archive(url) as archive:
-        for path in paths:
-            digest = file_digest(path)
-            found = archive.run_id(digest)
-            if found is None:
-                found = archive.add(*rows(solve_recording(path, config), digest, None))
-            done.append((path, found))
-    return done
 
 
 def verify(url: str) -> tuple[int, list[dict[str, Any]]]:

@@ -202,7 +202,11 @@ audit = Table(
     Column("reason", Text),  # as typed (None: none given)
     Column("previous_sha256", String(64), nullable=False),  # the entry before's hash
     Column("entry_sha256", String(64), nullable=False),  # this entry's (stand.archive.audit)
-)  # revision 0009: the audit trail, append-only and hash-chained
+    Column("source", String(16)),  # cli, station, opcua, ... (revision 0010)
+    Column("key_id", String(16)),  # the stand key that signed it (stand.archive.keys)
+    Column("signature", String(128)),  # Ed25519 of entry_sha256, hex
+    Column("detail", Text),  # the state the change left, JSON (no secrets)
+)  # revision 0009: the audit trail, append-only and hash-chained; 0010: signed
 
 accounts = Table(
     "accounts",

@@ -197,20 +197,9 @@ class Archive:
         return [{**row, "datum": correction_row(row, self.shown)} for row in found]
 
     def mark_tooling(self, file_sha256s: list[str]) -> list[int]:
-        """Mark the archived runs with these file digests as a tooling's index runs (kind
-        ``tooling``: out of production statistics and exports); their ids, oldest first
-        (none when they were never archived)."""
-        import sqlalchemy as sa
-
+        """:func:`mark_tooling_runs` in a transaction of its own."""
         with self.transaction() as conn:
-            ids = sorted(
-                conn.execute(
-                    sa.select(runs.c.id).where(runs.c.file_sha256.in_(file_sha256s))
-                ).scalars()
-            )
-            if ids:
-                conn.execute(runs.update().where(runs.c.id.in_(ids)).values(kind="tooling"))
-        return [int(i) for i in ids]  # fmt: skip
+            return mark_tooling_runs(conn, file_sha256s)
 
     def run_id(self, file_sha256: str) -> int | None:
         """The id of the run with this file digest, if archived."""
@@ -232,6 +221,19 @@ class Archive:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def mark_tooling_runs(conn: Any, file_sha256s: list[str]) -> list[int]:
+    """Mark the archived runs with these file digests as a tooling's index runs (kind
+    ``tooling``: out of production statistics and exports), in the open transaction
+    ``conn``; their ids, oldest first (none when they were never archived)."""
+    import sqlalchemy as sa
+
+    ids = sorted(conn.execute(
+        sa.select(runs.c.id).where(runs.c.file_sha256.in_(file_sha256s))).scalars())  # fmt: skip
+    if ids:
+        conn.execute(runs.update().where(runs.c.id.in_(ids)).values(kind="tooling"))
+    return [int(i) for i in ids]
 
 
 NETWORK_FILESYSTEMS = frozenset({

@@ -287,7 +287,8 @@ def audit_row(row: Any, url: str) -> dict[str, Any]:
                    "entry_sha256"):  # fmt: skip
         if not isinstance(r.get(column), str):
             raise r.fail(column, f"{str(r.get(column))[:40]!r} is not a text")
-    for column in ("old_sha256", "new_sha256", "reason"):
+    for column in ("old_sha256", "new_sha256", "reason", "source", "key_id", "signature",
+                   "detail"):  # fmt: skip
         r.text(column, 4000)
     return dict(r.m)
 

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from stand.archive import import_runs, url_for, verify
+from stand.actions import import_runs
+from stand.archive import url_for, verify
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import add_archive_argument
 from stand.cli.format import dump_json
 from stand.config import load_config
@@ -26,6 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "archive unless --archive says another",
     )  # fmt: skip
     add_archive_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -36,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if args.action == "import":
         if not args.runs:
             raise UsageError("stand archive import: give the runs to import")
-        done = import_runs(args.runs, url, args.config)
+        done = import_runs(args.runs, url, actor_of(args, url), args.config)
         if args.json:
             dump_json({"archive": args.archive or url, "runs": [
                 {"run_file": p, "id": i} for p, i in done

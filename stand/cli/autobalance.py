@@ -9,7 +9,9 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from stand.archive import archive_result, url_for
+from stand.actions import archive_run
+from stand.archive import url_for
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import ACCEPTANCE_EXIT, add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config, validate
@@ -64,6 +66,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="test: how far the test unbalance moves from one start to the next [deg]",
     )  # fmt: skip
     add_archive_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-archive", action="store_true", help="test: do not archive the starts")
 
@@ -217,12 +220,13 @@ def _test(args: argparse.Namespace) -> int:
     doc["certificate"] = certificate_line(doc)
     if not args.no_archive:
         url = url_for(args.archive, cfg)
+        actor = actor_of(args, url)
         doc["archived"] = []
         for k, s in enumerate(starts):
             job = replace(s.result.provenance.job, note=f"balancer test: {doc['line']} "
                           f"(start {k + 1} of {len(starts)})")  # fmt: skip
             result = replace(s.result, provenance=replace(s.result.provenance, job=job))
-            doc["archived"].append(archive_result(result, url, config=args.config))
+            doc["archived"].append(archive_run(result, url, actor, config=args.config))
     if args.json:
         dump_json(doc)
     else:

@@ -12,10 +12,11 @@ from typing import Annotated, Any
 import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat, PositiveFloat
 
+from stand.actions import save_calibration
 from stand.archive import correction_rows, url_for
-from stand.archive.audit import Change, file_sha256, record, sha256_of
 from stand.archive.query import serials_by_digest
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     add_archive_argument,
     add_force_argument,
@@ -93,10 +94,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="with --from-archive: the parameters to fit, e.g. C1 or C1,C2 (C1 C2 M1 M2 "
         "gain1 gain2; default: what stand health says moved)",
     )
-    g.add_argument("--stand", metavar="ID", help="with --from-archive: this stand's data")
-    g.add_argument("--rotor-type", metavar="TYPE", help="with --from-archive: this type's data")
+    g.add_argument(
+        "--stand", metavar="ID", help="with --from-archive: the config's stand id (checked)"
+    )
+    g.add_argument(
+        "--rotor-type", metavar="TYPE", help="with --from-archive: the config's type (checked)"
+    )
     add_archive_argument(g)
     add_reason_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -256,14 +262,15 @@ def _write(
 
 def _journaled(args: argparse.Namespace, cfg: Config, path: str, text: str,
                inputs: list[str]) -> None:  # fmt: skip
-    """Write the calibration, and one entry in the audit trail: the calibration's SHA-256
-    before (the file replaced, else the config it came from) and after."""
-    old = file_sha256(path) or file_sha256(args.config)
-    write_text_output(path, text, force=args.force, inputs=inputs)
-    if path != "-":
-        record(url_for(args.archive, cfg), Change(
-            "calibration", f"{Path(path).name} (from {Path(args.config).name})", old,
-            sha256_of(text), args.reason))  # fmt: skip
+    """Write the calibration, and one entry in the audit trail in the same transaction
+    (:func:`stand.actions.save_calibration`); to stdout (``-``) without either."""
+    if path == "-":
+        write_text_output(path, text, force=args.force, inputs=inputs)
+        return
+    url = url_for(args.archive, cfg)
+    save_calibration(url, actor_of(args, url), path, text, config=args.config,
+                     force=args.force, inputs=tuple(i for i in inputs if i),
+                     reason=args.reason)  # fmt: skip
 
 
 FITTABLE = ("C1", "C2", "M1", "M2", "gain1", "gain2")
@@ -280,6 +287,24 @@ def _no_change(r: Any, as_json: bool) -> bool:
     else:
         print(said)
     return True
+
+
+def _own_rows(args: argparse.Namespace, cfg: Config, url: str) -> list[Any]:
+    """The corrected rotors that recalibrate ``cfg``: its own stand's, of its own rotor
+    type (``--stand`` and ``--rotor-type`` may only name them again: another stand's or
+    type's rotors would write their calibration into this config), named on stdout."""
+    stand, rotor_type = cfg.stand.stand_id(), cfg.rotor.type
+    for flag, given, own in (("--stand", args.stand, stand),
+                             ("--rotor-type", args.rotor_type, rotor_type)):  # fmt: skip
+        if given is not None and given != own:
+            raise UsageError(f"{flag} {given}: {args.config} is {flag[2:]} {own or '(none)'}; "
+                             "a calibration is fitted to its own stand's rotors of its own "
+                             "type")  # fmt: skip
+    rows = [r for r in correction_rows(url, stand) if r["rotor_type"] == rotor_type]
+    if not args.json:
+        print(f"from the archive: {len(rows)} corrected rotors of stand {stand}, rotor type "
+              f"{rotor_type or '(none named)'}")  # fmt: skip
+    return rows
 
 
 def _from_archive(args: argparse.Namespace) -> int:
@@ -302,8 +327,7 @@ def _from_archive(args: argparse.Namespace) -> int:
             )
     cfg, params = load_config(args.config)
     url = url_for(args.archive, cfg)
-    rows = correction_rows(url, args.stand, args.rotor_type)
-    r = refit(rows, params, names)
+    r = refit(_own_rows(args, cfg, url), params, names)
     if not args.force and _no_change(r, args.json):
         return 0
     original, _ = read_toml(args.config)

@@ -9,6 +9,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from stand.calib import Tolerances
+from stand.cli.actor import add_actor_arguments
 from stand.config import Config, read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
@@ -309,6 +310,7 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
     add_measure_arguments(p)
     add_job_arguments(p, live=True)
     add_archive_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--no-archive", action="store_true", help="do not archive the run")
     add_bus_arguments(p)
 

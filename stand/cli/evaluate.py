@@ -8,9 +8,9 @@ from pathlib import Path
 from typing import Any
 
 from stand import __version__
+from stand.actions import archive_evaluation
 from stand.archive import url_for
-from stand.archive.audit import Change, record, sha256_of
-from stand.archive.evaluations import add_evaluation
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     ACCEPTANCE_EXIT,
     add_archive_argument,
@@ -26,7 +26,6 @@ from stand.health.due import due_date
 from stand.health.evaluate import DEFAULT_URR_CLAIM, Evaluation, evaluate_runs
 from stand.health.proving import file_runs, scene_runs
 from stand.sim import load_scene
-from stand.solve import json_text
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -65,6 +64,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_force_argument(p, "--report and --pdf")
     add_archive_argument(p)
     add_reason_argument(p)
+    add_actor_arguments(p)
     p.add_argument(
         "--no-archive",
         action="store_true",
@@ -117,11 +117,9 @@ def _archive(
     now = dt.datetime.now(dt.UTC)
     due = due_date(now, cfg.stand.evaluation_interval_days)
     url = url_for(args.archive, cfg)
-    eid, where = add_evaluation(url, "machine", cfg.stand.stand_id(), out["verdict"], out,
-                         simulated=simulated, software=f"stand {__version__}", due=due,
-                         performed_at=now)  # fmt: skip
-    record(url, Change("evaluation", f"machine evaluation E{eid} ({out['verdict']})", None,
-                       sha256_of(json_text(out)), args.reason))  # fmt: skip
+    eid, where, _entry = archive_evaluation(
+        url, actor_of(args, url), "machine", cfg.stand.stand_id(), out, simulated=simulated,
+        software=f"stand {__version__}", due=due, performed_at=now, reason=args.reason)  # fmt: skip
     return {"id": eid, "archive": where, "performed_at": now.isoformat(),
             "due": due.isoformat(), "simulated": simulated}  # fmt: skip
 

@@ -8,8 +8,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
+from stand.actions import save_matrix
 from stand.archive import url_for
-from stand.archive.audit import Change, file_sha256, record, sha256_of
 from stand.calib.influence import (
     TRIAL_CHANGE,
     Trial,
@@ -18,6 +18,7 @@ from stand.calib.influence import (
     phasors,
     suggested_trials,
 )
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     add_archive_argument,
     add_force_argument,
@@ -101,6 +102,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_force_argument(p, "--save")
     add_reason_argument(p)
     add_archive_argument(p)
+    add_actor_arguments(p)
     p.add_argument(
         "--matrix",
         metavar="MATRIX.json",
@@ -332,12 +334,14 @@ def _save(args: argparse.Namespace, result: Any, cfg: Config, entries: list[Any]
 
 def _journaled_save(args: argparse.Namespace, cfg: Config | None, text: str,
                     inputs: list[str]) -> None:  # fmt: skip
-    """``--save``: the matrix written, and one entry in the audit trail."""
-    old = file_sha256(args.save)
-    write_text_output(args.save, text, force=args.force, inputs=inputs)
-    if args.save != "-":
-        record(url_for(args.archive, cfg), Change("matrix", Path(args.save).name, old,
-                                                  sha256_of(text), args.reason))  # fmt: skip
+    """``--save``: the matrix written, and one entry in the audit trail in the same
+    transaction (:func:`stand.actions.save_matrix`); to stdout (``-``) without either."""
+    if args.save == "-":
+        write_text_output(args.save, text, force=args.force, inputs=inputs)
+        return
+    url = url_for(args.archive, cfg)
+    save_matrix(url, actor_of(args, url), args.save, text, force=args.force,
+                inputs=tuple(i for i in inputs if i), reason=args.reason)  # fmt: skip
 
 
 def _print(out: dict[str, Any]) -> None:

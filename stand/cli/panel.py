@@ -277,12 +277,17 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
     """Archive a live run (unless ``--no-archive``); say where on stderr."""
     if args.no_archive or not result.provenance.run_file:
         return
-    from stand.archive import archive_result, url_for  # after the answer: SQLAlchemy
+    from stand.actions import archive_run, config_seen  # after the answer: SQLAlchemy
+    from stand.archive import url_for
+    from stand.cli.actor import actor_of
     from stand.plant import publish_archived
 
     url = url_for(args.archive, cfg)
+    actor = actor_of(args, url)
     try:
-        run_id = archive_result(result, url, config=args.config)
+        if args.config:  # a rotor type's file edited since it was last used: journaled
+            config_seen(url, actor, args.config)
+        run_id = archive_run(result, url, actor, config=args.config)
     except ArchiveError as exc:
         raise ArchiveError(
             f"{str(exc).split(': ', 1)[1]} (the run is kept in {result.provenance.run_file}: "
@@ -293,7 +298,7 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
     if not args.quiet:
         print(_("archived as run {id}").format(id=run_id), file=sys.stderr)
 
-    said = publish_archived(result, run_id, cfg)
+    said = publish_archived(result, run_id, cfg, url)
     if said and (not args.quiet or said.startswith("not")):
         print(said, file=sys.stderr)
 

@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 from pathlib import Path
 
+from stand.actions import release_certificate, signature_path
 from stand.archive import file_digest, url_for
-from stand.archive.audit import Change, file_sha256, os_user, record
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     add_across_speeds_arguments,
     add_archive_argument,
@@ -22,7 +22,7 @@ from stand.config import load_config
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
-from stand.report import Release, released, render, render_speeds, write_pdf
+from stand.report import render, render_speeds, write_pdf
 from stand.report.language import LANGUAGES, language
 from stand.solve import solve_check, solve_recording
 
@@ -65,12 +65,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--release",
         action="store_true",
-        help="release it as this computer's user: "
-        "its signature block names who, when and the run file's SHA-256, and the "
-        "audit trail keeps the written file's SHA-256 (stand audit check FILE)",
+        help="release it (--as NAME once the archive has accounts: a setter or above): its "
+        "signature block names who, when, the run file's SHA-256 and the stand key; the "
+        "file kept (the PDF if one is written) is signed (FILE.sig beside it) and its "
+        "SHA-256 journaled (stand audit check FILE)",
     )
     add_archive_argument(g)
     add_reason_argument(g)
+    add_actor_arguments(g)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -101,19 +103,18 @@ def run(args: argparse.Namespace) -> int:
     else:
         result = solve_recording(run, args.config, options)
     words = language(args.lang)
-    page, release = render(result, words), None
-    if args.release:
-        release = Release(os_user(), None, dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
-                          file_digest(run))  # fmt: skip
-        page = released(page, release, words)
-    _write(args, page, inputs)
-    if release is not None:  # the file a customer keeps: the PDF if one was written
-        kept = args.pdf or args.out
-        cfg = load_config(args.config)[0] if args.config else None
-        entry = record(url_for(args.archive, cfg), Change(
-            "release", f"certificate of {Path(run).name} ({Path(kept).name})",
-            release.run_sha256, file_sha256(kept), args.reason, who=release.who))  # fmt: skip
-        print(f"released by {release.who}: audit entry {entry}")
+    page = render(result, words)
+    if not args.release:
+        return _write(args, page, inputs)
+    cfg = load_config(args.config)[0] if args.config else None
+    url = url_for(args.archive, cfg)
+    actor = actor_of(args, url)
+    targets = [Path(p) for p in (args.out, args.pdf) if p]  # the customer keeps the last
+    kept, entry = release_certificate(url, actor, page, file_digest(run),
+                          f"certificate of {Path(run).name} ({targets[-1].name})", targets,
+                          lambda text: _write(args, text, inputs), words=words,
+                          reason=args.reason)  # fmt: skip
+    print(f"released by {actor.name}: audit entry {entry}; its signature {signature_path(kept)}")
     return 0
 
 

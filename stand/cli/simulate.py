@@ -9,8 +9,10 @@ from pathlib import Path
 from typing import Any
 
 from stand import __version__
+from stand.actions import archive_run
 from stand.archive import url_for
 from stand.archive.production import simulate_series
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     add_archive_argument,
     add_bus_arguments,
@@ -71,6 +73,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )  # fmt: skip
     p.add_argument("--out-dir", metavar="DIR", help="with --series or --starts: where the runs go")
     add_archive_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--force", action="store_true", help="replace --out if it exists")
     add_scene_arguments(p)
     add_job_arguments(p)
@@ -203,11 +206,13 @@ def _series(args: argparse.Namespace) -> int:
         believed = (cfg, text)
     url = url_for(args.archive, believed[0] if believed else None)
     line = ProgressLine(f"simulating a series of {args.series}")
+    actor = actor_of(args, url)
     done = simulate_series(
         args.scene,
         args.series,
         str(folder),
         url,
+        lambda result: archive_run(result, url, actor),
         seed=args.seed or 0,
         force=args.force,
         on_rotor=lambda i: line.count(i, args.series, "rotor"),

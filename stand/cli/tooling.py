@@ -3,20 +3,20 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
-from stand.archive import Archive, file_digest, url_for
-from stand.archive.audit import Change, file_sha256, journal
+from stand.actions import keep_tooling
+from stand.archive import file_digest, url_for
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
-from stand.errors import ArchiveError, UsageError
+from stand.errors import UsageError
 from stand.solve.index_runs import measure_tooling
-from stand.solve.tooling import folder, save_tooling, stored_toolings, tooling_file
+from stand.solve.tooling import folder, stored_toolings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -40,6 +40,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace a tooling measured before")
     add_archive_argument(p)
     add_reason_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -68,19 +69,10 @@ def _measure(args: argparse.Namespace) -> int:
         raise UsageError("stand tooling measure: give two runs, at 0 deg and at 180 deg")
     tooling, U_r, cov_r, cfg = measure_tooling(args.runs[0], args.runs[1], args.config, args.name)
     where = _where(args, cfg)
-    old = file_sha256(tooling_file(tooling.name, where))
-    path = save_tooling(tooling, where, force=args.force)
-    marked: list[int] | None = None
-    change = Change("tooling", f"tooling {tooling.name} ({path.name})", old, file_sha256(path),
-                    args.reason)  # fmt: skip
-    try:
-        with Archive(url_for(args.archive, cfg)) as archive:  # index runs are no production
-            marked = archive.mark_tooling([file_digest(r) for r in args.runs])
-        journal(url_for(args.archive, cfg), change)
-    except ArchiveError as exc:  # the tooling is kept: the marking and its entry wait
-        print(f"the index runs are not marked as tooling runs and the change is not in the "
-              f"audit trail ({exc}): measure the tooling again with --force once the archive "
-              "answers", file=sys.stderr)  # fmt: skip
+    url = url_for(args.archive, cfg)
+    path, marked, _entry = keep_tooling(url, actor_of(args, url), tooling, where,
+                                        [file_digest(r) for r in args.runs], force=args.force,
+                                        reason=args.reason)  # fmt: skip
     doc = {
         "name": tooling.name,
         "file": str(path),

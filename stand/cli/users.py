@@ -1,17 +1,18 @@
 """The station's accounts: who may measure, load, calibrate, manage accounts
-(:mod:`stand.archive.accounts`); each change journaled (``stand audit``)."""
+(:mod:`stand.archive.accounts`); each change made by an administrator (``--as``; the
+first administrator of an archive by this computer's user) and journaled in the same
+transaction (:mod:`stand.actions.accounts`, ``stand audit``)."""
 
 from __future__ import annotations
 
 import argparse
 import getpass
-import json
 import sys
-from typing import Any
 
+from stand.actions import add_account, set_account
 from stand.archive import url_for
-from stand.archive.accounts import ROLES, accounts_of, add_account, set_account
-from stand.archive.audit import Change, record, sha256_of
+from stand.archive.accounts import ROLES, accounts_of
+from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import add_archive_argument, add_reason_argument
 from stand.cli.format import dump_json
 from stand.config import load_config
@@ -42,12 +43,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--badge-file",
         metavar="FILE",
-        help="add: the code its badge's bar code carries (first line): logging in by scanning it",
+        help="add, set: the code its badge's bar code carries (first line): logging in by "
+        "scanning it",
     )
     state = p.add_mutually_exclusive_group()
-    state.add_argument("--disable", action="store_true", help="set: no more logging in")
+    state.add_argument("--disable", action="store_true",
+                       help="set: no more logging in (add: made disabled)")  # fmt: skip
     state.add_argument("--enable", action="store_true", help="set: logging in again")
     add_reason_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--config", metavar="CFG", help="the stand's config: its [archive] url")
     add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="list: print one JSON object")
@@ -64,11 +68,6 @@ def _password(args: argparse.Namespace) -> str:
     return sys.stdin.readline().strip()
 
 
-def _digest(state: dict[str, Any] | None) -> str | None:
-    """An account's state (no secrets) as the journal's SHA-256."""
-    return None if state is None else sha256_of(json.dumps(state, sort_keys=True))
-
-
 def run(args: argparse.Namespace) -> int:
     url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
     if args.action == "list":
@@ -82,24 +81,28 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if not args.name:
         raise UsageError(f"stand users {args.action}: name the account")
+    actor = actor_of(args, url)
+    badge = first_line(args.badge_file, "a badge code") if args.badge_file else None
     if args.action == "add":
         if not args.role:
             raise UsageError("stand users add: --role is required")
-        badge = first_line(args.badge_file, "a badge code") if args.badge_file else None
-        before, after = None, add_account(url, args.name, args.role, _password(args), badge,
-                                          args.language)  # fmt: skip
+        if args.enable:
+            raise UsageError("stand users add: an account is made active (--enable is for set)")
+        after, entry = add_account(url, actor, args.name, args.role, _password(args),
+                                   badge=badge, language=args.language, active=not args.disable,
+                                   reason=args.reason)  # fmt: skip
     else:
         password = _password(args) if args.password_file else None
         active = True if args.enable else False if args.disable else None
-        if args.role is None and password is None and active is None and not args.language:
+        if (args.role is None and password is None and active is None and not args.language
+                and badge is None):  # fmt: skip
             raise UsageError(
-                "stand users set: nothing to change (--role, --password-file, "
+                "stand users set: nothing to change (--role, --password-file, --badge-file, "
                 "--language, --disable or --enable)"
             )
-        before, after = set_account(url, args.name, role=args.role, password=password,
-                                    active=active, language=args.language)  # fmt: skip
-    entry = record(url, Change("account", args.name, _digest(before), _digest(after),
-                               args.reason))  # fmt: skip
+        after, entry = set_account(url, actor, args.name, role=args.role, password=password,
+                                   active=active, language=args.language, badge=badge,
+                                   reason=args.reason)  # fmt: skip
     state = "active" if after["active"] else "disabled"
     print(f"account {args.name}: {after['role']}, {state} (audit entry {entry})")
     return 0

@@ -24,10 +24,12 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from stand.actions import Actor, receive_job
 from stand.archive import Archive
-from stand.archive.jobs import command, job_by_id, jobs_of, store_job
+from stand.archive.jobs import command, job_by_id, jobs_of
 from stand.errors import ArchiveError, JobOrderError
 from stand.plant.ua_jobs import JOB_STATES
+from stand.plant.ua_security import CALLER
 from stand.solve import job_field_problem
 
 NO_ERROR, UNKNOWN_JOB_ORDER, INVALID_STATUS, UNABLE_TO_ACCEPT = 1, 1 << 1, 1 << 3, 1 << 4
@@ -134,7 +136,10 @@ class JobOrders:
     def _store(self, name: str, order: Any, *, start: bool) -> list[Any]:
         try:
             fields = job_fields(order, self.stand, self.rotor_types())
-            why = store_job(self.open_archive(), self.stand, fields, start=start)
+            who = CALLER.get()
+            actor = Actor(who or "opcua:anonymous", None, "opcua")
+            url = self.open_archive().url  # the server's archive, kept open
+            why = receive_job(url, actor, self.stand, fields, start=start)
         except JobOrderError as exc:
             return self._status(name, exc.bits, str(exc))
         except ArchiveError as exc:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import hmac
 import os
 import socket
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,9 @@ CERT_FILE, KEY_FILE = "server-cert.der", "server-key.pem"
 """The server's certificate (DER) and private key (PEM) in the certificate folder."""
 CERT_DAYS = 3650
 """How long a certificate the server makes is valid [days]."""
+CALLER: ContextVar[str | None] = ContextVar("stand_opcua_caller", default=None)
+"""The OPC UA user of the method call being served (set as the call's rights are checked,
+in the same task that then runs the method): who sent a job order, for the journal."""
 
 
 @dataclass(frozen=True)
@@ -142,10 +146,10 @@ class Users:
                                      str(self.access.password).encode())  # fmt: skip
             return User(role=UserRole.User, name=username) if ok else None
         if username is not None and self.accounts_url is not None:
-            from stand.archive.accounts import check_password
+            from stand.actions import log_in  # journaled: a log-in, or a failed one
 
             try:
-                found = check_password(self.accounts_url, str(username), str(password or ""))
+                found = log_in(self.accounts_url, str(username), str(password or ""), "opcua")
             except StandError:  # the archive does not answer: nobody is let in
                 return None
             if found is None:
@@ -191,6 +195,7 @@ def rights(users: Users) -> Any:
             except Exception:  # a Call that does not decode: refused, never let through
                 return False
             jobs = any(JOB_METHODS in str(m.MethodId.Identifier) for m in params.MethodsToCall)
+            CALLER.set(getattr(user, "name", None))
             return not jobs or users.may_send_jobs(getattr(user, "name", None))
 
     return Rights()

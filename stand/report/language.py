@@ -12,6 +12,7 @@ A plant adds a language by adding a catalogue (docs/people.md says how).
 from __future__ import annotations
 
 import datetime as dt
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -31,6 +32,14 @@ DOMAIN = "stand"
 def catalogue_path(code: str) -> Path:
     """Where the catalogue of language ``code`` is kept."""
     return LOCALE_DIR / code / "LC_MESSAGES" / f"{DOMAIN}.po"
+
+
+AMBIGUOUS = N_(
+    "{what}: {text} could be read two ways: write it without a thousands "
+    "separator, with {sign} before the decimals"
+)
+NOT_A_NUMBER = N_("{what}: {text} is not a number")
+"""What :meth:`Language.typed` says of a number it does not take."""
 
 
 @dataclass(frozen=True)
@@ -80,6 +89,30 @@ class Language:
 
         pattern = "#,##0" + ("." + "0" * digits if digits > 0 else "")
         return str(format_decimal(value, format=pattern, locale=self.code))
+
+    def typed(self, text: str, what: str) -> float:
+        """A number a person typed, read by this language's rules (the same that
+        :meth:`number` writes by: ``2,5`` is 2.5 in German and Ukrainian, ``2.5`` in
+        English).  UsageError, naming ``what``, for a text that is no number, and for one
+        with the thousands separator: ``2,500`` in English, ``2.500`` in German could be
+        either, and is never guessed."""
+        from babel.numbers import NumberFormatError, get_group_symbol, parse_decimal
+
+        from stand.errors import UsageError
+
+        plain = text.strip()
+        group = str(get_group_symbol(self.code))
+        spaces = {group, "\u00a0", "\u202f", " "} if group.isspace() else {group}
+        if any(g in plain for g in spaces):
+            raise UsageError(self(AMBIGUOUS).format(what=what, text=plain[:40],
+                                                    sign=self.decimal))  # fmt: skip
+        try:
+            value = float(parse_decimal(plain, locale=self.code, strict=True))
+        except (NumberFormatError, ValueError):
+            value = math.nan
+        if not math.isfinite(value):
+            raise UsageError(self(NOT_A_NUMBER).format(what=what, text=plain[:40]))
+        return value
 
     def when(self, t: dt.datetime | str, *, seconds: bool = False) -> str:
         """A time in local time with its zone, its date as this language writes it

@@ -31,6 +31,10 @@ class Release:
     at_utc: str
     run_sha256: str
     meaning: str = "released"
+    key_id: str | None = None
+    """The id of the stand key that signs the released file (None: not signed)."""
+    public_pem: str | None = None
+    """That key's public half (PEM), for a customer to check the file's signature."""
 
 
 def released(page: str, r: Release, words: Language = ENGLISH) -> str:
@@ -41,18 +45,24 @@ def released(page: str, r: Release, words: Language = ENGLISH) -> str:
     _, _, tail = rest.partition(RELEASE_END)
     e, _ = html.escape, words
     role = f" ({e(_(r.role))})" if r.role else ""
-    rows = (
+    rows: tuple[tuple[str, str], ...] = (
         (_("released by"), f"{e(r.who)}{role}"),
         (_("on"), e(_.when(r.at_utc)) + f" ({e(r.at_utc[:19].replace('T', ' '))} UTC)"),
         (_("meaning"), e(_("released: the rotor was balanced and measured as this "
                            "certificate states"))),
         (_("run file SHA-256"), f"<span class=digest>{e(r.run_sha256)}</span>"),
     )  # fmt: skip
+    if r.key_id and r.public_pem:
+        rows += ((_("stand key"), f"<span class=digest>{e(r.key_id)}</span><pre class=digest>"
+                  f"{e(r.public_pem.strip())}</pre>"),)  # fmt: skip
     table = "".join(f"<tr><th>{e(k)}</th><td>{v}</td></tr>" for k, v in rows)
     note = _(
         "Signed electronically in the stand's software; the stand's audit trail holds "
         "this document's SHA-256 (stand audit check)."
     )
+    if r.key_id:
+        note += " " + _("The file beside it named .sig is its Ed25519 signature by the stand "
+                        "key above (openssl pkeyutl -verify).")  # fmt: skip
     block = (f"<div class=released><h2>{e(_('Release'))}</h2><table>{table}</table>"
              f"<p class=muted>{e(note)}</p></div>")  # fmt: skip
     return f"{head}{RELEASE_START}{block}{RELEASE_END}{tail}"

@@ -10,14 +10,13 @@ which holds the folders, the archive's URL and the state these methods read.
 
 from __future__ import annotations
 
-import datetime as dt
 import logging
 import threading
 from pathlib import Path
 from typing import Any
 
+from stand.actions import Actor, release_certificate
 from stand.archive import Archive, correction_rows, file_digest
-from stand.archive.audit import Change, file_sha256, record
 from stand.archive.evaluations import evaluations_due
 from stand.archive.jobs import end_job, jobs_of, take_job
 from stand.archive.query import Filters, history, run_digest, run_file
@@ -27,7 +26,7 @@ from stand.field import balance_speeds, speeds_json
 from stand.files import output
 from stand.health import datum_row, health, health_json
 from stand.plant import export_qdas
-from stand.report import Release, released, render, render_speeds, write_pdf
+from stand.report import render, render_speeds, write_pdf
 from stand.report.language import LANGUAGES, Language
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
@@ -187,25 +186,20 @@ class ArchiveSide:
             paths.append(str(path))
         return render_speeds(speeds_json(balance_speeds(paths)))
 
-    def released_pdf(self, run_id: int, who: str, role: str | None, code: str | None = None
-                     ) -> Path:  # fmt: skip
-        """The certificate of archived run ``run_id`` released by the account ``who``: its
-        signature block the release (:func:`stand.report.released`), printed once as
-        ``<run>.released.pdf`` (``<run>.de.released.pdf`` in the language ``de``) and
-        journaled (the PDF's SHA-256); the first release stands, later asks get it."""
+    def released_pdf(self, run_id: int, actor: Actor, code: str | None = None) -> Path:
+        """The certificate of archived run ``run_id`` released by ``actor``: its signature
+        block the release, printed once as ``<run>.released.pdf`` (``<run>.de.released.pdf``
+        in the language ``de``), signed and journaled (:func:`stand.actions.release`, the
+        rule the CLI's release follows too); the first release stands, later asks get it."""
         report = self.report_file(run_id, code)
         pdf = report.with_suffix(".released.pdf")
         with self._printing:
             if not pdf.is_file():
-                digest = run_digest(self.archive_url, run_id) or ""
-                now = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-                page = released(report.read_text(encoding="utf-8"),
-                                Release(who, role, now, digest),
-                                self.language(code))  # the report's language  # fmt: skip
-                write_pdf(page, pdf, inputs=[str(report)])
-                record(self.archive_url, Change(
-                    "release", f"certificate of run {run_id} ({report.stem})", digest,
-                    file_sha256(pdf), None, who=who))  # fmt: skip
+                release_certificate(self.archive_url, actor, report.read_text(encoding="utf-8"),
+                        run_digest(self.archive_url, run_id) or "",
+                        f"certificate of run {run_id} ({report.stem})", [pdf],
+                        lambda page: write_pdf(page, pdf, inputs=[str(report)]),
+                        words=self.language(code))  # the report's language  # fmt: skip
         return pdf
 
     def certificate_pdf(self, run_id: int, code: str | None = None) -> Path:

@@ -20,6 +20,7 @@ from stand.report import Display
 from stand.report.language import ENGLISH, LANGUAGES, N_, Language
 from stand.station.login import forbidden, session_of, words
 from stand.station.service import Station
+from stand.station.sessions import actor
 
 TOAST: Literal["top-right"] = "top-right"
 """Where the screens' notes appear: the top right corner, below the header (class
@@ -229,7 +230,7 @@ def add_routes(station: Station) -> None:
         session = session_of(station, request)
         try:
             pdf = (station.certificate_pdf(run_id, lang) if session is None
-                   else station.released_pdf(run_id, session.name, session.role, lang))  # fmt: skip
+                   else station.released_pdf(run_id, actor(session), lang))  # fmt: skip
         except UsageError as exc:  # no such run, or outside the folders
             return PlainTextResponse(str(exc), status_code=404)
         except StandError as exc:  # Chromium missing or failing, a full disk

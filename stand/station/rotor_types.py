@@ -22,20 +22,18 @@ The shipped demo rotor types are never changed.
 
 from __future__ import annotations
 
-import datetime as dt
 import re
 from pathlib import Path
 from typing import Any
 
+from stand.actions import Rights, replace_config
 from stand.archive import correction_rows
-from stand.archive.audit import Change, file_sha256, os_user, record, sha256_of
 from stand.config import Config, config_from_dict, load_config, parse_toml
 from stand.config.edit import updated_toml, without_table
 from stand.config.paths import SHIPPED_ROTORS
 from stand.config.schema import ToolingTable
 from stand.core import StandParameters
-from stand.errors import StandError, UsageError, WriteError
-from stand.files import output
+from stand.errors import StandError, UsageError
 from stand.health.monitor import Refit, refit
 from stand.health.recalibrate import fits_text, kept_line, refitted_config, significant
 from stand.report.language import Language
@@ -43,7 +41,7 @@ from stand.solve.tooling import folder, stored_toolings
 from stand.solve.verdict import tolerance_of
 from stand.station.login import refused
 from stand.station.service import Station
-from stand.station.sessions import Session
+from stand.station.sessions import Session, actor
 
 MAX_CONFIG_BYTES = 256 * 1024
 """A rotor type's file is a few kB; one over 256 kiB is refused unread."""
@@ -112,7 +110,7 @@ def _reason(station: Station, reason: str, _: Language) -> str:
     reason = " ".join(reason.split())
     if not reason:
         raise UsageError(_("give the reason for the change: the audit trail keeps it"))
-    return reason[:500]
+    return reason  # the journal refuses one of over 1000 characters, never cuts it
 
 
 def load_rotor_type(station: Station, session: Session | None, file_name: str, raw: bytes,
@@ -140,11 +138,15 @@ def load_rotor_type(station: Station, session: Session | None, file_name: str, r
         raise UsageError(_("rotor type {type} exists: tick replace to load this file in its "
                            "place").format(type=name))  # fmt: skip
     others = [t for t in station.rotor_types() if t != name]
+    rights = ["load"]
     if others and _calibration(cfg) != _calibration(_config(station, others[0])):
         _allow(station, session, "calibrate", _("change the stand's calibration"), _)
+        rights.append("calibrate")
     if path.exists() and cfg.tolerance != _config(station, name).tolerance:
         _allow(station, session, "tolerance", _("change a tolerance"), _)
-    _replace(station, path, text, session, reason)
+        rights.append("tolerance")
+    _replace(station, path, text, session, reason, right=tuple(rights),
+             what="load a rotor type")  # fmt: skip
     return name
 
 
@@ -194,7 +196,8 @@ def set_tolerance(station: Station, session: Session | None, rotor_type: str, *,
     if source.strip():
         table["source"] = " ".join(source.split())
     new = _validated(cfg, "tolerance", table, path)
-    _replace(station, path, updated_toml(path.read_text(encoding="utf-8"), new), session, reason)
+    _replace(station, path, updated_toml(path.read_text(encoding="utf-8"), new), session, reason,
+             right="tolerance", what="change a tolerance")  # fmt: skip
 
 
 def _validated(cfg: Config, name: str, table: dict[str, Any] | None, path: Path) -> Config:
@@ -222,14 +225,16 @@ def set_tooling(station: Station, session: Session | None, rotor_type: str,
     cfg = load_config(str(path))[0]
     text = path.read_text(encoding="utf-8")
     if tooling is None:
-        _replace(station, path, without_table(text, "tooling"), session, reason)
+        _replace(station, path, without_table(text, "tooling"), session, reason, right="load",
+                 what="change a rotor type's tooling")  # fmt: skip
         return
     if tooling not in toolings(station, rotor_type):
         raise UsageError(_("no measured tooling {name} (stand tooling measure measures "
                            "one)").format(name=tooling))  # fmt: skip
     where = cfg.tooling.folder if cfg.tooling else None
     new = cfg.model_copy(update={"tooling": ToolingTable(name=tooling, folder=where)})
-    _replace(station, path, updated_toml(text, new), session, reason)
+    _replace(station, path, updated_toml(text, new), session, reason, right="load",
+             what="change a rotor type's tooling")  # fmt: skip
 
 
 def recalibration(station: Station, rotor_type: str) -> Refit:
@@ -253,28 +258,15 @@ def recalibrate(station: Station, session: Session | None, rotor_type: str, *, r
     path = station.config_path(rotor_type)
     cfg = load_config(str(path))[0]
     text = refitted_config(cfg, r, path.read_text(encoding="utf-8"))[1]
-    _replace(station, path, text, session, reason, action="calibration")
+    _replace(station, path, text, session, reason, right="calibrate",
+             what="change the stand's calibration", action="calibration")  # fmt: skip
     return _("calibration written and journaled: {fits} (95 %)").format(fits=fits_text(r))
 
 
 def _replace(station: Station, path: Path, text: str, session: Session | None,
-             reason: str, action: str = "config") -> int:  # fmt: skip
+             reason: str, *, right: Rights, what: str, action: str = "config") -> int:  # fmt: skip
     """Keep the file ``path`` replaces in ``.history/``, write ``text`` in its place
-    (a temporary name, then a rename), and journal it; the audit entry's id."""
-    old = file_sha256(path)
-    if old is not None:
-        stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%fZ")
-        kept = station.config_dir / ".history" / f"{path.stem}-{stamp}.toml"
-        try:
-            kept.parent.mkdir(exist_ok=True)
-        except OSError as exc:
-            raise WriteError(f"cannot keep the file it replaces here ({exc.strerror}): "
-                             "nothing changed", path=str(kept.parent)) from exc  # fmt: skip
-        with output(kept) as tmp:
-            tmp.write_bytes(path.read_bytes())
-    data = text.encode("utf-8")
-    with output(path, force=True, need_bytes=len(data)) as tmp:
-        tmp.write_bytes(data)
-    who = session.name if session is not None else os_user()
-    return record(station.archive_url, Change(action, path.name, old, sha256_of(text),
-                                              reason, who=who))  # fmt: skip
+    (a temporary name, then a rename), and journal it, in one transaction with the right
+    checked again (:func:`stand.actions.replace_config`); the audit entry's id."""
+    return replace_config(station.archive_url, actor(session), path, text, right=right,
+                          what=what, reason=reason, action=action)  # fmt: skip

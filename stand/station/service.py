@@ -22,8 +22,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from stand.archive import archive_result, drift_rows
-from stand.archive.audit import config_seen
+from stand.actions import Actor, archive_run, config_seen, os_actor
+from stand.archive import drift_rows
 from stand.archive.query import serials_starting
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.config.serials import next_serial, rule_prefix
@@ -193,13 +193,20 @@ class Station(ArchiveSide):
             self._take_job(job.job_id, rotor_type)
         if self._state.phase != "measuring":  # a rotor type edited on disk: journaled
             try:
-                config_seen(self.archive_url, config, job.operator)
+                config_seen(self.archive_url, self._actor(job), config)
             except StandError as exc:  # the run itself will say the archive is out of reach
                 log.warning("rotor type %s not checked against the audit trail: %s",
                             rotor_type, exc)  # fmt: skip
         self._launch(
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )
+
+    @staticmethod
+    def _actor(job: Job) -> Actor:
+        """Who measures a rotor, as the journal names a run archived and a rotor type found
+        edited: the operator the job names (the account logged in, where there are
+        accounts), else the operating system's user the station runs as."""
+        return Actor(job.operator, None, "station") if job.operator else os_actor("station")
 
     def _generated_serial(self, config: Path) -> str:
         """The next serial of the rotor type's ``[rotor] serial_rule`` for today (local),
@@ -380,12 +387,14 @@ class Station(ArchiveSide):
             notes.append(said("no report: {why}", why=exc))
         run_id = None
         try:
-            run_id = archive_result(result, self.archive_url, config=str(config))
+            run_id = archive_run(result, self.archive_url, self._actor(result.provenance.job),
+                                 config=str(config))  # fmt: skip
         except StandError as exc:
             notes.append(said("not archived ({why}); the run is kept in {run}", why=exc, run=run))
             return run_id, tuple(notes)
 
-        told = publish_archived(result, run_id, load_config_text(str(config))[0])
+        told = publish_archived(result, run_id, load_config_text(str(config))[0],
+                                self.archive_url)  # fmt: skip
         if told and told.startswith("not"):
             notes.append(told)
         return run_id, tuple(notes)

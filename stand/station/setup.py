@@ -73,6 +73,31 @@ def _done(action: Any, said: str, refresh: Any) -> None:
     refresh()
 
 
+def _digits(value: float) -> int:
+    """The decimals a typed figure needs to be shown as it is (at most 3)."""
+    return next((k for k in range(4) if abs(round(value, k) - value) < 1e-9), 3)
+
+
+def _shown(_: Language, value: float | None, none: str = "-") -> str:
+    """A figure as a person types it back: the language's decimal sign, no thousands
+    separator (:meth:`Language.typed` refuses one as ambiguous)."""
+    if value is None:
+        return none
+    return f"{value:.{_digits(value)}f}".replace(".", _.decimal)
+
+
+def _confirm(_: Language, question: str, then: Any) -> None:
+    """Ask once, old and new side by side, before a change is saved: ``then`` on Save."""
+    with ui.dialog() as dialog, ui.card().mark("confirm"):
+        ui.label(question).classes("text-h6")
+        with ui.row():
+            ui.button(_("Save"), on_click=lambda: (dialog.close(), then())).props(
+                "size=lg").mark("confirm-save")  # fmt: skip
+            ui.button(_("Cancel"), on_click=dialog.close).props("flat size=lg").mark(
+                "confirm-cancel")  # fmt: skip
+    dialog.open()
+
+
 def _may(station: Station, right: str, what: str, _: Language) -> bool:
     """Whether this screen's account may ``what``; if not, the panel says why."""
     if not station.sessions.required():
@@ -156,26 +181,36 @@ def _tolerance_panel(station: Station, _: Language, refresh: Any) -> Any:
         if not _may(station, "tolerance", _("change a tolerance"), _):
             return None
         rotor = _rotor_choice(station, _, "tolerance-type")
-        grade = ui.number(_("G [mm/s]"), min=0.01, max=4000).mark("grade")
-        speed = ui.number(_("maximum speed [rpm]"), min=1).mark("max-speed")
+        grade = ui.input(_("G [mm/s]")).mark("grade")
+        speed = ui.input(_("maximum speed [rpm]")).mark("max-speed")
         source = ui.input(_("source (drawing, standard)")).classes("w-full").mark("source")
+        shown: dict[str, float | None] = {}
 
-        def show() -> None:  # the chosen type's tolerance as it is
-            grade.value, speed.value, source.value = grade_of(station, str(rotor.value))
+        def show() -> None:  # the chosen type's tolerance as it is, in the screen's language
+            g, rpm, src = grade_of(station, str(rotor.value))
+            shown.update(grade=g, rpm=rpm)
+            grade.value, speed.value = _shown(_, g, ""), _shown(_, rpm, "")
+            source.value = src
 
         rotor.on_value_change(lambda _e: show())
         show()
         reason = ui.input(_("reason")).classes("w-full").mark("tolerance-reason")
 
         def save() -> None:
-            if grade.value is None or speed.value is None:
-                notify(_("give G and the maximum speed"), "warning")
+            try:  # read as the screen's language writes numbers: never a guess
+                g = _.typed(str(grade.value or ""), _("G [mm/s]"))
+                rpm = _.typed(str(speed.value or ""), _("maximum speed [rpm]"))
+            except StandError as exc:
+                notify(str(exc), "warning", multi_line=True)
                 return
-            _done(lambda: set_tolerance(
-                station, current(station), str(rotor.value), grade_mm_s=float(grade.value),
-                max_speed_rpm=float(speed.value), source=source.value or "",
-                reason=reason.value or "", _=_),
-                _("tolerance changed and journaled"), refresh)  # fmt: skip
+            _confirm(_, _("Change the tolerance of {type}: G {old_g} -> {new_g} mm/s, maximum "
+                          "speed {old_rpm} -> {new_rpm} rpm?").format(
+                type=rotor.value, old_g=_shown(_, shown["grade"]), new_g=_shown(_, g),
+                old_rpm=_shown(_, shown["rpm"]), new_rpm=_shown(_, rpm)),
+                lambda: _done(lambda: set_tolerance(
+                    station, current(station), str(rotor.value), grade_mm_s=g,
+                    max_speed_rpm=rpm, source=source.value or "", reason=reason.value or "",
+                    _=_), _("tolerance changed and journaled"), refresh))  # fmt: skip
 
         ui.button(_("Save the tolerance"), on_click=save).props("size=lg").mark("save-tolerance")
     return rotor

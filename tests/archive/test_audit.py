@@ -1,10 +1,10 @@
-"""The audit trail (:mod:`stand.archive.audit`): a hash chain that names the row an edit,
-a deletion or a reordering breaks; and every command that changes what the stand
-measures with writes exactly one entry."""
+"""The audit trail (:mod:`stand.archive.audit`): a signed hash chain that names the row an
+edit, a deletion or a reordering breaks; and every command that changes what the stand
+measures with writes exactly one entry (that only the actions write the journal:
+tests/system/test_layers.py)."""
 
 from __future__ import annotations
 
-import ast
 import json
 import sqlite3
 from pathlib import Path
@@ -13,7 +13,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from stand.archive.audit import Change, entries, journal, verify_journal
+from stand.actions import os_user
+from stand.archive.audit import EVENTS, Change, entries, journal, verify_journal
 from stand.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -29,7 +30,7 @@ def _journal(path: Path, n: int) -> str:
     url = f"sqlite:///{path}"
     for k in range(n):
         journal(url, Change("config", f"rotor-{k}.toml", None if k == 0 else f"{k:064x}",
-                            f"{k + 1:064x}", f"reason {k}", who="kim"))  # fmt: skip
+                            f"{k + 1:064x}", f"reason {k}"), who="kim", source="cli")  # fmt: skip
     return url
 
 
@@ -71,12 +72,17 @@ def test_rows_swapped_with_their_hashes_are_found(tmp_path: Path) -> None:
     assert "audit row 2: does not follow row 1" in str(verify_journal(url).problem)
 
 
-def test_the_newest_deleted_is_found_against_a_kept_head(tmp_path: Path) -> None:
+def test_the_newest_deleted_is_found_against_the_anchor_and_a_kept_head(tmp_path: Path) -> None:
+    """The anchor beside the stand's key keeps the head: a plain verify finds the tail
+    deleted; a head kept elsewhere (``--head``) finds it too."""
     url = _journal(tmp_path / "a.sqlite", 4)
     head = verify_journal(url).head
+    assert verify_journal(url).anchored == head
     _sql(url, "DELETE FROM audit WHERE id = 4")
-    assert verify_journal(url).problem is None  # a shorter chain is whole ...
-    assert "not in the chain" in str(verify_journal(url, head).problem)  # ... not to the head
+    problem = str(verify_journal(url).problem)
+    assert "the anchor kept beside the stand's key" in problem and "not in the chain" in problem
+    _sql(url, "DELETE FROM audit WHERE id = 3")
+    assert "not in the chain" in str(verify_journal(url, head).problem)
 
 
 @settings(
@@ -98,70 +104,45 @@ def test_any_change_to_any_field_breaks_the_chain(
         assert f"audit row {row}:" in v.problem
 
 
+def _changes(url: str) -> list[dict[str, object]]:
+    """The journal's changes, its security events left out."""
+    return [e for e in entries(url) if e["action"] not in EVENTS]
+
+
 def test_users_and_influence_journal_one_entry_each(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     pw = tmp_path / "pw"
     pw.write_text("a-long-password\n")
+    ana = ["--as", "ana", "--as-password-file", str(pw)]
     steps = [
         (["users", "add", "ana", "--role", "administrator", "--password-file", str(pw),
           "--reason", "first administrator"], "account"),
-        (["users", "set", "ana", "--disable"], "account"),
+        (["users", "set", "ana", "--language", "de", *ana], "account"),
         (["influence", str(ROOT / "examples" / "published" / "goodman-1964.toml"), "--save",
-          str(tmp_path / "M.json"), "--reason", "new fixture"], "matrix"),
+          str(tmp_path / "M.json"), "--reason", "new fixture", *ana], "matrix"),
         (["influence", str(ROOT / "examples" / "published" / "goodman-1964.toml"), "--save",
-          str(tmp_path / "M.json"), "--force"], "matrix"),
+          str(tmp_path / "M.json"), "--force", *ana], "matrix"),
     ]  # fmt: skip
     for k, (argv, action) in enumerate(steps, start=1):
         assert main([*argv, "--archive", url]) == 0
-        got = entries(url)
+        got = _changes(url)
         assert len(got) == k and got[-1]["action"] == action, got
-    first, disabled, matrix, again = entries(url)
-    assert first["old_sha256"] is None and first["reason"] == "first administrator"
-    assert disabled["old_sha256"] == first["new_sha256"] != disabled["new_sha256"]
+    assert [e["action"] for e in entries(url, action="login")] == ["login"] * 3  # each --as
+    first, changed, matrix, again = _changes(url)
+    assert first["old_sha256"] is None
+    assert first["reason"] == "bootstrap: the archive's first administrator; first administrator"
+    assert changed["old_sha256"] == first["new_sha256"] != changed["new_sha256"]
+    assert (first["who"], changed["who"]) == (os_user(), "ana")
+    assert json.loads(changed["detail"])["language"] == "de"
     assert again["old_sha256"] == matrix["new_sha256"]  # the same matrix saved again
     assert "a-long-password" not in json.dumps(entries(url))
     assert main(["audit", "verify", "--archive", url]) == 0
-    assert "intact: 4 entries" in capsys.readouterr().out
+    assert "intact: 7 entries, signed" in capsys.readouterr().out
     _sql(url, "UPDATE audit SET reason = 'tidied' WHERE id = 1")
     assert main(["audit", "verify", "--archive", url]) == 1
     assert "audit row 1: its fields were changed" in capsys.readouterr().out
-
-
-def test_exactly_the_commands_that_change_things_journal() -> None:
-    """The CLI modules that call ``record`` are the journaled commands, each once per
-    change it writes (a second call would be a second entry)."""
-    calls = {}
-    for path in (ROOT / "stand" / "cli").glob("*.py"):
-        tree = ast.parse(path.read_text())
-        n = sum(isinstance(c, ast.Call) and getattr(c.func, "id", None) in ("record", "journal")
-                for c in ast.walk(tree))  # fmt: skip
-        if n:
-            calls[path.stem] = n
-    assert calls == {"calibrate": 1, "influence": 1, "tooling": 1, "evaluate": 1, "users": 1,
-                     "report": 1}  # fmt: skip
-    assert set(calls) == set(JOURNALED)
-
-
-def test_exactly_the_station_screens_that_change_things_journal() -> None:
-    """The station's writers: a released certificate (archive_side), a rotor type, tooling,
-    tolerance or calibration changed at Setup (rotor_types: every change goes through its
-    one ``_replace``; tests/station/test_rotor_types.py counts one entry per change), a
-    config found edited on disk at Start (service, :func:`config_seen`)."""
-    calls = {}
-    for path in (ROOT / "stand" / "station").glob("*.py"):
-        tree = ast.parse(path.read_text())
-        n = sum(isinstance(c, ast.Call) and getattr(c.func, "id", None) in (
-            "record", "journal", "config_seen") for c in ast.walk(tree))  # fmt: skip
-        if n:
-            calls[path.stem] = n
-    assert calls == {"archive_side": 1, "rotor_types": 1, "service": 1}
-    tree = ast.parse((ROOT / "stand" / "station" / "rotor_types.py").read_text())
-    writers = {f.name for f in ast.walk(tree) if isinstance(f, ast.FunctionDef)
-               and any(getattr(c.func, "id", None) == "_replace"
-                       for c in ast.walk(f) if isinstance(c, ast.Call))}  # fmt: skip
-    assert writers == {"load_rotor_type", "set_tolerance", "set_tooling", "recalibrate"}
 
 
 @pytest.mark.parametrize(("statement", "command", "says"), [
@@ -182,7 +163,7 @@ def test_a_row_no_writer_made_is_one_line_and_exit_2(
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     pw = tmp_path / "pw"
     pw.write_text("a-long-password\n")
-    assert main(["users", "add", "ana", "--role", "operator", "--password-file", str(pw),
+    assert main(["users", "add", "ana", "--role", "administrator", "--password-file", str(pw),
                  "--archive", url]) == 0  # fmt: skip
     capsys.readouterr()
     _sql(url, statement)
@@ -216,16 +197,18 @@ def test_a_cli_release_is_journaled_and_checked(
 def test_a_rotor_type_edited_on_disk_is_journaled_when_next_used(tmp_path: Path) -> None:
     """The station's rotor type: one ``config`` entry when first used, none while it stays
     the same, one more after it was edited (old -> new SHA-256)."""
-    from stand.archive.audit import config_seen, file_sha256
+    from stand.actions import Actor, config_seen
+    from stand.archive.audit import file_sha256
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     cfg = tmp_path / "auger.toml"
     cfg.write_text("[rotor]\nR1 = 0.09\n")
     first = file_sha256(cfg)
-    assert config_seen(url, cfg, "kim") == 1
-    assert config_seen(url, cfg, "kim") is None
+    kim, ana = Actor("kim", None, "station"), Actor("ana", None, "station")
+    assert config_seen(url, kim, cfg) == 1
+    assert config_seen(url, kim, cfg) is None
     cfg.write_text("[rotor]\nR1 = 0.10\n")
-    assert config_seen(url, cfg, "ana") == 2
+    assert config_seen(url, ana, cfg) == 2
     used, edited = entries(url)
     assert (used["old_sha256"], used["new_sha256"]) == (None, first)
     assert (edited["old_sha256"], edited["new_sha256"]) == (first, file_sha256(cfg))

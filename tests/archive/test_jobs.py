@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 import sqlalchemy as sa
 
-from stand.archive import Archive, archive_result
+from stand.actions import archive_run, os_actor
+from stand.archive import Archive
 from stand.archive.jobs import (
     MAX_JOBS,
     command,
@@ -83,7 +84,7 @@ def test_a_passing_run_under_the_job_ends_it(archive: Archive, tmp_path: Path) -
     take_job(archive, STAND, "J-1")
     prov = dataclasses.replace(result.provenance, stand_id=STAND,
                                job=Job(serial="SN-1", job_id="J-1"))  # fmt: skip
-    run_id = archive_result(dataclasses.replace(result, provenance=prov), archive.url)
+    run_id = archive_run(dataclasses.replace(result, provenance=prov), archive.url, os_actor())
     job = job_by_id(archive, STAND, "J-1")
     verdict = archive.engine.connect().execute(sa.text(
         f"select verdict, job_id from runs where id = {run_id}")).one()  # fmt: skip

@@ -22,6 +22,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "helpers"))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "station"))
 
+from accounts import with_accounts
+
 
 def one(base: str, driver: object) -> tuple[float, float]:
     """(log-in -> answer, log-in -> Start clicked) [s]."""
@@ -55,8 +57,6 @@ def main() -> None:
     from selenium.webdriver.chrome.service import Service
     from test_station_browser import served
 
-    from stand.cli import main as stand
-
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=5)
     n = ap.parse_args().runs
@@ -67,8 +67,7 @@ def main() -> None:
         tmp = Path(tmpdir)
         (tmp / "pw").write_text("a-long-password\n")
         url = f"sqlite:///{tmp / 'a.sqlite'}"
-        assert stand(["users", "add", "kim", "--role", "operator", "--password-file",
-                      str(tmp / "pw"), "--archive", url]) == 0  # fmt: skip
+        with_accounts(url, ("kim", "operator", "a-long-password"))
         driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
         got = []
         with served(tmp) as base:

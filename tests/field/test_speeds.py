@@ -120,7 +120,7 @@ def test_the_station_shows_the_correction_across_speeds_of_archived_runs(
     """History: one rotor's archived runs at three speeds, ticked, give the page with the
     three-plane correction and every speed's bars; a run outside the runs folder is not
     read."""
-    from stand.archive import archive_result
+    from stand.actions import archive_run, os_actor
     from stand.errors import UsageError
     from stand.solve import solve_recording
     from stand.station import Station
@@ -128,7 +128,7 @@ def test_the_station_shows_the_correction_across_speeds_of_archived_runs(
     rotors = Path(__file__).resolve().parents[2] / "stand" / "data" / "rotors"
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     station = Station(rotors, bow_runs["raw900"].parent, url, lambda *a: (1.0, 1.0))
-    ids = [archive_result(solve_recording(str(bow_runs[f"raw{r}"])), url) for r in SPEEDS]
+    ids = [archive_run(solve_recording(str(bow_runs[f"raw{r}"])), url, os_actor()) for r in SPEEDS]
     page = station.speeds_page(ids)
     assert "Correction across speeds" in page and page.count("<span class=pass>pass</span>") == 4
     assert "data:image/png;base64," in page and "against the direction of\nrotation" in page

@@ -146,8 +146,8 @@ def test_an_evaluation_is_archived_with_its_due_date_and_health_says_when(
 
     import sqlalchemy as sa
 
+    from stand.actions import archive_evaluation, os_actor
     from stand.archive import Archive
-    from stand.archive.evaluations import add_evaluation
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     scene = short_demo(tmp_path)
@@ -172,8 +172,8 @@ def test_an_evaluation_is_archived_with_its_due_date_and_health_says_when(
     old = dt.datetime.now(dt.UTC) - dt.timedelta(days=40)
     other = f"sqlite:///{tmp_path / 'c.sqlite'}"
     due = old.date() + dt.timedelta(days=30)
-    add_evaluation(other, "machine", "S-8", "pass", {"verdict": "pass"}, simulated=False,
-                   software="test", due=due, performed_at=old)  # fmt: skip
+    archive_evaluation(other, os_actor(), "machine", "S-8", {"verdict": "pass"},
+                       simulated=False, software="test", due=due, performed_at=old)  # fmt: skip
     (late,) = _json(["health", "--archive", other], capsys, 0)["evaluations"]
     assert late["state"] == "overdue" and "OVERDUE since" in late["line"]
     with Archive(other) as archive, archive.transaction() as conn:

@@ -334,7 +334,9 @@ def test_a_change_inside_its_interval_keeps_the_calibration(
     assert abs(fit["change_pct"]) <= fit["interval95_pct"]
     assert not (tmp_path / "stand-recalibrated.toml").exists()
     assert main(argv) == 0
-    said = capsys.readouterr().out
+    named, said = capsys.readouterr().out.split("\n", 1)
+    assert named.startswith("from the archive: 12 corrected rotors of stand ")
+    assert named.endswith(", rotor type auger-A")  # the config's own: no other's rotors
     assert (
         said.startswith("no significant change: keep the calibration (C1 ")
         and said.count("\n") == 1
@@ -343,3 +345,30 @@ def test_a_change_inside_its_interval_keeps_the_calibration(
     assert main([*argv, "--force"]) == 0
     forced = capsys.readouterr().out
     assert (tmp_path / "stand-recalibrated.toml").is_file() and "  S-00012: plane 1" in forced
+
+
+def test_recalibration_takes_only_the_configs_own_stand_and_rotor_type(
+    series: tuple[Path, str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The series is rotor type auger-A: a config of another type in the same archive
+    finds none of its rotors (and says whose it looked for); ``--stand`` or
+    ``--rotor-type`` naming others than the config's are refused before anything is
+    read."""
+    from stand.config import config_toml
+    from stand.sim import load_scene
+
+    _, url = series
+    text = config_toml(load_scene("production-drift")[0].config())
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace('type = "auger-A"', 'type = "auger-B"'))
+    capsys.readouterr()
+    assert main(["calibrate", "--from-archive", "--config", str(other), "--archive", url]) == 2
+    said = capsys.readouterr()
+    assert "0 corrected rotors of stand" in said.out and "rotor type auger-B" in said.out
+    own = tmp_path / "own.toml"
+    own.write_text(text)
+    for flag, value in (("--stand", "stand-elsewhere"), ("--rotor-type", "auger-B")):
+        assert main(["calibrate", "--from-archive", "--config", str(own), flag, value,
+                     "--archive", url]) == 2  # fmt: skip
+        err = capsys.readouterr().err
+        assert f"{flag} {value}" in err and "its own stand's rotors" in err, err

@@ -79,6 +79,10 @@ def test_a_balanced_run_is_published_as_its_json(
     ready = threading.Event()
     client = _subscribe(broker, "stand/+/result", got, ready)
     assert ready.wait(10)
+    heads: list[dict] = []
+    heard = threading.Event()
+    head_client = _subscribe(broker, "stand/+/audit-head", heads, heard)
+    assert heard.wait(10)
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     argv = ["balance", "--scene", "demo", "--config", str(cfg), "--archive", url, "--json",
             "--out", str(tmp_path / "r.h5"), "--serial", "M-1"]  # fmt: skip
@@ -96,6 +100,19 @@ def test_a_balanced_run_is_published_as_its_json(
     assert result["stand"]["id"] == "line-3/stand" == message["stand"]
     assert message["run_file"] == str((tmp_path / "r.h5").resolve())
     assert message["verdict"] == "fail" and message["result_id"] == str(message["run_id"])
+    # the audit trail's head beside it: the one the anchor keeps, which verify takes back
+    from stand.archive.audit import anchored_head
+
+    end = time.monotonic() + 5
+    while not heads and time.monotonic() < end:
+        time.sleep(0.05)
+    head_client.loop_stop()  # type: ignore[attr-defined]
+    assert [h["topic"] for h in heads] == ["stand/line-3_stand/audit-head"]
+    kept = heads[0]["payload"]
+    assert kept["head"] == anchored_head(url) and kept["stand"] == "line-3/stand"
+    assert "/" not in json.dumps(kept).replace("line-3/stand", "")  # no path in it
+    capsys.readouterr()
+    assert main(["audit", "verify", "--archive", url, "--head", kept["head"]]) == 0
     # the check run: its own message, its own run id, linked in the archive
     got.clear()
     client.loop_start()  # type: ignore[attr-defined]

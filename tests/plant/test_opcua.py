@@ -30,11 +30,11 @@ SERVER_OBJECT, ORGANIZES, HAS_ADD_IN = 2253, 35, 17604
 """Namespace 0: the Server object, Organizes, HasAddIn."""
 ARCHIVE_IN_ANOTHER_PROCESS = """
 import dataclasses, sys, time
-from stand.archive import archive_result
+from stand.actions import archive_run, os_actor
 from stand.solve import solve_recording
 r = solve_recording(sys.argv[1])
 r = dataclasses.replace(r, provenance=dataclasses.replace(r.provenance, stand_id="stand-7"))
-run_id = archive_result(r, sys.argv[2])
+run_id = archive_run(r, sys.argv[2], os_actor())
 print(run_id, time.time(), flush=True)
 """
 
@@ -428,7 +428,7 @@ async def _evaluation_client(endpoint: str, url: str) -> None:
 
     from asyncua import Client, ua
 
-    from stand.archive.evaluations import add_evaluation
+    from stand.actions import archive_evaluation, os_actor
 
     async with Client(endpoint) as client:
         ns, machine = await _machine(client, "stand-7")
@@ -444,10 +444,11 @@ async def _evaluation_client(endpoint: str, url: str) -> None:
         etype = client.get_node(ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"]))
         await sub.subscribe_events(client.get_node(ua.NodeId(SERVER_OBJECT)), etype)
         await asyncio.sleep(0.5)
-        add_evaluation(url, "machine", "stand-8", "fail", EVALUATED, simulated=True,
-                       software="test")  # another stand's: not this server's  # fmt: skip
-        eid, _ = add_evaluation(url, "machine", "stand-7", "pass", EVALUATED, simulated=True,
-                                software="test", due=dt.date(2026, 12, 27))  # fmt: skip
+        archive_evaluation(url, os_actor(), "machine", "stand-8", {**EVALUATED, "verdict": "fail"},
+                           simulated=True, software="test")  # another stand's  # fmt: skip
+        eid, _, _ = archive_evaluation(url, os_actor(), "machine", "stand-7",
+                                       {**EVALUATED, "verdict": "pass"}, simulated=True,
+                                       software="test", due=dt.date(2026, 12, 27))  # fmt: skip
         end = time.monotonic() + 5
         while not heard and time.monotonic() < end:
             await asyncio.sleep(0.02)

@@ -26,14 +26,14 @@ from stand.cli import main
 
 ARCHIVER = """
 import dataclasses, sys, time
-from stand.archive import archive_result
+from stand.actions import archive_run, os_actor
 from stand.solve import solve_recording
 url = sys.argv[1]
 for path in sys.argv[2:]:
     r = solve_recording(path)
     r = dataclasses.replace(r, provenance=dataclasses.replace(r.provenance, stand_id="stand-7"))
     time.sleep(0.6)  # apart by more than the server's poll: one event each
-    run_id = archive_result(r, url)
+    run_id = archive_run(r, url, os_actor())
     print(run_id, time.time(), flush=True)
 """
 """Another process that archives each run given, printing its id and when it was archived."""

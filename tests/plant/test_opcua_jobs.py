@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from accounts import with_accounts
 from mes import job_management
 
 from stand.cli import main
@@ -166,9 +167,7 @@ def test_the_stands_accounts_decide_who_may_send_jobs(tmp_path: Path) -> None:
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     Archive(url).close()
     (tmp_path / "pw").write_text("a-long-password\n")
-    for name, role in (("kim", "operator"), ("ana", "setter")):
-        assert main(["users", "add", name, "--role", role, "--password-file",
-                     str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    with_accounts(url, ("kim", "operator", "a-long-password"), ("ana", "setter", "a-long-password"))
     port = _port()
     server = ResultServer(url, "stand-7", "127.0.0.1", port, rotor_types=lambda: ["demo"])
     server.run_in_thread()
@@ -202,3 +201,12 @@ def test_the_stands_accounts_decide_who_may_send_jobs(tmp_path: Path) -> None:
         server.stop()
     assert got == {None: "denied at call", "kim": "denied at call", "ana": "stored 1"}, got
     assert wrong == "denied at log-in"
+    # journaled: who sent the job order (the OPC UA user), and each log-in, failed or not
+    from stand.archive.audit import entries
+
+    (job,) = entries(url, action="job")
+    assert (job["who"], job["source"]) == ("ana", "opcua") and "J-ana" in job["subject"]
+    assert {(e["who"], e["source"]) for e in entries(url, action="login")} >= {
+        ("kim", "opcua"), ("ana", "opcua")}  # fmt: skip
+    failed = [(e["who"], e["source"]) for e in entries(url, action="login_failed")]
+    assert ("ana", "opcua") in failed and "not-her-password" not in str(entries(url))

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 from babel.messages.pofile import read_po
+from hypothesis import given
+from hypothesis import strategies as st
 from messages import SENTENCE, used
 
 from stand.errors import UsageError
@@ -64,3 +66,36 @@ def test_gnu_gettext_compiles_every_catalogue(code: str, tmp_path: Path) -> None
                            str(catalogue_path(code))], capture_output=True, text=True)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert re.fullmatch(r"\d+ translated messages\.\n", done.stderr), done.stderr  # all of them
+
+
+@pytest.mark.parametrize(("code", "typed", "value"), [
+    ("en", "2.5", 2.5), ("de", "2,5", 2.5), ("uk", "2,5", 2.5), ("en", "1500", 1500.0),
+    ("de", "0,75", 0.75), ("en", " 6.3 ", 6.3),
+])  # fmt: skip
+def test_a_number_is_read_as_the_language_writes_it(code: str, typed: str, value: float) -> None:
+    assert language(code).typed(typed, "G") == value
+
+
+@pytest.mark.parametrize(("code", "typed", "says"), [
+    ("en", "2,500", "could be read two ways"), ("de", "2.500", "could be read two ways"),
+    ("de", "2.5", "could be read two ways"), ("uk", "2\u00a0500", "could be read two ways"),
+    ("en", "abc", "is not a number"), ("en", "nan", "is not a number"),
+    ("en", "1e999", "is not a number"), ("en", "", "is not a number"),
+])  # fmt: skip
+def test_a_number_that_could_be_misread_is_refused(code: str, typed: str, says: str) -> None:
+    """The Setup screen once saved German "2,5" as 25: a figure with a thousands separator
+    is never guessed, one that is no number refused (the message in the language)."""
+    with pytest.raises(UsageError) as caught:
+        language(code).typed(typed, "G")
+    if code == "en":
+        assert says in str(caught.value)
+
+
+@given(st.floats(0.001, 1e5, allow_nan=False), st.sampled_from(["en", "de", "uk"]))
+def test_a_figure_shown_for_editing_reads_back(value: float, code: str) -> None:
+    """What the Setup screen shows in a field (the language's decimal sign, no grouping)
+    reads back to the same figure to its shown decimals."""
+    from stand.station.setup import _digits, _shown
+
+    _ = language(code)
+    assert _.typed(_shown(_, value), "G") == pytest.approx(round(value, _digits(value)))

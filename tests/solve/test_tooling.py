@@ -154,7 +154,8 @@ def test_index_runs_are_archived_as_tooling_runs_out_of_production(
     capsys.readouterr()
     argv = ["tooling", "measure", r0, r180, "--config", str(cfg), "--archive", url, "--json"]
     assert main(argv) == 0
-    assert json.loads(capsys.readouterr().out)["archived_as_tooling"] == [1, 2]
+    measured = json.loads(capsys.readouterr().out)
+    assert measured["archived_as_tooling"] == [1, 2]
     assert main(["history", "--archive", url, "--json"]) == 0
     assert [r["kind"] for r in json.loads(capsys.readouterr().out)["runs"]] == ["tooling"] * 2
     dfq = str(tmp_path / "t.dfq")
@@ -163,12 +164,14 @@ def test_index_runs_are_archived_as_tooling_runs_out_of_production(
     assert main(["stats", "--rotor-type", "T-1", "--archive", url, "--json"]) == 0
     stats = json.loads(capsys.readouterr().out)
     assert (stats["runs"], stats["rotors"], stats["not_checked_yet"]) == (0, 0, 0), stats
-    # an archive that cannot be reached: the tooling is kept, the marking said to wait
+    # an archive that cannot be reached: nothing changes (the tooling, its runs' marking
+    # and its journal entry are one transaction), said in one line
+    kept = Path(measured["file"])
+    before = kept.read_bytes()
     (tmp_path / "file").write_text("x")
     bad = f"sqlite:///{tmp_path / 'file' / 'a.sqlite'}"
     argv = ["tooling", "measure", r0, r180, "--config", str(cfg), "--archive", bad, "--force"]
-    assert main([*argv, "--json"]) == 0
+    assert main([*argv, "--json"]) == 2
     out, err = capsys.readouterr()
-    assert json.loads(out)["archived_as_tooling"] is None
-    assert "not marked as tooling runs and the change is not in the audit trail" in err
-    assert err.count("\n") == 1, err
+    assert out == "" and "not a usable database URL" in err and err.count("\n") == 1, err
+    assert kept.read_bytes() == before

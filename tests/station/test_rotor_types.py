@@ -11,9 +11,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from accounts import with_accounts
 
-from stand.archive.accounts import add_account
-from stand.archive.audit import config_seen, entries, file_sha256, verify_journal
+from stand.actions import Actor, config_seen
+from stand.archive.audit import entries, file_sha256, verify_journal
 from stand.config import load_config
 from stand.errors import StandError
 from stand.report.language import ENGLISH, language
@@ -41,8 +42,8 @@ def station(tmp_path: Path) -> Station:
     folder.mkdir()
     shutil.copy(ROTORS / "demo-auger.toml", folder)
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
-    for role in ("operator", "setter", "engineer"):
-        add_account(url, role[:3], role, "a-long-password")
+    with_accounts(url, *((role[:3], role, "a-long-password")
+                         for role in ("operator", "setter", "engineer")))  # fmt: skip
     return Station(folder, tmp_path / "runs", url, _targets)
 
 
@@ -69,7 +70,8 @@ def test_a_setter_loads_a_rotor_type_journaled_and_the_start_finds_nothing_new(
     (entry,) = entries(station.archive_url, action="config")
     assert entry["who"] == "set" and entry["reason"] == "new order 4711"
     assert entry["old_sha256"] is None and entry["new_sha256"] == file_sha256(path)
-    assert config_seen(station.archive_url, path, "set") is None  # no second entry
+    again = config_seen(station.archive_url, Actor("set", None, "station"), path)
+    assert again is None  # no second entry
     assert verify_journal(station.archive_url).problem is None
 
 
@@ -190,8 +192,7 @@ def test_an_engineer_recalibrates_from_the_archive_when_the_change_is_significan
     folder.mkdir()
     cfg = load_scene(str(scene))[0].config()
     (folder / f"{cfg.rotor.type}.toml").write_text(config_toml(cfg))
-    add_account(url, "eva", "engineer", "a-long-password")
-    add_account(url, "ana", "setter", "a-long-password")
+    with_accounts(url, ("eva", "engineer", "a-long-password"), ("ana", "setter", "a-long-password"))
     st = Station(folder, tmp_path / "st-runs", url, _targets)
     with pytest.raises(StandError, match="may not change the stand's calibration"):
         recalibrate(st, _who("setter"), cfg.rotor.type, reason="drift", _=ENGLISH)
@@ -208,7 +209,7 @@ def test_an_engineer_recalibrates_from_the_archive_when_the_change_is_significan
     assert c1 == pytest.approx(0.92 * cfg.stand.C1, rel=0.03)  # 8 % softer, found
     (entry,) = entries(url, action="calibration")
     assert entry["who"] == "eva" and entry["new_sha256"] == file_sha256(path)
-    assert config_seen(url, path, "eva") is None
+    assert config_seen(url, Actor("eva", None, "station"), path) is None
 
 
 def test_a_history_folder_that_cannot_be_made_changes_nothing(station: Station) -> None:

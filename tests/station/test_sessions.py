@@ -7,8 +7,8 @@ import time
 from pathlib import Path
 
 import pytest
+from accounts import change, with_accounts
 
-from stand.archive.accounts import add_account, set_account
 from stand.report.language import ENGLISH, language
 from stand.station.login import refused
 from stand.station.sessions import Sessions
@@ -17,9 +17,9 @@ from stand.station.sessions import Sessions
 @pytest.fixture
 def url(tmp_path: Path) -> str:
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
-    add_account(url, "kim", "operator", "a-long-password", badge="B-17")
-    add_account(url, "ana", "engineer", "another-password")
-    return url
+    return with_accounts(
+        url, ("kim", "operator", "a-long-password", "B-17"), ("ana", "engineer", "another-password")
+    )
 
 
 def test_a_lone_stand_needs_no_session(tmp_path: Path) -> None:
@@ -39,7 +39,7 @@ def test_password_badge_and_the_idle_end(url: str) -> None:
     ana = s.log_in("ana", "another-password")
     s.log_out(ana.token)
     assert s.get(ana.token) is None
-    set_account(url, "kim", active=False)
+    change(url, "kim", active=False)
     assert s.log_in("kim", "a-long-password") is None and s.log_in_badge("B-17") is None
 
 

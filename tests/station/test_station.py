@@ -126,10 +126,10 @@ def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> N
 
 
 def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run: Path) -> None:
-    from stand.archive import archive_result
+    from stand.actions import archive_run, os_actor
     from stand.solve import solve_recording
 
-    run_id = archive_result(solve_recording(str(demo_run)), station.archive_url)
+    run_id = archive_run(solve_recording(str(demo_run)), station.archive_url, os_actor())
     with pytest.raises(UsageError, match="outside"):
         station.report_file(run_id)
 
@@ -141,7 +141,7 @@ def test_a_report_outside_the_runs_folder_is_refused(station: Station, demo_run:
 def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
     station: Station, demo_run: Path
 ) -> None:
-    from stand.archive import archive_result
+    from stand.actions import archive_run, os_actor
     from stand.report import render
     from stand.solve import SolveOptions, solve_recording
 
@@ -150,7 +150,7 @@ def test_the_certificate_is_printed_once_as_a_pdf_beside_its_report(
     shutil.copy(demo_run, run)
     result = solve_recording(str(run), options=SolveOptions(traces=True))  # as the station
     run.with_suffix(".html").write_text(render(result), encoding="utf-8")
-    run_id = archive_result(result, station.archive_url)
+    run_id = archive_run(result, station.archive_url, os_actor())
     pdf = station.certificate_pdf(run_id)
     assert pdf == run.with_suffix(".pdf") and pdf.read_bytes()[:5] == b"%PDF-"
     printed = pdf.stat().st_mtime_ns

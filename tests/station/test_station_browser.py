@@ -23,6 +23,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 import pytest
+from accounts import change, with_accounts
 
 ROOT = Path(__file__).resolve().parents[2]
 MIN_TEXT_PX = 16.0
@@ -148,14 +149,14 @@ def _text_sizes(driver: Any) -> list[tuple[float, str]]:
 def _evaluated(tmp_path: Path) -> dt.date:
     """A machine evaluation of the shipped rotor types' stand archived where ``served``
     archives (its figures as the demo's); its due date."""
-    from stand.archive.evaluations import add_evaluation
+    from stand.actions import archive_evaluation, os_actor
     from stand.config import load_config
 
     rotors = ROOT / "stand" / "data" / "rotors"
     stand = load_config(str(next(rotors.glob("*.toml"))))[0].stand.stand_id()
     due = dt.datetime.now(dt.UTC).date() + dt.timedelta(days=30)
-    add_evaluation(f"sqlite:///{tmp_path / 'a.sqlite'}", "machine", stand, "pass",
-                   {"verdict": "pass"}, simulated=True, software="test", due=due)  # fmt: skip
+    archive_evaluation(f"sqlite:///{tmp_path / 'a.sqlite'}", os_actor(), "machine", stand,
+                       {"verdict": "pass"}, simulated=True, software="test", due=due)  # fmt: skip
     return due
 
 
@@ -455,11 +456,13 @@ def _log_in(browser: Any, account: str, password: str) -> None:
 
 @pytest.mark.realtime
 def test_accounts_log_in_their_rights_and_a_released_certificate(
-    browser: Any, tmp_path: Path
+    browser: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """With accounts the station asks who works it; the operator is the account; an
     operator may measure but not release a certificate (403, saying why); a setter logs in
-    with a badge and releases it, bound to the run and journaled."""
+    with a badge and releases it, bound to the run, signed and journaled (the station and
+    this test's commands share the stand's data folder, so its key: one stand)."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))  # the station's (served)
     from selenium.webdriver.common.by import By
 
     from stand.archive.audit import entries, file_sha256
@@ -469,12 +472,11 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
     (tmp_path / "badge").write_text("BADGE-0042\n")
-    for name, role, extra in (
-        ("kim", "operator", []),
-        ("ana", "setter", ["--badge-file", str(tmp_path / "badge")]),
-    ):
-        assert main(["users", "add", name, "--role", role, "--password-file",
-                     str(tmp_path / "pw"), "--archive", url, *extra]) == 0  # fmt: skip
+    with_accounts(
+        url,
+        ("kim", "operator", "a-long-password"),
+        ("ana", "setter", "a-long-password", "BADGE-0042"),
+    )
     with served(tmp_path) as base:
         browser.get(base + "/")
         _see(browser, "Log in")
@@ -520,12 +522,11 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
     a lone stand started with --lang de speaks German; a certificate in another language
     than the screen's."""
     from stand.archive.query import Filters, history
-    from stand.cli import main
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
-    assert main(["users", "add", "olena", "--role", "operator", "--language", "uk",
-                 "--password-file", str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    with_accounts(url, ("olena", "operator", "a-long-password"))
+    change(url, "olena", language="uk")
     strict = tmp_path / "rotors"  # a grade no run proves: it measures until stopped
     strict.mkdir()
     text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
@@ -572,17 +573,17 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
 def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
     """A setter loads a rotor type from a file at the Setup screen (the upload, the reason,
     the table), journaled as the account; the tolerance panel tells the setter why not; an
-    engineer sees the tolerance and calibration panels."""
+    engineer sees the tolerance and calibration panels, and a tolerance typed as "2,500"
+    is refused as ambiguous, "2.5" saved after old and new are shown."""
     from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
 
     from stand.archive.audit import entries
-    from stand.cli import main
+    from stand.config import load_config
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
-    for name, role in (("ana", "setter"), ("eva", "engineer")):
-        assert main(["users", "add", name, "--role", role, "--password-file",
-                     str(tmp_path / "pw"), "--archive", url]) == 0  # fmt: skip
+    with_accounts(url, ("ana", "setter", "a-long-password"), ("eva", "engineer", "a-long-password"))
     folder = tmp_path / "rotors"
     folder.mkdir()
     text = (ROOT / "stand" / "data" / "rotors" / "demo-auger.toml").read_text()
@@ -616,10 +617,28 @@ def test_the_setup_screen_by_role(browser: Any, tmp_path: Path) -> None:
         _button(browser, "Recalibrate from the archive")  # an engineer's panels: all four
         _button(browser, "Save the tolerance")
         _shot(browser, tmp_path, "setup-engineer")
-    assert (folder / "auger-b.toml").read_text() == new.read_text()
-    (entry,) = entries(url, action="config")
-    assert (entry["who"], entry["subject"], entry["reason"]) == (
+        # the tolerance as typed, asked once with old and new, then saved
+        grade = browser.find_element(By.CSS_SELECTOR, 'input[aria-label="G [mm/s]"]')
+        assert grade.get_attribute("value") == "6.3"  # auger-b's, the first type
+        grade.send_keys(Keys.CONTROL, "a")
+        grade.send_keys("2,500")  # thousands or decimals? never guessed
+        reasons = browser.find_elements(By.CSS_SELECTOR, 'input[aria-label="reason"]')
+        reasons[2].send_keys("drawing rev. C")  # load, tooling, tolerance, calibration
+        _button(browser, "Save the tolerance").click()
+        _see(browser, "2,500 could be read two ways")
+        grade.send_keys(Keys.CONTROL, "a")
+        grade.send_keys("2.5")
+        _button(browser, "Save the tolerance").click()
+        _see(browser, "G 6.3 -> 2.5 mm/s, maximum speed 1500 -> 1500 rpm?")
+        _shot(browser, tmp_path, "setup-confirm")
+        _button(browser, "Save").click()
+        _see(browser, "tolerance changed and journaled")
+    assert (folder / "auger-b.toml").read_text() != new.read_text()
+    assert load_config(str(folder / "auger-b.toml"))[0].tolerance.grade_mm_s == 2.5
+    loaded, tightened = entries(url, action="config")
+    assert (loaded["who"], loaded["subject"], loaded["reason"]) == (
         "ana",
         "auger-b.toml",
         "order 4711 needs it",
     )
+    assert (tightened["who"], tightened["reason"]) == ("eva", "drawing rev. C")

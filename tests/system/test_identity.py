@@ -109,8 +109,11 @@ def test_every_command_that_archives_uses_the_configs_stand_and_archive(
     assert ("walk-7", "T-1", "tooling") in got  # tooling measure marked them in this archive
     from stand.archive.audit import entries
 
-    journaled = [e["action"] for e in entries(url)]  # the evaluation and the tooling: one each
-    assert sorted(journaled) == ["evaluation", "tooling"], journaled
+    journaled = [e["action"] for e in entries(url) if e["action"] != "run"]
+    # the config first used (balance, measure), the evaluation and the tooling: one each
+    assert sorted(journaled) == ["config", "evaluation", "tooling"], journaled
+    archived = [e for e in entries(url) if e["action"] == "run"]
+    assert len(archived) == len(got)  # every run archived, journaled with it
     default = Path(default_url().removeprefix("sqlite:///"))
     assert not default.exists() or _rows(default_url()) == ([], [])
 

@@ -29,6 +29,7 @@ FLOORS: list[set[str]] = [
     {"stand.field", "stand.live", "stand.health"},  # trial runs, live sessions, drift
     {"stand.archive"},  # the database of results
     {"stand.report", "stand.reprocess"},  # what a person reads; archived runs re-judged
+    {"stand.actions"},  # the one door: a right checked, the change made and journaled
     {"stand.plant"},  # Q-DAS, OPC UA, MQTT, the servers' bind rule
     {"stand.station"},  # the operator's screens
     {"stand.cli"},  # the stand command
@@ -200,7 +201,49 @@ def test_a_planted_cycle_and_an_upward_import_are_caught(tmp_path: Path) -> None
     assert wrong == ["stand/core/c.py:2 imports stand.cli"]
 
 
-CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel"}
+JOURNAL_WRITERS = {
+    "stand.archive.audit.append", "stand.archive.audit.journal", "stand.archive.audit.anchor",
+    "stand.actions.door.door", "stand.actions.door.Passage",
+    "stand.archive.accounts.insert_account", "stand.archive.accounts.update_account",
+    "stand.archive.evaluations.add_evaluation", "stand.archive.results.insert_result",
+    "stand.archive.jobs.insert_job", "stand.archive.jobs.store_job",
+    "stand.archive.store.mark_tooling_runs",
+}  # fmt: skip
+"""What writes the journal, or changes what the journal covers: the actions' own."""
+
+
+def journal_writers_outside(root: Path = ROOT) -> list[str]:
+    """Imports of :data:`JOURNAL_WRITERS` by a module that is neither the archive's nor an
+    action's: a front end (CLI, station, plant) that would change and journal things
+    itself, in a transaction of its own."""
+    wrong = []
+    for path, name in sources(root):
+        if package_of(name) in ("stand.archive", "stand.actions"):
+            continue
+        for imported, line, _ in imports(path, name):
+            if imported in JOURNAL_WRITERS:
+                wrong.append(f"{path.relative_to(root)}:{line} imports {imported}")
+    return wrong
+
+
+def test_only_the_actions_write_the_journal() -> None:
+    assert journal_writers_outside() == []
+
+
+def test_a_front_end_writing_the_journal_is_caught(tmp_path: Path) -> None:
+    for folder in ("stand/station", "drivers", "calib"):
+        (tmp_path / folder).mkdir(parents=True)
+    (tmp_path / "stand/station/x.py").write_text(
+        "from stand.archive.audit import journal\n"
+        "def f():\n    from stand.archive.accounts import update_account\n"
+    )
+    assert journal_writers_outside(tmp_path) == [
+        "stand/station/x.py:1 imports stand.archive.audit.journal",
+        "stand/station/x.py:3 imports stand.archive.accounts.update_account",
+    ]
+
+
+CLI_SHARED = {"stand.cli.actor", "stand.cli.common", "stand.cli.format", "stand.cli.panel"}
 """What a subcommand may import of the CLI: argument handling and formatting, nothing that
 measures (that is the application layer's)."""
 
@@ -214,7 +257,7 @@ def test_no_subcommand_imports_another_cli_module() -> None:
         others = {m for m in mods if m.startswith("stand.cli") and m not in CLI_SHARED}
         assert not others, f"stand/cli/{name}.py imports {sorted(others)}"
     helpers = {p.stem for p in (ROOT / "stand" / "cli").glob("*.py")} - set(SUBCOMMANDS)
-    assert helpers == {"__init__", "__main__", "common", "format", "panel"}, helpers
+    assert helpers == {"__init__", "__main__", "actor", "common", "format", "panel"}, helpers
 
 
 def imported_modules(path: Path) -> set[str]:
