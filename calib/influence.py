@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from stand.core import Diagnostic, StandParameters, forward
-from stand.core.words import said
 from stand.errors import ModelError
+from stand.i18n.words import said
 
 TRIAL_EFFECT_MIN = 0.25
 """A trial run should move some reading by at least 25 % of the initial one."""

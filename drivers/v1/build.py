@@ -38,12 +38,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.core.words import said
 from stand.drivers.frames import READ_ROWS, Frames
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.drivers.v1.codec import concat_decoded, decode
 from stand.drivers.v1.node_build import rebuild_node
 from stand.drivers.v1.protocol import Decoded, node_records, shift_decoded
+from stand.i18n.words import said
 
 
 def rebuild(frames: Frames, *, strict_status: bool = True) -> RunStreams:

@@ -13,7 +13,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from stand.core import Diagnostic
-from stand.core.words import said
 from stand.drivers.frame_index import FrameIndex
 from stand.drivers.streams import SUPPORT_NODES, NodeStream
 from stand.drivers.v1.protocol import (
@@ -25,6 +24,7 @@ from stand.drivers.v1.protocol import (
     Decoded,
 )
 from stand.errors import NoStatusError
+from stand.i18n.words import said
 
 STATUS_WITHIN_S = 1.5
 """A node's first STATUS must come within this time of its first frame [s]."""

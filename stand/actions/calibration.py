@@ -7,6 +7,7 @@ from pathlib import Path
 
 from stand.actions.door import Actor, door
 from stand.archive.audit import Change, file_sha256, sha256_of
+from stand.config import config_parts
 
 
 def save_calibration(url: str, actor: Actor, path: str | Path, text: str, *, config: str,
@@ -17,9 +18,10 @@ def save_calibration(url: str, actor: Actor, path: str | Path, text: str, *, con
     old = file_sha256(path) or file_sha256(config)
     with door(url, actor, "calibrate", "calibrate the stand") as p:
         p.write(path, text.encode("utf-8"), force=force, inputs=inputs)
-        return p.journal(Change("calibration", f"{Path(path).name} (from {Path(config).name})",
-                                old, sha256_of(text), reason,
-                                detail={"file": Path(path).name}))  # fmt: skip
+        name = Path(path).name
+        return p.journal(Change("calibration", f"{name} (from {Path(config).name})", old,
+                                sha256_of(text), reason,
+                                detail={"file": name, **config_parts(text)}))  # fmt: skip
 
 
 def save_matrix(url: str, actor: Actor, path: str | Path, text: str, *, force: bool,

@@ -1,6 +1,6 @@
 """A job order the line's MES sends (OPC 40001-3): kept and journaled with who sent it
 (the OPC UA user) in one transaction.  Who may send jobs is the OPC UA server's check
-(:mod:`stand.plant.ua_security`), made before the call; the entry attributes it."""
+(:mod:`stand.plant.opcua.security`), made before the call; the entry attributes it."""
 
 from __future__ import annotations
 

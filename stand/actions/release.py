@@ -17,8 +17,8 @@ from pathlib import Path
 from stand.actions.door import Actor, door
 from stand.archive.accounts import account_in
 from stand.archive.audit import Change, file_sha256
+from stand.i18n.language import ENGLISH, Language
 from stand.report import Release, released
-from stand.report.language import ENGLISH, Language
 
 SIGNATURE_SUFFIX = ".sig"
 """The detached signature's file: the released file's name and this."""

@@ -11,6 +11,7 @@ from stand.actions.door import Actor, Rights, door
 from stand.archive import Archive
 from stand.archive.audit import Change, file_sha256, sha256_of
 from stand.archive.schema import audit
+from stand.config import config_parts
 from stand.errors import WriteError
 
 
@@ -32,7 +33,7 @@ def replace_config(url: str, actor: Actor, path: Path, text: str, *, right: Righ
             p.write(kept, path.read_bytes())
         p.write(path, text.encode("utf-8"), force=True)
         return p.journal(Change(action, path.name, old, sha256_of(text), reason,
-                                detail={"file": path.name}))  # fmt: skip
+                                detail={"file": path.name, **config_parts(text)}))  # fmt: skip
 
 
 def config_seen(url: str, actor: Actor, path: str | Path) -> int | None:
@@ -51,7 +52,8 @@ def config_seen(url: str, actor: Actor, path: str | Path) -> int | None:
     if new is None or last == new:
         return None
     why = "first used" if last is None else "changed on disk since the last entry"
+    text = Path(path).read_text(encoding="utf-8", errors="replace")
     with door(url, actor, None, "use a rotor type") as p:
         return p.journal(Change("config", name, last, new,
                                 f"{why}; found by {actor.name} before a run",
-                                detail={"file": name}))  # fmt: skip
+                                detail={"file": name, **config_parts(text)}))  # fmt: skip

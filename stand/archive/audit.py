@@ -109,7 +109,12 @@ def file_sha256(path: str | Path) -> str | None:
 def archive_id(conn: Any) -> str:
     """What names an archive for its anchor: an SQLite file's resolved path, else the URL
     without its password."""
-    url = conn.engine.url
+    return engine_archive_id(conn.engine)
+
+
+def engine_archive_id(engine: Any) -> str:
+    """:func:`archive_id` of an SQLAlchemy engine."""
+    url = engine.url
     if url.get_backend_name() == "sqlite" and url.database not in (None, "", ":memory:"):
         return f"sqlite:{Path(url.database).resolve()}"
     return str(url.render_as_string(hide_password=True))

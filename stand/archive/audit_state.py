@@ -2,16 +2,20 @@
 and credentials' digest, each archived run's verdict and file digest, and each
 evaluation's verdict must be what the last journal entry about it says (the entry's
 ``detail``).  A row edited, added or deleted behind the journal is named: table, row and
-field.  Run by ``stand audit verify`` once the chain itself verifies."""
+field.  Run by ``stand audit verify`` once the chain itself verifies; with a station's
+folder of rotor types (``--config-dir``), each file against its last entry too."""
 
 from __future__ import annotations
 
+import hashlib
 import json
+from pathlib import Path
 from typing import Any
 
 from stand.archive.accounts import accounts_in, digest, state_of
 from stand.archive.schema import audit, evaluations, runs
 from stand.archive.store import Archive
+from stand.config import config_parts
 
 
 def _last_entries(conn: Any, action: str) -> dict[str, dict[str, Any]]:
@@ -91,6 +95,40 @@ def _rows(conn: Any, table: Any, action: str, fields: tuple[str, ...]) -> list[s
             problems.append(f"table {name}, {name[:-1]} {key}: gone, but audit entry "
                             f"{entry['id']} archived it (deleted behind the journal)")  # fmt: skip
     return problems
+
+
+def rotor_type_problems(url: str, folder: Path) -> tuple[list[str], list[str]]:
+    """The rotor types of a station's folder (``*.toml``) against the journal's last
+    ``config`` or ``calibration`` entry of each: the files changed on disk since it (the
+    field named: tolerance, calibration, or the rest of the text), and the files the
+    journal has no entry of yet (used by no run since the journal began)."""
+    import sqlalchemy as sa
+
+    with Archive(url) as archive, archive.transaction() as conn:
+        q = sa.select(audit.c.id, audit.c.subject, audit.c.new_sha256, audit.c.detail).where(
+            audit.c.action.in_(("config", "calibration"))).order_by(audit.c.id)  # fmt: skip
+        last = {row.subject: row for row in conn.execute(q)}
+    changed, unknown = [], []
+    for path in sorted(p for p in Path(folder).glob("*.toml") if p.is_file()):
+        entry = last.get(path.name)
+        if entry is None:
+            unknown.append(path.name)
+            continue
+        data = path.read_bytes()
+        if hashlib.sha256(data).hexdigest() == entry.new_sha256:
+            continue
+        try:
+            said = json.loads(entry.detail) if entry.detail else {}
+        except ValueError:
+            said = {}
+        now = config_parts(data.decode("utf-8", errors="replace"))
+        fields = [k.removesuffix("_sha256") for k in sorted(now)
+                  if k in said and said[k] != now[k]]  # fmt: skip
+        fields = fields or ["its text (not its tolerance or calibration)"]
+        changed += [f"rotor type {path.name}, field {f}: changed on disk since audit entry "
+                    f"{entry.id} (journaled when next used: who changed it is not known)"
+                    for f in fields]  # fmt: skip
+    return changed, unknown
 
 
 def state_problems(url: str) -> list[str]:

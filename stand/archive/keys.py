@@ -121,17 +121,22 @@ def stand_key(folder: Path | None = None) -> StandKey:
 
 
 def _make(path: Path, data: bytes) -> None:
-    """Write a new file exclusively with mode 0600 (another process that made it first
-    wins: its key is kept)."""
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-    except FileExistsError:
-        return
+    """Write a new file of mode 0600 whole under a temporary name, then link it in place
+    exclusively: another process that made it first wins (its key is kept), and none
+    ever reads a half-written key."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
     try:
         os.write(fd, data)
         os.fsync(fd)
     finally:
         os.close(fd)
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        pass
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 def _publish_public(path: Path, pem: str) -> None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import re
+from pathlib import Path
 
 from stand.archive import url_for
 from stand.archive.audit import (
@@ -18,7 +19,7 @@ from stand.archive.audit import (
     signed_by_trusted_key,
     verify_journal,
 )
-from stand.archive.audit_state import state_problems
+from stand.archive.audit_state import rotor_type_problems, state_problems
 from stand.archive.keys import stand_key, trust
 from stand.cli.common import add_archive_argument, add_date_arguments
 from stand.cli.format import dump_json
@@ -58,6 +59,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="verify: check each entry's signature, also those the anchor beside the "
         "stand's key vouches for (as on a computer without the anchor)",
+    )
+    p.add_argument(
+        "--config-dir",
+        metavar="DIR",
+        help="verify: the station's rotor types too, each file against its last entry "
+        "(its tolerance, its calibration)",
     )
     p.add_argument("--config", metavar="CFG", help="the stand's config: its [archive] url")
     add_archive_argument(p)
@@ -105,20 +112,30 @@ def _shown(text: str | None) -> str:
         c if c.isprintable() else repr(c)[1:-1] for c in text)  # fmt: skip
 
 
-def _verify(url: str, head: str | None, as_json: bool, every: bool) -> int:
+def _verify(url: str, args: argparse.Namespace) -> int:
+    head = args.head
     if head is not None and not HEAD.fullmatch(head.lower()):
         raise UsageError(f"--head {head[:80]!r}: not a head (ID:SHA256, as verify printed it)")
-    v = verify_journal(url, None if head is None else head.lower(), every_signature=every)
+    if args.config_dir and not Path(args.config_dir).is_dir():
+        raise UsageError(f"--config-dir {args.config_dir}: not a folder")
+    v = verify_journal(url, None if head is None else head.lower(),
+                       every_signature=args.every_signature)  # fmt: skip
     tables = state_problems(url) if v.problem is None else []
+    unknown: list[str] = []
+    if args.config_dir and v.problem is None:
+        changed, unknown = rotor_type_problems(url, Path(args.config_dir))
+        tables += changed
     ok = v.problem is None and not tables
-    if as_json:
+    if args.json:
         dump_json({"entries": v.entries, "intact": ok, "problem": v.problem,
                    "tables": tables, "head": v.head, "unsigned": v.unsigned,
-                   "anchored": v.anchored, "signatures_checked": v.signatures})  # fmt: skip
-    elif v.problem is not None:
+                   "anchored": v.anchored, "signatures_checked": v.signatures,
+                   "rotor_types_not_journaled": unknown})  # fmt: skip
+        return 0 if ok else 1
+    if v.problem is not None:
         print(f"audit trail BROKEN: {_shown(v.problem)}")
     elif tables:
-        print(f"audit trail intact ({v.entries} entries), but the archive's tables were "
+        print(f"audit trail intact ({v.entries} entries), but what it covers was "
               f"changed behind it ({len(tables)}):")  # fmt: skip
         for t in tables:
             print(f"  {_shown(t)}")
@@ -130,6 +147,9 @@ def _verify(url: str, head: str | None, as_json: bool, every: bool) -> int:
         print(f"audit trail intact: {v.entries} entries, signed ({sigs}){old}; accounts, "
               f"runs and evaluations as the journal left them; head {v.head} (kept beside "
               "the stand's key, and yours to keep: --head)")  # fmt: skip
+    if unknown:
+        print(f"rotor types the journal has no entry of yet (used by no run since it "
+              f"began): {', '.join(unknown)}")  # fmt: skip
     return 0 if ok else 1
 
 
@@ -148,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
     if args.file:
         raise UsageError(f"stand audit {args.what}: takes no file (check FILE does)")
     if args.what == "verify":
-        return _verify(url, args.head, args.json, args.every_signature)
+        return _verify(url, args)
     found = entries(url, who=args.who, action=args.action, since=args.since, until=args.until)
     if args.json:
         dump_json({"entries": [{k: e[k] for k in (*SHOWN, "entry_sha256")} for e in found]})

@@ -26,9 +26,9 @@ from stand.errors import ArchiveError, StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
 from stand.health import datum_row, with_drift
+from stand.i18n.language import language
 from stand.process import warm_imports
 from stand.report import render, render_speeds
-from stand.report.language import language
 from stand.solve import to_json, with_check
 from stand.solve.recordings import result_masses, solve_recording
 

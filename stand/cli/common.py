@@ -15,7 +15,7 @@ from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, p
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import UsageError
 from stand.files import output
-from stand.report.language import LANGUAGES
+from stand.i18n.language import LANGUAGES
 from stand.solve import Job, job_field_problem
 from stand.solve.pipeline import SolveOptions, precision_targets
 

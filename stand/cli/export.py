@@ -11,7 +11,7 @@ from stand.cli.common import add_archive_argument, add_date_arguments, add_revis
 from stand.config import load_config
 from stand.errors import UsageError
 from stand.plant import export_qdas
-from stand.plant.qdas_evaluations import FIGURES, export_evaluations
+from stand.plant.qdas.evaluations import FIGURES, export_evaluations
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -10,8 +10,8 @@ import sys
 from collections.abc import Iterable
 from typing import Any, TextIO
 
-from stand.report import Display
-from stand.report.language import ENGLISH, N_, Language
+from stand.i18n import Display
+from stand.i18n.language import ENGLISH, N_, Language
 from stand.report.units import ACTIONS, verdict_word
 from stand.solve import json_text
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS

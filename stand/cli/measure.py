@@ -12,7 +12,7 @@ from stand.cli.common import (
 )
 from stand.cli.format import show
 from stand.cli.panel import archive_live, measure_live_from_args
-from stand.report.language import language
+from stand.i18n.language import language
 from stand.solve import to_json
 
 

@@ -1,5 +1,5 @@
 """The OPC UA result server on its own: the stand as a machine of OPC 40001-1 with its
-results by OPC 40001-101, for a line's MES (:mod:`stand.plant.opcua`)."""
+results by OPC 40001-101, for a line's MES (:mod:`stand.plant.opcua.server`)."""
 
 from __future__ import annotations
 

@@ -26,9 +26,9 @@ from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError, UsageError
 from stand.field.speeds import correction_masses_across_speeds
+from stand.i18n import Display
+from stand.i18n.language import ENGLISH, N_, Language, language
 from stand.live import live_source, measure_live
-from stand.report import Display
-from stand.report.language import ENGLISH, N_, Language, language
 from stand.sim import Mass
 from stand.solve import Job
 from stand.solve.recordings import correction_masses

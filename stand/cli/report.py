@@ -22,8 +22,8 @@ from stand.config import load_config
 from stand.errors import UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
+from stand.i18n.language import LANGUAGES, language
 from stand.report import render, render_speeds, write_pdf
-from stand.report.language import LANGUAGES, language
 from stand.solve import solve_check, solve_recording
 
 

@@ -26,7 +26,7 @@ from stand.cli.format import dump_json, print_speeds, show
 from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import check_output
-from stand.report.language import language
+from stand.i18n.language import language
 from stand.solve import json_text, to_json
 from stand.solve.recordings import solve_many, solve_recording
 

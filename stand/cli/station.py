@@ -11,8 +11,8 @@ from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
 from stand.config import data_folder
 from stand.config.paths import SHIPPED_ROTORS
 from stand.errors import UsageError
+from stand.i18n.language import LANGUAGES
 from stand.plant import ResultServer, check_bind, read_token
-from stand.report.language import LANGUAGES
 from stand.solve.pipeline import precision_targets
 from stand.station import Station
 from stand.station.pages import serve

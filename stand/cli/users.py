@@ -18,7 +18,7 @@ from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError
 from stand.files import first_line
-from stand.report.language import LANGUAGES
+from stand.i18n.language import LANGUAGES
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

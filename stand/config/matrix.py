@@ -23,10 +23,10 @@ from stand.config.schema import STRICT, validate
 from stand.config.tables import Reading, Rpm
 from stand.core import Diagnostic, rad_s_to_rpm
 from stand.core.influence import InfluenceMap
-from stand.core.words import said
 from stand.drivers.runs.recording import MATRIX_ATTR
 from stand.errors import ConfigError, ModelError, RecordingError
 from stand.files import check_input
+from stand.i18n.words import said
 
 KIND = "stand influence matrix"
 SAME_SPEED = 0.05

@@ -34,8 +34,8 @@ from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.inverse import RESONANCE_BAND, Diagnostic, UnbalanceSolution, speed_diagnostics
 from stand.core.model import ComplexArray, StandParameters, rad_s_to_rpm
 from stand.core.shaft import ELEMENTS, PointMass, Section, beam_element
-from stand.core.words import said
 from stand.errors import ModelError
+from stand.i18n.words import said
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core.inverse import Diagnostic, UnbalanceSolution, propagate_covariance
 from stand.core.model import ComplexArray
-from stand.core.words import said
 from stand.errors import ModelError
+from stand.i18n.words import said
 
 COND_WARN = 10.0
 """An influence matrix with a condition number above this draws a warning."""

@@ -35,8 +35,8 @@ from stand.core.model import (
     rad_s_to_rpm,
     support_matrix,
 )
-from stand.core.words import said
 from stand.errors import ModelError, PlanesTooCloseError
+from stand.i18n.words import said
 
 #: Default largest split condition number accepted: the planes' split then
 #: multiplies relative measurement error by at most 1000 (planes closer

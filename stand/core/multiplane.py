@@ -43,8 +43,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from stand.core.inverse import Diagnostic
-from stand.core.words import said
 from stand.errors import ModelError
+from stand.i18n.words import said
 
 METHODS = ("ls", "wls", "minmax")
 """The criteria: least squares, weighted least squares, min-max."""

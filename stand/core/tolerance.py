@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.core.model import StandParameters
-from stand.core.words import N_, said
+from stand.i18n.words import N_, said
 
 SHARE_MIN, SHARE_MAX = 0.3, 0.7
 """ISO 21940-11's limits on a bearing plane's share of ``U_per``."""

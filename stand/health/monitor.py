@@ -37,9 +37,9 @@ from stand.core.drift import (
     single_fits,
     whitened,
 )
-from stand.core.words import said
 from stand.errors import ConfigError, ModelError, UsageError
 from stand.health.data import Group, groups
+from stand.i18n.words import said
 from stand.solve.pipeline import calibration_radius
 
 SCATTER_PCT = 2.0

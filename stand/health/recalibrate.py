@@ -10,8 +10,8 @@ from typing import Any
 
 from stand.config import Config
 from stand.config.edit import updated_toml
-from stand.core.words import said
 from stand.health.monitor import Refit
+from stand.i18n.words import said
 
 
 def significant(r: Refit) -> bool:

@@ -26,7 +26,6 @@ import numpy as np
 
 from stand.config import Config
 from stand.core import Diagnostic
-from stand.core.words import N_, said
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, config_digest
 from stand.drivers.v1.build import StreamBuilder
 from stand.errors import (
@@ -36,6 +35,7 @@ from stand.errors import (
     SensorFaultError,
     StandError,
 )
+from stand.i18n.words import N_, said
 from stand.live.session import LiveSession
 from stand.live.source import LiveSource
 from stand.measuring.measure import MIN_REVS

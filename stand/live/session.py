@@ -23,11 +23,11 @@ from types import FrameType
 from typing import Any
 
 from stand.core import Diagnostic
-from stand.core.words import said
 from stand.drivers.bus import BusReader, describe_bus, open_bus, play
 from stand.drivers.family import FrameBuilder
 from stand.drivers.runs.run_writer import RunWriter
 from stand.errors import BusError
+from stand.i18n.words import said
 from stand.solve.acquisition import Acquired, default_acquisition
 from stand.solve.pipeline import SOFTWARE
 

@@ -17,9 +17,9 @@ import numpy as np
 
 from stand.core.dsp import median
 from stand.core.fitsums import block_fits
-from stand.core.words import said
 from stand.drivers.streams import LATE_FLAG, LATE_SHARE, NodeStream
 from stand.errors import MeasurementError, SensorFaultError
+from stand.i18n.words import said
 
 SPEED_TOLERANCE = 0.03
 """A revolution is at steady speed within 3 % of the steady part's median."""

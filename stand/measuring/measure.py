@@ -28,9 +28,9 @@ from stand.core.beam import BeamRotor, solve_beam
 from stand.core.dsp import Phasor, radius95, sensor_response
 from stand.core.influence import InfluenceMap, solve_influence
 from stand.core.nonlinear import Nonlinearity, detect
-from stand.core.words import said
 from stand.drivers.streams import SUPPORT_NODES, RunStreams
 from stand.errors import MeasurementError, SensorFaultError
+from stand.i18n.words import said
 from stand.measuring.gate import (
     BLOCK_REVS,
     MIN_REVS,

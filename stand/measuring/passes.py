@@ -40,9 +40,9 @@ from stand.core.fitsums import (
     side_band_sums,
 )
 from stand.core.trig import cos_sin
-from stand.core.words import said
 from stand.drivers.streams import NodeStream
 from stand.errors import MeasurementError, SensorFaultError
+from stand.i18n.words import said
 from stand.measuring.gate import (
     BLOCK_REVS,
     Window,

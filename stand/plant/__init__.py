@@ -1,8 +1,8 @@
-"""The plant's systems: Q-DAS files for the quality engineer's statistics
-(:mod:`stand.plant.qdas`), an OPC UA result server for the line (:mod:`stand.plant.opcua`),
-results published over MQTT (:mod:`stand.plant.mqtt`), and the bind rule and token every
-server of the stand keeps to (:mod:`stand.plant.safety`).  They read the archive and
-format Results; they never measure.
+"""The plant's systems, a wing each where they are many modules: Q-DAS files for the
+quality engineer's statistics (:mod:`stand.plant.qdas`), an OPC UA result server for the
+line (:mod:`stand.plant.opcua`), results published over MQTT (:mod:`stand.plant.mqtt`), and
+the bind rule and token every server of the stand keeps to (:mod:`stand.plant.safety`).
+They read the archive and format Results; they never measure.
 """
 
 from stand.plant.mqtt import publish_archived

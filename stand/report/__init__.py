@@ -2,8 +2,9 @@
 the pages of corrections across speeds and of production statistics
 (:mod:`stand.report.pages`), a re-judgement's (:mod:`stand.report.reprocess_page`),
 their plots (:mod:`stand.report.plots`), PDFs printed by
-headless Chromium (:mod:`stand.report.printing`) and the units shown (:mod:`stand.report.units`:
-g, mm, deg, rpm at the edges, SI inside).  Formatting only: nothing here measures.
+headless Chromium (:mod:`stand.report.printing`) and the words for actions and verdicts
+(:mod:`stand.report.units`; the units shown are :mod:`stand.i18n.display`'s).  Formatting
+only: nothing here measures.
 """
 
 from stand.report.certificate import render
@@ -11,10 +12,8 @@ from stand.report.pages import render_production, render_speeds
 from stand.report.printing import write_pdf
 from stand.report.release import Release, released
 from stand.report.reprocess_page import render_reprocess
-from stand.report.units import Display
 
 __all__ = [
-    "Display",
     "Release",
     "released",
     "render",

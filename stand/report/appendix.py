@@ -8,9 +8,9 @@ import html
 from pathlib import PurePath
 from typing import Any
 
-from stand.report.language import ENGLISH, Language
+from stand.i18n.display import Display
+from stand.i18n.language import ENGLISH, Language
 from stand.report.plots import spectrum_and_speed
-from stand.report.units import Display
 from stand.solve import Result
 
 

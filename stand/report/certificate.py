@@ -16,10 +16,11 @@ from __future__ import annotations
 import html
 from typing import Any
 
+from stand.i18n.display import Display
+from stand.i18n.language import ENGLISH, N_, Language
 from stand.report.appendix import appendix, file_name
-from stand.report.language import ENGLISH, N_, Language
 from stand.report.plots import polar
-from stand.report.units import ACTIONS, Display, verdict_word
+from stand.report.units import ACTIONS, verdict_word
 from stand.solve import Result, to_json
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm
-from stand.report.language import ENGLISH, Language
-from stand.report.units import ACTIONS, Display
+from stand.i18n.display import Display
+from stand.i18n.language import ENGLISH, Language
+from stand.report.units import ACTIONS
 from stand.solve.result import Traces
 
 

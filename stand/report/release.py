@@ -8,8 +8,8 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass
 
+from stand.i18n.language import ENGLISH, Language
 from stand.report.certificate import RELEASE_END, RELEASE_START
-from stand.report.language import ENGLISH, Language
 
 
 @dataclass(frozen=True)

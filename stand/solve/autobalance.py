@@ -18,8 +18,8 @@ from stand.config import Config
 from stand.core import Diagnostic, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.autobalance import antiresonance, balanced, driving_point, windows, with_balls
 from stand.core.model import StandParameters, natural_frequencies
-from stand.core.words import said
 from stand.errors import UsageError
+from stand.i18n.words import said
 
 SPAN_OVER_MODES = 4.0
 """Without a given top speed the windows are sought up to this many times the upper

@@ -15,8 +15,8 @@ from typing import Any
 
 from stand.config import SAME_SPEED, Config, config_toml
 from stand.core import Diagnostic, StandParameters, rad_s_to_rpm
-from stand.core.words import said
 from stand.errors import UsageError
+from stand.i18n.words import said
 from stand.measuring import Measurement
 from stand.solve.pipeline import (
     ConfigText,

@@ -20,7 +20,7 @@ import numpy as np
 from stand.config.tolerance import KeyTable
 from stand.core import Diagnostic, StandParameters
 from stand.core.tolerance import KEY_SHARE, key_unbalance, transfer
-from stand.core.words import N_, said
+from stand.i18n.words import N_, said
 
 MARKING = {"half": "H", "full": "F", "none": "N"}
 """The letter a part balanced under each convention is marked with (ISO 21940-32, as

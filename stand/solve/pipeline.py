@@ -31,8 +31,8 @@ from stand.core import Diagnostic, StandParameters, natural_frequencies, rad_s_t
 from stand.core.balance import static_couple
 from stand.core.flexible import RIGID_TOLERANCE, rigid_error_range, rigid_limit_rpm
 from stand.core.inverse import RESONANCE_BAND
-from stand.core.words import said
 from stand.errors import ConfigError
+from stand.i18n.words import said
 from stand.measuring import Measurement
 from stand.measuring.live_fit import remeasure
 from stand.measuring.measure import measure

@@ -30,7 +30,7 @@ from stand.core.tolerance import (
     static_couple_criteria,
     static_couple_limits,
 )
-from stand.core.words import N_, said
+from stand.i18n.words import N_, said
 from stand.solve.result import Judgement, Tolerance
 
 RULES = {

@@ -25,9 +25,9 @@ from stand.errors import StandError, UsageError
 from stand.field import balance_speeds, speeds_json
 from stand.files import output
 from stand.health import datum_row, health, health_json
+from stand.i18n.language import LANGUAGES, Language
 from stand.plant import export_qdas
 from stand.report import render, render_speeds, write_pdf
-from stand.report.language import LANGUAGES, Language
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
@@ -127,7 +127,7 @@ class ArchiveSide:
 
     def export_qdas(self, rotor_type: str) -> bytes:
         """The Q-DAS file (AQDEF .dfq) of every archived run of a rotor type on this stand
-        (:mod:`stand.plant.qdas`; UsageError when there is none), its dates in the zone of
+        (:mod:`stand.plant.qdas.export`; UsageError when there is none), its dates in the zone of
         the type's config (``[plant] qdas_timezone``), else this machine's."""
 
         zone, path = None, self.config_dir / f"{rotor_type}.toml"

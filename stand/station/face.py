@@ -13,7 +13,7 @@ import math
 from collections.abc import Sequence
 from html import escape
 
-from stand.report.language import ENGLISH, N_, Language
+from stand.i18n.language import ENGLISH, N_, Language
 
 SEEN_FROM = N_("seen from the end where the rotor turns counter-clockwise")
 """The stated end the face is drawn from (the arrow shows the rotation)."""

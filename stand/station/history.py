@@ -16,8 +16,8 @@ from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
-from stand.report import Display
-from stand.report.language import ENGLISH, LANGUAGES, N_, Language
+from stand.i18n import Display
+from stand.i18n.language import ENGLISH, LANGUAGES, N_, Language
 from stand.station.login import forbidden, session_of, words
 from stand.station.service import Station
 from stand.station.sessions import actor

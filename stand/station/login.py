@@ -14,7 +14,7 @@ from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
-from stand.report.language import N_, Language
+from stand.i18n.language import N_, Language
 from stand.station.service import Station
 from stand.station.sessions import Session, allowed_roles
 

@@ -13,9 +13,9 @@ from typing import Any
 
 from nicegui import app, ui
 
+from stand.i18n import Display
+from stand.i18n.language import LANGUAGES, N_, Language
 from stand.plant import TokenGate
-from stand.report import Display
-from stand.report.language import LANGUAGES, N_, Language
 from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.history import add_routes, guard, history_screen, notify

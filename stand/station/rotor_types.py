@@ -28,7 +28,7 @@ from typing import Any
 
 from stand.actions import Rights, replace_config
 from stand.archive import correction_rows
-from stand.config import Config, config_from_dict, load_config, parse_toml
+from stand.config import CALIBRATION_KEYS, Config, config_from_dict, load_config, parse_toml
 from stand.config.edit import updated_toml, without_table
 from stand.config.paths import SHIPPED_ROTORS
 from stand.config.schema import ToolingTable
@@ -36,7 +36,7 @@ from stand.core import StandParameters
 from stand.errors import StandError, UsageError
 from stand.health.monitor import Refit, refit
 from stand.health.recalibrate import fits_text, kept_line, refitted_config, significant
-from stand.report.language import Language
+from stand.i18n.language import Language
 from stand.solve.tooling import folder, stored_toolings
 from stand.solve.verdict import tolerance_of
 from stand.station.login import refused
@@ -47,9 +47,6 @@ MAX_CONFIG_BYTES = 256 * 1024
 """A rotor type's file is a few kB; one over 256 kiB is refused unread."""
 TYPE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 """A rotor type's name, as its file is named: letters, digits, ``._-``."""
-CALIBRATION_KEYS = ("M1", "M2", "C1", "C2", "H1", "H2", "reference_angle_deg",
-                    "clock_tolerance_pct", "calibrated")  # fmt: skip
-"""The ``[stand]`` figures a calibration sets (its name and id are the stand's)."""
 
 
 def rotor_type_rows(station: Station, _: Language) -> list[dict[str, str]]:

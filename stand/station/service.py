@@ -27,15 +27,15 @@ from stand.archive import drift_rows
 from stand.archive.query import serials_starting
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.config.serials import next_serial, rule_prefix
-from stand.core.words import said
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.files import output
 from stand.health import with_drift
+from stand.i18n.language import Language, language
+from stand.i18n.words import said
 from stand.live import live_source, measure_live
 from stand.plant import publish_archived
 from stand.report import render
-from stand.report.language import Language, language
 from stand.sim import Mass, shipped_scenes
 from stand.solve import Job, with_check
 from stand.solve.pipeline import SolveOptions, load_config_text

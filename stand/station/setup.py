@@ -14,7 +14,7 @@ from typing import Any
 from nicegui import ui
 
 from stand.errors import StandError
-from stand.report.language import N_, Language
+from stand.i18n.language import N_, Language
 from stand.station.history import notify
 from stand.station.login import current, refused, words
 from stand.station.rotor_types import (

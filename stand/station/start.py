@@ -1,6 +1,6 @@
 """The Start screen: the rotor type, the job, the source; and the MES's job orders.
 
-A job order the MES sent (OPC 40001-3, :mod:`stand.plant.ua_job_control`) fills the form
+A job order the MES sent (OPC 40001-3, :mod:`stand.plant.opcua.job_control`) fills the form
 within :data:`JOB_POLL_S`: the rotor type, serial, order and operator, with a line saying
 which job order it is; the operator starts it (the run is archived under it).  One the
 MES asked to start (StoreAndStart, Start) starts by itself while the station is idle on
@@ -14,7 +14,7 @@ from typing import Any
 
 from nicegui import ui
 
-from stand.report.language import Language
+from stand.i18n.language import Language
 from stand.solve import Job
 from stand.station.history import guard
 from stand.station.login import current, require, words

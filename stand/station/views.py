@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.report import Display
-from stand.report.language import ENGLISH, N_, Language
+from stand.i18n import Display
+from stand.i18n.language import ENGLISH, N_, Language
 from stand.report.units import verdict_word
 
 ANGLE_NOTE = N_("angles from the reference mark, against the direction of rotation")

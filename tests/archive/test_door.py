@@ -343,3 +343,54 @@ def test_a_malformed_head_is_one_line_not_tampering(
         assert main(["audit", "verify", "--archive", url, "--head", bad]) == 2
         err = capsys.readouterr().err
         assert "not a head" in err and "BROKEN" not in err
+
+
+def test_processes_making_the_key_at_once_keep_one(tmp_path: Path) -> None:
+    """Four processes ask for the stand's key of a new data folder at the same moment:
+    all get the same key, none a half-written file."""
+    import subprocess
+    import sys
+
+    code = ("import sys, pathlib; from stand.archive.keys import stand_key; "
+            "print(stand_key(pathlib.Path(sys.argv[1])).id)")  # fmt: skip
+    procs = [subprocess.Popen([sys.executable, "-c", code, str(tmp_path / "k")],
+                              stdout=subprocess.PIPE, text=True) for _ in range(4)]  # fmt: skip
+    ids = {p.communicate(timeout=60)[0].strip() for p in procs}
+    assert len(ids) == 1 and all(len(i) == 16 for i in ids), ids
+    assert [p.name for p in (tmp_path / "k").iterdir() if p.name.endswith(".tmp")] == []
+
+
+def test_a_rotor_type_edited_behind_the_journal_is_named_by_field(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``verify --config-dir``: a station's rotor type whose tolerance or calibration was
+    edited on disk since its last entry is named with the field; a comment alone is its
+    text; a file never used is listed apart, not called tampered."""
+    from stand.actions import config_seen
+
+    url = _url(tmp_path)
+    folder = tmp_path / "rotors"
+    folder.mkdir()
+    demo = Path(__file__).resolve().parents[2] / "stand/data/rotors/demo-auger.toml"
+    text = demo.read_text()
+    (folder / "auger.toml").write_text(text)
+    (folder / "fresh.toml").write_text(text)
+    config_seen(url, Actor("kim", None, "station"), folder / "auger.toml")
+    argv = ["audit", "verify", "--archive", url, "--config-dir", str(folder)]
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "no entry of yet (used by no run since it began): fresh.toml" in capsys.readouterr().out
+    for edit, field in (("grade_mm_s = 6.3", "tolerance"), ("C1 = ", "calibration")):
+        assert edit in text, edit
+        changed = (
+            text.replace("grade_mm_s = 6.3", "grade_mm_s = 63.0")
+            if field == "tolerance"
+            else text.replace("C1 = ", "C1 = 1", 1)
+        )
+        (folder / "auger.toml").write_text(changed)
+        assert main(argv) == 1
+        out = capsys.readouterr().out
+        assert f"rotor type auger.toml, field {field}: changed on disk since audit entry 1" in out
+    (folder / "auger.toml").write_text(text + "\n# a comment\n")
+    assert main(argv) == 1
+    assert "field its text (not its tolerance or calibration)" in capsys.readouterr().out

@@ -1,5 +1,5 @@
 """The operator's CLI text in the plant's language (``--lang``), and the engine's sentences
-(:func:`stand.core.words.said`) found again and translated wherever they are shown."""
+(:func:`stand.i18n.words.said`) found again and translated wherever they are shown."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 from messages import SENTENCE, used
 
 from stand.cli import main
-from stand.core.words import said
-from stand.report.language import catalogue_path, language
+from stand.i18n.language import catalogue_path, language
+from stand.i18n.words import said
 
 
 def _text(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[str, str]:

@@ -2,8 +2,8 @@
 
 ``python tests/helpers/messages.py`` lists, per shipped language, the messages its
 catalogue lacks (to translate) and those no code uses (to remove); a message the engine
-writes with :func:`stand.core.words.said` and placeholders goes in with the comment
-``#. engine sentence`` (:data:`stand.report.language.SENTENCE`).
+writes with :func:`stand.i18n.words.said` and placeholders goes in with the comment
+``#. engine sentence`` (:data:`stand.i18n.language.SENTENCE`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-from stand.report.language import SENTENCE
+from stand.i18n.language import SENTENCE
 
 ROOT = Path(__file__).resolve().parents[2]
 TRANSLATED = sorted(p for d in ("stand", "drivers", "calib") for p in (ROOT / d).rglob("*.py"))
@@ -44,7 +44,7 @@ def main() -> None:
     """Print what each catalogue lacks and what it holds that no code uses."""
     from babel.messages.pofile import read_po
 
-    from stand.report.language import LANGUAGES, catalogue_path
+    from stand.i18n.language import LANGUAGES, catalogue_path
 
     need, sentences = used(), used(("said",))
     for code in (c for c in LANGUAGES if c != "en"):

@@ -22,6 +22,8 @@ from stand.cli import main
 MACHINERY = "http://opcfoundation.org/UA/Machinery/"
 DI = "http://opcfoundation.org/UA/DI/"
 RESULT = "http://opcfoundation.org/UA/Machinery/Result/"
+NAMESPACE = "urn:rotor-stand:balancing-stand"
+"""The stand's own namespace, as docs/plant.md gives it."""
 MACHINES, MACHINE_IDENTIFICATION_TYPE, ITEM_STATE_TYPE = 1001, 1012, 1002
 NOT_EXECUTING = 5007
 RESULT_MANAGEMENT_TYPE, RESULT_READY_EVENT_TYPE = 1004, 1002
@@ -348,7 +350,7 @@ def test_a_guarded_method_answers_each_bad_call_with_its_status_code(
     from asyncua import ua
 
     from stand.errors import UsageError
-    from stand.plant.ua_call import guarded
+    from stand.plant.opcua.call import guarded
 
     async def by_id(rid: int) -> list:
         if rid < 0:
@@ -602,3 +604,35 @@ async def _where_client(endpoint: str, url: str, run: Path) -> dict[str, tuple[b
         for sub in subs:
             await sub.delete()
     return {name: (k in heard, want) for k, (name, (_, want)) in enumerate(cases.items())}
+
+
+def test_the_audit_trails_head_is_a_variable_the_plant_keeps(
+    tmp_path: Path, demo_run: Path
+) -> None:
+    """The machine's AuditHead is the head the anchor beside the stand's key keeps: empty
+    before any entry, the new head once a run is archived (journaled); given back to
+    ``stand audit verify --head`` it verifies."""
+    from stand.actions import archive_run, os_actor
+    from stand.archive.audit import anchored_head
+    from stand.solve import solve_recording
+
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+
+    async def client(endpoint: str) -> tuple[str, str]:
+        from asyncua import Client
+
+        async with Client(endpoint) as c:
+            uris = await c.get_namespace_array()
+            _, machine = await _machine(c, "stand-7")
+            own = uris.index(NAMESPACE)
+            node = await machine.get_child([f"{own}:AuditHead"])
+            before = await node.read_value()
+            archive_run(solve_recording(str(demo_run)), url, os_actor())
+            end = time.monotonic() + 10
+            while (after := await node.read_value()) == before and time.monotonic() < end:
+                await asyncio.sleep(0.05)
+            return before, after
+
+    before, after = _with_server(url, client)
+    assert before == "" and after == anchored_head(url) and after.startswith("1:")
+    assert main(["audit", "verify", "--archive", url, "--head", after]) == 0

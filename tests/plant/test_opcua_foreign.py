@@ -168,7 +168,7 @@ def test_node_opcua_over_the_encrypted_endpoint_from_another_host(
     """Beyond loopback only Basic256Sha256 with SignAndEncrypt and a user: node-opcua in
     another network namespace logs in as the MES user and reads the machine and its latest
     result; without the password it is refused."""
-    from stand.plant.ua_security import Access
+    from stand.plant.opcua.security import Access
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     certs = tmp_path / "certs"

@@ -2,7 +2,7 @@
 
 ``aqdefreader`` (PyPI, successfactory) reads every value, placeholder and attribute of the
 file as the archive holds them; a second reader, written here from AQDEF's key table alone
-(each key's type and length, :data:`KEY_TABLE`, not from ``stand.plant.qdas``), checks
+(each key's type and length, :data:`KEY_TABLE`, not from ``stand.plant.qdas.export``), checks
 every key line and every field of every value set against its type and length.
 """
 

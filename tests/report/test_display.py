@@ -10,7 +10,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from stand.cli import main
-from stand.report.units import G_PER_OZ, MM_PER_IN, Display
+from stand.i18n.display import G_PER_OZ, MM_PER_IN, Display
 
 ROOT = Path(__file__).resolve().parents[2]
 

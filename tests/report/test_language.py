@@ -1,4 +1,4 @@
-"""The plant's languages (:mod:`stand.report.language`): every message of the translated
+"""The plant's languages (:mod:`stand.i18n.language`): every message of the translated
 modules is in every catalogue, translated, with the same placeholders, and no catalogue
 holds a message no code uses; numbers in the locale's form."""
 
@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from messages import SENTENCE, used
 
 from stand.errors import UsageError
-from stand.report.language import LANGUAGES, catalogue_path, language
+from stand.i18n.language import LANGUAGES, catalogue_path, language
 
 
 def placeholders(text: str) -> set[str]:

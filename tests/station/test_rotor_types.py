@@ -17,7 +17,7 @@ from stand.actions import Actor, config_seen
 from stand.archive.audit import entries, file_sha256, verify_journal
 from stand.config import load_config
 from stand.errors import StandError
-from stand.report.language import ENGLISH, language
+from stand.i18n.language import ENGLISH, language
 from stand.solve.pipeline import precision_targets
 from stand.solve.tooling import Tooling, save_tooling
 from stand.station import Station

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from accounts import change, with_accounts
 
-from stand.report.language import ENGLISH, language
+from stand.i18n.language import ENGLISH, language
 from stand.station.login import refused
 from stand.station.sessions import Sessions
 

@@ -102,7 +102,7 @@ def test_rotor_types_and_files_stay_inside_their_folders(station: Station, tmp_p
 def test_the_history_shows_each_rotor_type_in_its_own_units(tmp_path: Path) -> None:
     """A rotor type whose configuration asks for ounces and inches has its archived
     unbalances shown so; a type no longer in the folder (or broken) in g mm."""
-    from stand.report import Display
+    from stand.i18n import Display
     from stand.station.history import _history_row
 
     folder = tmp_path / "rotors"
@@ -384,7 +384,7 @@ def test_the_rotor_face_numbers_the_holes_and_marks_the_masses() -> None:
 
 
 def test_the_live_chart_draws_the_circles_where_they_are() -> None:
-    from stand.report import Display
+    from stand.i18n import Display
     from stand.station.views import PlaneLive, polar_chart
 
     p = PlaneLive(U_kg_m=5e-3, angle_deg=30.0, radius95_kg_m=1e-3, goal_kg_m=2e-3,

@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parents[2]
 FLOORS: list[set[str]] = [
     {"stand", "stand.errors"},  # the version, the one exception tree
     {"stand.files"},  # safe writes: a temporary name, then a rename
+    {"stand.i18n"},  # the plant's languages: sentences, catalogues, numbers, units shown
     {"stand.core"},  # pure numerics: arrays in, arrays out
     {"stand.process"},  # work forked beside, the allocator: process-level tricks
     {"stand.drivers"},  # frames, streams, the families' seam and wings, run files

@@ -14,8 +14,8 @@ from __future__ import annotations
 from typing import Any
 
 from stand.archive.jobs import MAX_JOBS
-from stand.plant.ua_model import ISA95_URI, JOBS_URI, Namespaces, structure, structure_field
-from stand.plant.ua_nodes import add_node, add_property, argument, arguments, modelling_rule
+from stand.plant.opcua.model import ISA95_URI, JOBS_URI, Namespaces, structure, structure_field
+from stand.plant.opcua.nodes import add_node, add_property, argument, arguments, modelling_rule
 
 __all__ = ["ISA95_URI", "JOBS_URI", "declare_job_types", "method_arguments", "receiver_children"]
 

@@ -6,7 +6,7 @@ placeholders, the text the catalogues ``stand/data/locale`` translate) and its v
 The sentence stays plain English text wherever it goes (the run file, the archive, the
 JSON); a screen, the certificate or the operator's CLI text in another language finds
 the message again from the sentence and translates it with its values
-(:meth:`stand.report.language.Language.__call__`), so an archived run's warnings read
+(:meth:`stand.i18n.language.Language.__call__`), so an archived run's warnings read
 in the reader's language too.  :func:`N_` marks a word that is named here and shown
 elsewhere.
 """

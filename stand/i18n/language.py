@@ -18,8 +18,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from stand.core.words import N_
 from stand.errors import UsageError
+from stand.i18n.words import N_
 
 __all__ = ["ENGLISH", "LANGUAGES", "N_", "Language", "catalogue_path", "language"]
 
@@ -62,7 +62,7 @@ class Language:
         return self._sentence(msgid) if self.patterns and "{" not in msgid else msgid
 
     def _sentence(self, text: str) -> str:
-        """A sentence the engine wrote (:func:`stand.core.words.said`), in this language: its
+        """A sentence the engine wrote (:func:`stand.i18n.words.said`), in this language: its
         message found by pattern, its values put back (a number with this language's
         decimal sign, a value that is a message itself translated)."""
         for pattern, msgstr in self.patterns:
@@ -161,7 +161,7 @@ def language(code: str | None) -> Language:
 
 SENTENCE = "engine sentence"
 """The comment (``#. engine sentence``) a catalogue gives a message the engine writes with
-:func:`stand.core.words.said`: only these are found again in a sentence by their words (the
+:func:`stand.i18n.words.said`: only these are found again in a sentence by their words (the
 longest first), so that a screen's own text is never taken apart."""
 _PLACEHOLDER = re.compile(r"\{(\w+)\}")
 _DECIMAL = re.compile(r"[-+]?\d+\.\d+")

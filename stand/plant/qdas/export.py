@@ -7,7 +7,7 @@ A ``.dfq`` file holds a description part (K1xxx for the part, K2xxx per characte
 plane's initial and residual unbalance amount [g mm] and angle [deg]; amount and angle
 are grouped as an unbalance (``K2008 = 18``).  The residual amount's upper limit (K2111)
 is the plane's permissible unbalance, where one applies.  Each rotor is one value line
-(what it holds: :mod:`stand.plant.qdas_parts`); with ``runs=True`` each run is.  A value
+(what it holds: :mod:`stand.plant.qdas.parts`); with ``runs=True`` each run is.  A value
 line holds the characteristics' value sets separated by ``0x0F``, each value set's fields
 separated by ``0x14`` in AQDEF's order: value (K0001), attribute (K0002: 0 valid, 129
 invalid, 255 no value), date and time (K0004, ``DD.MM.YYYY/HH:MM:SS`` in the stand's
@@ -30,7 +30,7 @@ from typing import Any
 
 from stand.errors import UsageError
 from stand.files import output
-from stand.plant.qdas_parts import Measured, Part, basis, per_rotor, per_run, read
+from stand.plant.qdas.parts import Measured, Part, basis, per_rotor, per_run, read
 
 VALUE_SEP, FIELD_SEP = "\x0f", "\x14"
 """Between the value sets of one line, and between the fields of one value set."""

@@ -28,8 +28,8 @@ from stand.actions import Actor, receive_job
 from stand.archive import Archive
 from stand.archive.jobs import command, job_by_id, jobs_of
 from stand.errors import ArchiveError, JobOrderError
-from stand.plant.ua_jobs import JOB_STATES
-from stand.plant.ua_security import CALLER
+from stand.plant.opcua.jobs import JOB_STATES
+from stand.plant.opcua.security import CALLER
 from stand.solve import job_field_problem
 
 NO_ERROR, UNKNOWN_JOB_ORDER, INVALID_STATUS, UNABLE_TO_ACCEPT = 1, 1 << 1, 1 << 3, 1 << 4

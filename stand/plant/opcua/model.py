@@ -17,8 +17,7 @@ from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
-from stand.plant.qdas_evaluations import FIGURES
-from stand.plant.ua_nodes import (
+from stand.plant.opcua.nodes import (
     add_node,
     add_property,
     add_reference,
@@ -26,6 +25,7 @@ from stand.plant.ua_nodes import (
     arguments,
     modelling_rule,
 )
+from stand.plant.qdas.evaluations import FIGURES
 
 DI_URI = "http://opcfoundation.org/UA/DI/"
 MACHINERY_URI = "http://opcfoundation.org/UA/Machinery/"

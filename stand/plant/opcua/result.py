@@ -7,7 +7,7 @@ The ResultId is the archive's run id as text: the same id the MQTT payload carri
 ``result_id`` and ``stand history --json`` as ``id``.  The stand's machine evaluations
 (ISO 21940-21) are results too, ``E`` and the evaluation's archive id (``E12``), their
 content the stand's ``MachineEvaluationDataType``.  The data types must have been
-loaded into asyncua (:mod:`stand.plant.ua_model`, ``load_data_type_definitions``).
+loaded into asyncua (:mod:`stand.plant.opcua.model`, ``load_data_type_definitions``).
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from stand.plant.qdas_evaluations import FIGURES, PART
-from stand.plant.ua_model import EVALUATIONS
+from stand.plant.opcua.model import EVALUATIONS
+from stand.plant.qdas.evaluations import FIGURES, PART
 
 RESULT_STATE_COMPLETED = 1
 """ResultMetaDataType.ResultState: processing was carried out completely."""

@@ -19,7 +19,7 @@ from typing import Any
 from stand.archive.evaluations import evaluations_of
 from stand.errors import UsageError
 from stand.files import output
-from stand.plant.qdas import (
+from stand.plant.qdas.export import (
     ATTR_NO_VALUE,
     ATTR_VALID,
     DATE_FORMAT,

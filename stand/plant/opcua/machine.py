@@ -1,5 +1,5 @@
 """The stand's machine object in an OPC UA address space, as OPC 40001-1 and 40001-101
-lay it out (the types: :mod:`stand.plant.ua_model`)::
+lay it out (the types: :mod:`stand.plant.opcua.model`)::
 
     Objects/Machines/<stand id>                    (Machinery i=1001 organizes it)
         DI:Identification                          MachineIdentificationType
@@ -12,6 +12,7 @@ lay it out (the types: :mod:`stand.plant.ua_model`)::
         Result:ResultManagement                    ResultManagementType
             Result:GetLatestResult, Result:GetResultById, Result:GetResultIdListFiltered
             Result:Results/ Result:LatestResult    ResultType (a ResultDataType)
+        AuditHead                                  String: the audit trail's head
 
 The notifier chain Server -> Machines -> machine -> ResultManagement (HasNotifier) lets a
 client subscribed on the Server object hear the machine's result events.
@@ -23,17 +24,17 @@ from dataclasses import dataclass
 from typing import Any
 
 from stand import __version__
-from stand.plant.ua_jobs import (
+from stand.plant.opcua.jobs import (
     PROVIDER_METHODS,
     PROVIDER_TYPE,
     RECEIVER_METHODS,
     RECEIVER_TYPE,
     receiver_children,
 )
-from stand.plant.ua_jobs import (
+from stand.plant.opcua.jobs import (
     method_arguments as job_method_arguments,
 )
-from stand.plant.ua_model import (
+from stand.plant.opcua.model import (
     MACHINE_IDENTIFICATION_TYPE,
     MACHINERY_ITEM_STATE_TYPE,
     MACHINES,
@@ -46,7 +47,7 @@ from stand.plant.ua_model import (
     empty_result,
     method_arguments,
 )
-from stand.plant.ua_nodes import add_node, add_property, add_reference, arguments
+from stand.plant.opcua.nodes import add_node, add_property, add_reference, arguments
 
 MANUFACTURER = "rotor-stand (open source)"
 MODEL = "soft-bearing rotor balancing stand, N correction planes"
@@ -68,6 +69,8 @@ class Machine:
     """ResultManagement, the machine, Machines, Server: who emits a result event."""
     jobs: dict[str, Any]
     """JobOrderControl's variables by name (CurrentState, its Id, JobOrderList, ...)."""
+    audit_head: Any
+    """The audit trail's head (``id:sha256``) the anchor beside the stand's key keeps."""
 
 
 def _id(ns: Namespaces, stand: str, path: str) -> Any:
@@ -179,9 +182,15 @@ async def build_machine(server: Any, ns: Namespaces, stand: str, calls: dict[str
     jobs = await _job_management(server, ns, stand, node.nodeid, calls)
     await add_reference(server, blocks.nodeid, ua.ObjectIds.HasAddIn,
                         _id(ns, stand, "JobManagement"), obj)  # fmt: skip
+    head = await add_node(
+        server, ua.NodeClass.Variable, _id(ns, stand, "AuditHead"),
+        ua.QualifiedName("AuditHead", ns.own), node.nodeid, ua.ObjectIds.HasComponent,
+        ua.ObjectIds.BaseDataVariableType, DataType=ua.NodeId(ua.ObjectIds.String),
+        ValueRank=-1, Value=ua.Variant("", ua.VariantType.String),
+    )  # fmt: skip
     chain = (rm.nodeid, node.nodeid, machines, ua.NodeId(ua.ObjectIds.Server))
     states = {name: ua.NodeId(ids[0], ns.machinery) for name, ids in STATES.items()}
-    return Machine(node, current, state_id, states, rm, latest, methods, chain, jobs)
+    return Machine(node, current, state_id, states, rm, latest, methods, chain, jobs, head)
 
 
 async def _job_management(server: Any, ns: Namespaces, stand: str, parent: Any,

@@ -4,13 +4,13 @@ state, calls ``GetLatestResult``, ``GetResultById`` and ``GetResultIdListFiltere
 ``ResultDataType``, and hears a ``ResultReadyEventType`` event when a run is archived,
 on the machine or on the Server object (asyncua).
 
-The address space: :mod:`stand.plant.ua_machine`; the types: :mod:`stand.plant.ua_model`;
-a run as a result: :mod:`stand.plant.ua_result`.  The server reads the archive (polling
+The address space: :mod:`stand.plant.opcua.machine`; the types: :mod:`stand.plant.opcua.model`;
+a run as a result: :mod:`stand.plant.opcua.result`.  The server reads the archive (polling
 it every :data:`POLL_S`), so a station or a CLI in another process that archives a run is
 heard within about that time.  Every node is read-only.  Who may connect: anonymous
 clients only when the server listens on this machine alone; beyond it, a user and a
 password over an encrypted endpoint (Basic256Sha256, SignAndEncrypt) only, the server's
-certificate made on first start and kept (:mod:`stand.plant.ua_security`).
+certificate made on first start and kept (:mod:`stand.plant.opcua.security`).
 """
 
 from __future__ import annotations
@@ -26,14 +26,16 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive
+from stand.archive.audit import engine_archive_id
 from stand.archive.evaluations import evaluation_by_id, evaluation_ids
+from stand.archive.keys import read_anchor
 from stand.archive.query import latest, latest_id, newest_ids
-from stand.errors import ArchiveError, StandError, UsageError
-from stand.plant.ua_call import guarded
-from stand.plant.ua_job_control import JobOrders
-from stand.plant.ua_jobs import JOB_STATES, declare_job_types
-from stand.plant.ua_machine import Machine, build_machine
-from stand.plant.ua_model import (
+from stand.errors import ArchiveError, KeyFileError, StandError, UsageError
+from stand.plant.opcua.call import guarded
+from stand.plant.opcua.job_control import JobOrders
+from stand.plant.opcua.jobs import JOB_STATES, declare_job_types
+from stand.plant.opcua.machine import Machine, build_machine
+from stand.plant.opcua.model import (
     NAMESPACE,
     OWN_EVENT_TYPE,
     declare_machinery,
@@ -42,9 +44,9 @@ from stand.plant.ua_model import (
     empty_result,
     register,
 )
-from stand.plant.ua_result import EVALUATION_PREFIX, evaluation_data, result_data
-from stand.plant.ua_security import Access, Users, apply_security, cert_folder, check_bind
-from stand.plant.ua_where import install as install_where_clause
+from stand.plant.opcua.result import EVALUATION_PREFIX, evaluation_data, result_data
+from stand.plant.opcua.security import Access, Users, apply_security, cert_folder, check_bind
+from stand.plant.opcua.where import install as install_where_clause
 
 POLL_S = 0.25
 """How often the archive is asked for a new run [s] (an event within about this)."""
@@ -92,7 +94,7 @@ class ResultServer:
         beyond this machine, where the endpoint is encrypted.
     rotor_types
         The rotor types the stand can run now: the job orders it accepts
-        (:mod:`stand.plant.ua_job_control`); none given, it accepts none.
+        (:mod:`stand.plant.opcua.job_control`); none given, it accepts none.
     """
 
     def __init__(self, archive_url: str, stand_id: str, host: str = "127.0.0.1",
@@ -262,6 +264,7 @@ class ResultServer:
         evaluated: set[int] | None = None  # the evaluations known: a new one is an event
         said = ""  # the archive's last error, said once on stderr
         jobs_seen: Any = None
+        head_seen: str | None = None
         assert self._stop is not None
         while not self._stop.is_set():
             state = "NotExecuting"
@@ -273,6 +276,7 @@ class ResultServer:
                     seen = now
                 evaluated = await self._new_evaluations(machine, events, evaluated)
                 jobs_seen = await self._write_jobs(machine, jobs_seen)
+                head_seen = await self._write_head(machine, head_seen)
             except ArchiveError as exc:
                 state = "OutOfService"
                 if str(exc) != said:
@@ -285,6 +289,20 @@ class ResultServer:
             except TimeoutError:
                 pass
         self._drop()
+
+    async def _write_head(self, machine: Machine, seen: str | None) -> str | None:
+        """The audit trail's head the anchor beside the stand's key keeps, into AuditHead
+        when it moved (the plant keeps it: ``stand audit verify --head``)."""
+        from asyncua import ua
+
+        try:
+            head = read_anchor(engine_archive_id(self._open().engine))
+        except KeyFileError:
+            head = None
+        now = None if head is None else str(head["head"])
+        if now != seen:
+            await machine.audit_head.write_value(ua.Variant(now or "", ua.VariantType.String))
+        return now
 
     async def _new_evaluations(self, machine: Machine, events: Any, known: set[int] | None
                                ) -> set[int]:  # fmt: skip
