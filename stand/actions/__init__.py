@@ -10,7 +10,7 @@ from stand.actions.accounts import add_account, set_account
 from stand.actions.calibration import save_calibration, save_matrix
 from stand.actions.door import Actor, Rights, os_actor, os_user
 from stand.actions.evaluations import archive_evaluation
-from stand.actions.jobs import receive_job
+from stand.actions.jobs import command_job, leave_job, receive_job, start_job
 from stand.actions.release import release_certificate, signature_path
 from stand.actions.rotor_types import config_seen, replace_config
 from stand.actions.runs import archive_run, import_runs
@@ -23,9 +23,11 @@ __all__ = [
     "add_account",
     "archive_evaluation",
     "archive_run",
+    "command_job",
     "config_seen",
     "import_runs",
     "keep_tooling",
+    "leave_job",
     "log_in",
     "log_in_badge",
     "log_out",
@@ -39,4 +41,5 @@ __all__ = [
     "session_ended",
     "set_account",
     "signature_path",
+    "start_job",
 ]

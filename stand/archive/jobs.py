@@ -34,8 +34,18 @@ COMMANDS = {
 }
 """The states a job order must be in for each command of the MES."""
 
-__all__ = ["COMMANDS", "JOB_STATES", "MAX_JOBS", "command", "end_job", "job_by_id",
-           "job_ran", "jobs_of", "store_job", "take_job"]  # fmt: skip
+__all__ = [
+    "COMMANDS",
+    "JOB_STATES",
+    "MAX_JOBS",
+    "command",
+    "end_job",
+    "insert_job",
+    "job_by_id",
+    "job_ran",
+    "jobs_of",
+    "take_job",
+]  # fmt: skip
 
 
 def _now() -> str:
@@ -51,13 +61,6 @@ def _select() -> Any:
     import sqlalchemy as sa
 
     return sa.select(jobs, as_stored(jobs.c.start_requested))
-
-
-def store_job(archive: Archive, stand: str, fields: dict[str, Any], *, start: bool) -> str | None:
-    """:func:`insert_job` in a transaction of its own (unjournaled: the OPC UA server's
-    jobs go through :func:`stand.actions.receive_job`)."""
-    with archive.transaction() as conn:
-        return insert_job(conn, stand, fields, start=start)
 
 
 def insert_job(conn: Any, stand: str, fields: dict[str, Any], *, start: bool) -> str | None:
@@ -84,24 +87,24 @@ def insert_job(conn: Any, stand: str, fields: dict[str, Any], *, start: bool) ->
     return None
 
 
-def command(archive: Archive, stand: str, job_id: str, what: str) -> str:
-    """The MES's ``what`` (a key of :data:`COMMANDS`) on a job order: ``ok``, ``unknown``
-    (no such job order) or ``state`` (not in a state the command applies to)."""
+def command(conn: Any, stand: str, job_id: str, what: str) -> str:
+    """The MES's ``what`` (a key of :data:`COMMANDS`) on a job order, in the open
+    transaction ``conn``: ``ok``, ``unknown`` (no such job order) or ``state`` (not in a
+    state the command applies to)."""
     import sqlalchemy as sa
 
-    with archive.transaction() as conn:
-        state = conn.execute(sa.select(jobs.c.state).where(_where(stand, job_id))).scalar()
-        if state is None:
-            return "unknown"
-        if state not in COMMANDS[what]:
-            return "state"
-        if what in ("cancel", "clear"):
-            conn.execute(sa.delete(jobs).where(_where(stand, job_id)))
-        elif what == "start":
-            conn.execute(sa.update(jobs).where(_where(stand, job_id)).values(start_requested=True))
-        else:
-            conn.execute(sa.update(jobs).where(_where(stand, job_id))
-                         .values(state="Aborted", ended_at=_now()))  # fmt: skip
+    state = conn.execute(sa.select(jobs.c.state).where(_where(stand, job_id))).scalar()
+    if state is None:
+        return "unknown"
+    if state not in COMMANDS[what]:
+        return "state"
+    if what in ("cancel", "clear"):
+        conn.execute(sa.delete(jobs).where(_where(stand, job_id)))
+    elif what == "start":
+        conn.execute(sa.update(jobs).where(_where(stand, job_id)).values(start_requested=True))
+    else:
+        conn.execute(sa.update(jobs).where(_where(stand, job_id))
+                     .values(state="Aborted", ended_at=_now()))  # fmt: skip
     return "ok"
 
 
@@ -126,18 +129,19 @@ def job_by_id(archive: Archive, stand: str, job_id: str) -> dict[str, Any] | Non
         return None if row is None else job_row(row, shown_url(conn))
 
 
-def take_job(archive: Archive, stand: str, job_id: str) -> dict[str, Any] | None:
-    """The station or CLI runs the job order: Running from AllowedToStart (Running stays
-    Running: a check run under the same job).  The job, or None when there is no such
-    job order or it ended or was aborted (the MES's word is final)."""
+def take_job(conn: Any, stand: str, job_id: str) -> tuple[dict[str, Any] | None, bool]:
+    """The station or CLI runs the job order, in the open transaction ``conn``: Running
+    from AllowedToStart (Running stays Running: a check run under the same job).  The job
+    (None when there is no such job order or it ended or was aborted: the MES's word is
+    final), and whether it was started now."""
     import sqlalchemy as sa
 
-    with archive.transaction() as conn:
-        conn.execute(sa.update(jobs)
-                     .where(_where(stand, job_id) & (jobs.c.state == "AllowedToStart"))
-                     .values(state="Running", started_at=_now()))  # fmt: skip
-    job = job_by_id(archive, stand, job_id)
-    return job if job is not None and job["state"] == "Running" else None
+    started = conn.execute(sa.update(jobs)
+                           .where(_where(stand, job_id) & (jobs.c.state == "AllowedToStart"))
+                           .values(state="Running", started_at=_now())).rowcount  # fmt: skip
+    row = conn.execute(_select().where(_where(stand, job_id))).first()
+    job = None if row is None else job_row(row, shown_url(conn))
+    return (job if job is not None and job["state"] == "Running" else None), bool(started)
 
 
 def job_ran(conn: Any, stand: str, job_id: str, run_id: int, verdict: str) -> None:
@@ -154,11 +158,11 @@ def job_ran(conn: Any, stand: str, job_id: str, run_id: int, verdict: str) -> No
     ))  # fmt: skip
 
 
-def end_job(archive: Archive, stand: str, job_id: str) -> None:
-    """The operator left the rotor of a Running job order (its last verdict stays)."""
+def end_job(conn: Any, stand: str, job_id: str) -> bool:
+    """The operator left the rotor of a Running job order (its last verdict stays), in the
+    open transaction ``conn``; whether one was ended."""
     import sqlalchemy as sa
 
-    with archive.transaction() as conn:
-        conn.execute(sa.update(jobs)
-                     .where(_where(stand, job_id) & (jobs.c.state == "Running"))
-                     .values(state="Ended", ended_at=_now()))  # fmt: skip
+    return bool(conn.execute(sa.update(jobs)
+                             .where(_where(stand, job_id) & (jobs.c.state == "Running"))
+                             .values(state="Ended", ended_at=_now())).rowcount)  # fmt: skip

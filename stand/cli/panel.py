@@ -200,16 +200,17 @@ def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
     run's serial, order and operator are the job's (UsageError when there is no such job
     order waiting or running, when it is for another rotor type, or when the options name
     the job's fields too)."""
-    from stand.archive import Archive, url_for  # SQLAlchemy: only when a job is named
-    from stand.archive.jobs import take_job
+    from stand.actions import start_job  # SQLAlchemy: only when a job is named
+    from stand.archive import url_for
+    from stand.cli.actor import actor_of
 
     given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
     if given:
         raise UsageError(f"--job takes the serial, order and operator from the job order: "
                          f"leave out {', '.join(given)}")  # fmt: skip
     stand = cfg.stand.stand_id()
-    with Archive(url_for(getattr(args, "archive", None), cfg)) as archive:
-        job = take_job(archive, stand, args.job)
+    url = url_for(getattr(args, "archive", None), cfg)
+    job = start_job(url, actor_of(args, url), stand, args.job)
     if job is None:
         raise UsageError(f"--job {args.job[:64]!r}: stand {stand} has no such job order "
                          "waiting or running (stand jobs lists them)")  # fmt: skip

@@ -15,10 +15,10 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from stand.actions import Actor, release_certificate
+from stand.actions import Actor, leave_job, release_certificate, start_job
 from stand.archive import Archive, correction_rows, file_digest
 from stand.archive.evaluations import evaluations_due
-from stand.archive.jobs import end_job, jobs_of, take_job
+from stand.archive.jobs import jobs_of
 from stand.archive.query import Filters, history, run_digest, run_file
 from stand.config import load_config
 from stand.errors import StandError, UsageError
@@ -63,11 +63,10 @@ class ArchiveSide:
             return None
         return next((j for j in waiting if j["start_requested"]), waiting[0] if waiting else None)
 
-    def _take_job(self, job_id: str, rotor_type: str) -> None:
+    def _take_job(self, job_id: str, rotor_type: str, actor: Actor) -> None:
         """The job order the operator starts: Running (UsageError when the MES aborted or
         cleared it meanwhile, or it is for another rotor type)."""
-        with Archive(self.archive_url) as a:
-            job = take_job(a, self.stand_id(), job_id)
+        job = start_job(self.archive_url, actor, self.stand_id(), job_id)
         if job is None:
             raise UsageError(
                 f"job order {job_id} is no longer waiting (the MES aborted or "
@@ -77,12 +76,11 @@ class ArchiveSide:
             raise UsageError(f"job order {job_id} is for rotor type {job['rotor_type']}, "
                              f"not {rotor_type}")  # fmt: skip
 
-    def _end_job(self, job_id: str) -> None:
+    def _end_job(self, job_id: str, actor: Actor) -> None:
         """The operator leaves the rotor of a job order: Ended (a failure is logged: the
         MES sees the job Running and may abort it)."""
         try:
-            with Archive(self.archive_url) as a:
-                end_job(a, self.stand_id(), job_id)
+            leave_job(self.archive_url, actor, self.stand_id(), job_id)
         except StandError as exc:
             log.warning("job order %s not ended: %s", job_id, exc)
 

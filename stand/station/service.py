@@ -190,7 +190,7 @@ class Station(ArchiveSide):
         if not (job.serial or "").strip() and self._state.phase != "measuring":
             job = replace(job, serial=self._generated_serial(config))
         if job.job_id and self._state.phase != "measuring":
-            self._take_job(job.job_id, rotor_type)
+            self._take_job(job.job_id, rotor_type, self._actor(job))
         if self._state.phase != "measuring":  # a rotor type edited on disk: journaled
             try:
                 config_seen(self.archive_url, self._actor(job), config)
@@ -301,10 +301,10 @@ class Station(ArchiveSide):
         with self._lock:
             if self._state.phase == "measuring":
                 raise StationBusyError("stop the measurement first", running="a run")
-            job = self._state.job.job_id
+            job = self._state.job
             self._state = Snapshot(seq=self._state.seq + 1)
-        if job:
-            self._end_job(job)
+        if job.job_id:
+            self._end_job(job.job_id, self._actor(job))
 
     # -- the measuring thread ------------------------------------------------------------
     def _measure(

@@ -4,28 +4,48 @@ states as ISA-95 moves them, the run that ends one, and rows no writer could hav
 from __future__ import annotations
 
 import dataclasses
+import json
 import sqlite3
 from pathlib import Path
 
 import pytest
 import sqlalchemy as sa
 
-from stand.actions import archive_run, os_actor
-from stand.archive import Archive
-from stand.archive.jobs import (
-    MAX_JOBS,
-    command,
-    end_job,
-    job_by_id,
-    jobs_of,
-    store_job,
-    take_job,
+from stand.actions import (
+    Actor,
+    archive_run,
+    command_job,
+    leave_job,
+    os_actor,
+    receive_job,
+    start_job,
 )
+from stand.archive import Archive
+from stand.archive.audit import entries
+from stand.archive.jobs import MAX_JOBS, job_by_id, jobs_of
 from stand.cli import main
 from stand.errors import ArchiveRowError
 from stand.solve import Job, solve_recording
 
 STAND = "stand-9"
+MES, OPERATOR = Actor("mes", None, "opcua"), Actor("olena", None, "station")
+"""Who sends the job orders (an OPC UA user) and who runs them (the station's operator)."""
+
+
+def store_job(archive: Archive, stand: str, fields: dict[str, str], *, start: bool) -> str | None:
+    return receive_job(archive.url, MES, stand, fields, start=start)
+
+
+def command(archive: Archive, stand: str, job_id: str, what: str) -> str:
+    return command_job(archive.url, MES, stand, job_id, what)
+
+
+def take_job(archive: Archive, stand: str, job_id: str) -> dict[str, object] | None:
+    return start_job(archive.url, OPERATOR, stand, job_id)
+
+
+def end_job(archive: Archive, stand: str, job_id: str) -> None:
+    leave_job(archive.url, OPERATOR, stand, job_id)
 
 
 def _job(job_id: str = "J-1", **more: str) -> dict[str, str]:
@@ -58,6 +78,13 @@ def test_a_job_order_moves_as_isa95_says(archive: Archive) -> None:
     assert command(archive, STAND, "J-1", "clear") == "ok"
     assert command(archive, STAND, "J-1", "clear") == "unknown"
     assert [j["stand"] for j in jobs_of(archive, "stand-other")] == ["stand-other"]
+    # every step that moved a job, journaled by who made it; a refused command none
+    steps = [(e["who"], e["source"], json.loads(e["detail"])["step"])
+             for e in entries(archive.url, action="job")
+             if json.loads(e["detail"])["stand"] == STAND]  # fmt: skip
+    assert steps == [("mes", "opcua", "stored"), ("mes", "opcua", "start"),
+                     ("olena", "station", "running"), ("olena", "station", "ended"),
+                     ("mes", "opcua", "clear")], steps  # fmt: skip
 
 
 def test_aborted_and_cancelled(archive: Archive) -> None:

@@ -207,7 +207,8 @@ JOURNAL_WRITERS = {
     "stand.actions.door.door", "stand.actions.door.Passage",
     "stand.archive.accounts.insert_account", "stand.archive.accounts.update_account",
     "stand.archive.evaluations.add_evaluation", "stand.archive.results.insert_result",
-    "stand.archive.jobs.insert_job", "stand.archive.jobs.store_job",
+    "stand.archive.jobs.insert_job", "stand.archive.jobs.command",
+    "stand.archive.jobs.take_job", "stand.archive.jobs.end_job",
     "stand.archive.store.mark_tooling_runs",
 }  # fmt: skip
 """What writes the journal, or changes what the journal covers: the actions' own."""

@@ -24,9 +24,9 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from stand.actions import Actor, receive_job
+from stand.actions import Actor, command_job, receive_job
 from stand.archive import Archive
-from stand.archive.jobs import command, job_by_id, jobs_of
+from stand.archive.jobs import job_by_id, jobs_of
 from stand.errors import ArchiveError, JobOrderError
 from stand.plant.opcua.jobs import JOB_STATES
 from stand.plant.opcua.security import CALLER
@@ -162,7 +162,9 @@ class JobOrders:
             if not isinstance(job_id, str) or not job_id:
                 return self._status(name, UNKNOWN_JOB_ORDER, "no JobOrderID")
             try:
-                said = command(self.open_archive(), self.stand, job_id, name.lower())
+                actor = Actor(CALLER.get() or "opcua:anonymous", None, "opcua")
+                said = command_job(self.open_archive().url, actor, self.stand, job_id,
+                                   name.lower())  # fmt: skip
             except ArchiveError as exc:
                 return self._status(name, UNABLE_TO_ACCEPT, f"the archive: {exc}")
             if said == "unknown":
