@@ -21,19 +21,20 @@ def archive_run(result: Result, url: str, actor: Actor, *, config: str | None = 
     if not run_file:
         raise ValueError("only a recorded run is archived")
     digest = file_digest(run_file)
-    before: tuple[Result, str] | None = None
-    if result.check is not None:
+    prev, prev_digest, solved = None, None, None
+    if result.check is not None:  # the run it checks: solved here (slow) if not archived
         prev = result.check.previous_run
         prev_digest = file_digest(prev)
         with Archive(url) as archive, archive.transaction() as conn:
-            known = run_id_in(conn, prev_digest) is not None
-        before = (solve_recording(prev, config) if not known else result, prev_digest)
+            if run_id_in(conn, prev_digest) is None:
+                solved = solve_recording(prev, config)
     with door(url, actor, None, "archive a run") as p:
         checks = None
-        if before is not None:
-            checks = run_id_in(p.conn, before[1])
-            if checks is None:
-                checks = _insert(p, before[0], before[1], None)
+        if prev is not None and prev_digest is not None:
+            checks = run_id_in(p.conn, prev_digest)
+            if checks is None:  # not archived (or gone meanwhile): its own result, always
+                solved = solved or solve_recording(prev, config)
+                checks = _insert(p, solved, prev_digest, None)
         return _insert(p, result, digest, checks)
 
 
