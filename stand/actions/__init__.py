@@ -11,15 +11,17 @@ from stand.actions.calibration import save_calibration, save_matrix
 from stand.actions.door import Actor, Rights, os_actor, os_user
 from stand.actions.evaluations import archive_evaluation
 from stand.actions.jobs import command_job, leave_job, receive_job, start_job
+from stand.actions.keys import trust_key
 from stand.actions.release import release_certificate, signature_path
 from stand.actions.rotor_types import config_seen, replace_config
 from stand.actions.runs import archive_run, import_runs
-from stand.actions.sessions import log_in, log_in_badge, log_out, session_ended
+from stand.actions.sessions import account_actor, log_in, log_in_badge, log_out, session_ended
 from stand.actions.toolings import keep_tooling
 
 __all__ = [
     "Actor",
     "Rights",
+    "account_actor",
     "add_account",
     "archive_evaluation",
     "archive_run",
@@ -42,4 +44,5 @@ __all__ = [
     "set_account",
     "signature_path",
     "start_job",
+    "trust_key",
 ]

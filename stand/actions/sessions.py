@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from stand.actions.door import Actor
 from stand.archive.accounts import check_badge, check_password
 from stand.archive.audit import Change, journal
+from stand.errors import RefusedError
 
 MAX_TYPED = 64
 """The most of a typed account name the journal keeps [characters]."""
@@ -30,6 +32,17 @@ def log_in(url: str, name: str, password: str, source: str) -> dict[str, Any] | 
         return None
     journal(url, Change("login", name, None, None, "password"), who=name, source=source)
     return found
+
+
+def account_actor(url: str, name: str, password: str, source: str) -> Actor:
+    """The :class:`Actor` of account ``name`` once ``password`` checks (:func:`log_in`,
+    journaled); RefusedError, the failed try journaled, when it does not."""
+    found = log_in(url, name, password, source)
+    if found is None:
+        raise RefusedError(f"--as {name}: wrong account or password, or the account is "
+                           "disabled (the failed try is journaled)", who=name,
+                           right="log in")  # fmt: skip
+    return Actor(name, str(found["role"]), source)
 
 
 def log_in_badge(url: str, code: str, source: str) -> dict[str, Any] | None:

@@ -42,7 +42,7 @@ from stand.errors import UsageError
 GENESIS = "0" * 64
 """The previous hash of the first entry."""
 ACTIONS = ("config", "calibration", "matrix", "tooling", "account", "evaluation", "release",
-           "run", "job")  # fmt: skip
+           "run", "job", "trust")  # fmt: skip
 """What an entry records a change of (``release``: a certificate released)."""
 EVENTS = ("login", "logout", "login_failed", "refused", "session_end")
 """The security events an entry records (nothing changed: someone came, went, or was

@@ -7,8 +7,7 @@ import sys
 
 from stand.actions import import_runs
 from stand.archive import url_for, verify
-from stand.cli.actor import actor_of, add_actor_arguments
-from stand.cli.common import add_archive_argument
+from stand.cli.common import actor_of, add_actor_arguments, add_archive_argument
 from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError

@@ -10,6 +10,7 @@ import argparse
 import re
 from pathlib import Path
 
+from stand.actions import trust_key
 from stand.archive import url_for
 from stand.archive.audit import (
     ACTIONS,
@@ -20,8 +21,14 @@ from stand.archive.audit import (
     verify_journal,
 )
 from stand.archive.audit_state import rotor_type_problems, state_problems
-from stand.archive.keys import stand_key, trust
-from stand.cli.common import add_archive_argument, add_date_arguments
+from stand.archive.keys import stand_key
+from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
+    add_archive_argument,
+    add_date_arguments,
+    add_reason_argument,
+)
 from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError
@@ -66,6 +73,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="verify: the station's rotor types too, each file against its last entry "
         "(its tolerance, its calibration)",
     )
+    add_reason_argument(p)
+    add_actor_arguments(p)
     p.add_argument("--config", metavar="CFG", help="the stand's config: its [archive] url")
     add_archive_argument(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -160,7 +169,9 @@ def run(args: argparse.Namespace) -> int:
     if args.what == "trust":
         if not args.file:
             raise UsageError("stand audit trust: name the other stand's public key (PEM)")
-        print(f"trusted stand key {trust(args.file)}")
+        url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
+        kid, entry = trust_key(url, actor_of(args, url), args.file, reason=args.reason)
+        print(f"trusted stand key {kid} (audit entry {entry})")
         return 0
     url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
     if args.what == "check":

@@ -11,8 +11,7 @@ from typing import Any
 
 from stand.actions import archive_run
 from stand.archive import url_for
-from stand.cli.actor import actor_of, add_actor_arguments
-from stand.cli.common import ACCEPTANCE_EXIT, add_archive_argument
+from stand.cli.common import ACCEPTANCE_EXIT, actor_of, add_actor_arguments, add_archive_argument
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config, validate
 from stand.config.autobalancer import AutobalancerTable, check_autobalancer

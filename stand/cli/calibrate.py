@@ -16,8 +16,9 @@ from stand.actions import save_calibration
 from stand.archive import correction_rows, url_for
 from stand.archive.query import serials_by_digest
 from stand.calib.identify import NAMES, ROTOR_NAMES, CalibrationRun, identify, identify_rotor
-from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
     add_archive_argument,
     add_force_argument,
     add_reason_argument,

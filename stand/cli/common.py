@@ -4,20 +4,24 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import getpass
 import math
+import sys
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from stand.calib import Tolerances
-from stand.cli.actor import add_actor_arguments
 from stand.config import Config, read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import UsageError
-from stand.files import output
+from stand.files import first_line, output
 from stand.i18n.language import LANGUAGES
 from stand.solve import Job, job_field_problem
 from stand.solve.pipeline import SolveOptions, precision_targets
+
+if TYPE_CHECKING:  # the actions load the archive (SQLAlchemy): only when a change is made
+    from stand.actions import Actor
 
 ACCEPTANCE_EXIT = {"pass": 0, "fail": 1, "not judged": 3, "undecided": 3}
 """Every acceptance test's exit code: 0 passed, 1 judged and failed, 3 not judged or
@@ -411,3 +415,39 @@ def targets_from(args: argparse.Namespace, tolerance_share: float | None = None)
 def run_path(args: argparse.Namespace) -> str:
     """The run file: ``--out`` or a timestamped name."""
     return str(args.out or f"run-{dt.datetime.now():%Y%m%d-%H%M%S}.h5")
+
+
+def add_actor_arguments(p: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+    """``--as NAME`` and ``--as-password-file FILE``: who makes a change."""
+    p.add_argument(
+        "--as",
+        dest="as_account",
+        metavar="NAME",
+        help="the account that makes the change (required once the archive has "
+        "accounts; its password asked for, or read from --as-password-file)",
+    )
+    p.add_argument(
+        "--as-password-file",
+        metavar="FILE",
+        help="--as: the account's password (the file's first line), for scripts",
+    )
+
+
+def actor_of(args: argparse.Namespace, url: str) -> Actor:
+    """Who runs this command: the account ``--as`` names once its password checks
+    (:func:`stand.actions.account_actor`), else the operating system's user (which only a
+    lone stand, an archive without accounts, lets make changes)."""
+    from stand.actions import account_actor, os_actor
+
+    name = getattr(args, "as_account", None)
+    if not name:
+        if getattr(args, "as_password_file", None):
+            raise UsageError("--as-password-file goes with --as NAME")
+        return os_actor("cli")
+    if args.as_password_file:
+        password = first_line(args.as_password_file, "a password")
+    elif sys.stdin.isatty():
+        password = getpass.getpass(f"password of {name}: ")
+    else:
+        raise UsageError(f"--as {name}: give --as-password-file FILE (no terminal to ask on)")
+    return account_actor(url, name, password, "cli")

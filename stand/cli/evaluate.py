@@ -10,9 +10,10 @@ from typing import Any
 from stand import __version__
 from stand.actions import archive_evaluation
 from stand.archive import url_for
-from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
     ACCEPTANCE_EXIT,
+    actor_of,
+    add_actor_arguments,
     add_archive_argument,
     add_force_argument,
     add_reason_argument,

@@ -18,8 +18,9 @@ from stand.calib.influence import (
     phasors,
     suggested_trials,
 )
-from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
     add_archive_argument,
     add_force_argument,
     add_reason_argument,

@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from stand.cli.common import bus_kwargs, check_live_arguments, job_from, run_path
+from stand.cli.common import actor_of, bus_kwargs, check_live_arguments, job_from, run_path
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError, UsageError
@@ -202,7 +202,6 @@ def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
     the job's fields too)."""
     from stand.actions import start_job  # SQLAlchemy: only when a job is named
     from stand.archive import url_for
-    from stand.cli.actor import actor_of
 
     given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
     if given:
@@ -280,7 +279,6 @@ def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:
         return
     from stand.actions import archive_run, config_seen  # after the answer: SQLAlchemy
     from stand.archive import url_for
-    from stand.cli.actor import actor_of
     from stand.plant import publish_archived
 
     url = url_for(args.archive, cfg)

@@ -7,9 +7,10 @@ from pathlib import Path
 
 from stand.actions import release_certificate, signature_path
 from stand.archive import file_digest, url_for
-from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
+    actor_of,
     add_across_speeds_arguments,
+    add_actor_arguments,
     add_archive_argument,
     add_force_argument,
     add_measure_arguments,

@@ -12,8 +12,9 @@ from stand import __version__
 from stand.actions import archive_run
 from stand.archive import url_for
 from stand.archive.production import simulate_series
-from stand.cli.actor import actor_of, add_actor_arguments
 from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
     add_archive_argument,
     add_bus_arguments,
     add_job_arguments,

@@ -8,8 +8,12 @@ from typing import Any
 
 from stand.actions import keep_tooling
 from stand.archive import file_digest, url_for
-from stand.cli.actor import actor_of, add_actor_arguments
-from stand.cli.common import add_archive_argument, add_reason_argument
+from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
+    add_archive_argument,
+    add_reason_argument,
+)
 from stand.cli.format import ANGLE_NOTE, dump_json
 from stand.config import Config, load_config
 from stand.core import unbalance_to_polar

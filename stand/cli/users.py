@@ -12,8 +12,12 @@ import sys
 from stand.actions import add_account, set_account
 from stand.archive import url_for
 from stand.archive.accounts import ROLES, accounts_of
-from stand.cli.actor import actor_of, add_actor_arguments
-from stand.cli.common import add_archive_argument, add_reason_argument
+from stand.cli.common import (
+    actor_of,
+    add_actor_arguments,
+    add_archive_argument,
+    add_reason_argument,
+)
 from stand.cli.format import dump_json
 from stand.config import load_config
 from stand.errors import UsageError

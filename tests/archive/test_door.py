@@ -394,3 +394,22 @@ def test_a_rotor_type_edited_behind_the_journal_is_named_by_field(
     (folder / "auger.toml").write_text(text + "\n# a comment\n")
     assert main(argv) == 1
     assert "field its text (not its tolerance or calibration)" in capsys.readouterr().out
+
+
+def test_trusting_another_stands_key_is_an_administrators_and_journaled(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
+
+    from stand.archive.keys import public_pem
+
+    url = with_accounts(_url(tmp_path), ("kim", "engineer", "a-long-password"))
+    pem = tmp_path / "other.pem"
+    pem.write_text(public_pem(Ed25519PrivateKey.generate().public_key()))
+    argv = ["audit", "trust", str(pem), "--archive", url]
+    kim = ["--as", "kim", "--as-password-file", _pw(tmp_path, "a-long-password")]
+    assert main([*argv, *kim]) == 2
+    assert "kim (engineer) may not trust another stand's key" in capsys.readouterr().err
+    assert main([*argv, "--as", "admin", "--as-password-file", _pw(tmp_path)]) == 0
+    (entry,) = entries(url, action="trust")
+    assert entry["who"] == "admin" and entry["subject"] in capsys.readouterr().out
