@@ -164,6 +164,8 @@ def print_tolerance(out: dict[str, Any], u: Display, _: Language = ENGLISH) -> N
     print(_("tolerance: {source} ({form} form)").format(
         source=_(t["source"]), form=_(FORM_WORDS[t["form"]])) + per)  # fmt: skip
     print("  " + _("judged in {where}").format(where=_(t["judged_in"])))
+    if t.get("allocation"):
+        print("  " + _("allocation: {rule}").format(rule=_(t["allocation"])))
     print("  " + _("rule: {rule}").format(rule=_(t["rule"])))
     for c in t["criteria"]:
         print("  " + criterion_text(c, u, out, _))

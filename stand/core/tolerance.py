@@ -11,6 +11,10 @@ Pure numerics: arrays in, arrays out, SI units (kg m, kg m^2, m, rad/s), no I/O.
   load [kg], N the maximum continuous speed [rpm] (:func:`api_permissible`).
 * A drawing's limit per correction plane, and ISO 21940-11's separate resultant (static)
   and moment (couple) limits for rotors outside its conditions for a simple split.
+* The rotor's shape decides the grade form's allocation (:func:`rotor_shape`): a rotor
+  whose centre of mass lies outside its bearing planes (overhung) or whose correction
+  planes lie close together (narrow) is judged by resultant and moment
+  (:func:`shape_limits`), not by a split clamped to 30 .. 70 %.
 
 **Criteria.**  Every form judges quantities that are linear in the two correction-plane
 unbalances: ``|w1 U1 + w2 U2|`` against a limit (:class:`Criterion`).  A plane is
@@ -54,6 +58,13 @@ AFTER_BALANCING, LATER_CHECK = "after_balancing", "later_check"
 Moment = Literal["after_balancing", "later_check"]
 State = Literal["pass", "fail", "undecided"]
 
+NARROW_SHARE = 1.0 / 3.0
+"""A rotor is *narrow* when its correction planes lie closer together than this share of
+its bearing distance.  ISO 21940-11 names narrow rotors without a figure in the sources
+the product quotes: a third is the product's assumption, said so wherever it is used."""
+
+Shape = Literal["between", "overhung", "narrow"]
+
 KEY_SHARE = {"none": 0.0, "half": 0.5, "full": 1.0}
 """The share of a key's mass each convention counts in the part (ISO 21940-32)."""
 
@@ -83,6 +94,39 @@ def lever_shares(x_cm_m: float, z_m: ArrayLike) -> tuple[float, float]:
     zA, zB = (float(v) for v in np.asarray(z_m, dtype=float))
     share = min(max((zB - x_cm_m) / (zB - zA), SHARE_MIN), SHARE_MAX)
     return share, 1.0 - share
+
+
+def rotor_shape(x_m: ArrayLike, x_cm_m: float, z_m: ArrayLike) -> Shape:
+    """Whether ISO 21940-11's simple split holds: ``overhung`` when the centre of mass
+    lies outside the bearing planes ``z`` (a lever share below 0 or above 1), ``narrow``
+    when the correction planes ``x`` lie closer than :data:`NARROW_SHARE` of the bearing
+    distance, else ``between``.
+
+    >>> rotor_shape([0.2, 0.8], 0.5, [0.0, 1.0]), rotor_shape([1.1, 1.4], 1.25, [0.0, 1.0])
+    ('between', 'overhung')
+    >>> rotor_shape([0.45, 0.55], 0.5, [0.0, 1.0])
+    'narrow'
+    """
+    x = np.asarray(x_m, dtype=float)
+    zA, zB = (float(v) for v in np.asarray(z_m, dtype=float))
+    share = (zB - x_cm_m) / (zB - zA)
+    if not 0.0 <= share <= 1.0:
+        return "overhung"
+    return "narrow" if abs(float(x[1] - x[0])) < NARROW_SHARE * (zB - zA) else "between"
+
+
+def shape_limits(U_per_kg_m: float, z_m: ArrayLike) -> tuple[float, float]:
+    """The resultant [kg m] and moment [kg m^2] limits of a rotor outside the simple split:
+    the resultant ``U_per`` (the grade's own definition, ``e_per m`` at the centre of mass)
+    and the moment about the centre of mass ``U_per l / 2`` for the bearing distance
+    ``l`` (the couple that loads each bearing plane as the even split's ``U_per / 2``).
+    The quoted sources give no number for either: the product's assumption, said so.
+
+    >>> shape_limits(2.0, [0.0, 1.5])
+    (2.0, 1.5)
+    """
+    zA, zB = (float(v) for v in np.asarray(z_m, dtype=float))
+    return U_per_kg_m, U_per_kg_m * (zB - zA) / 2.0
 
 
 def transfer(x_m: ArrayLike, z_m: ArrayLike) -> np.ndarray:

@@ -112,6 +112,8 @@ def _basis(out: dict[str, Any], _: Language) -> str:
         f"<p><b>{e(_('Tolerance:'))}</b> {e(_(t['source']))}{per}; "
         + e(_("judged in {where}. Balancing speed {rpm} rpm.").format(
             where=_(t["judged_in"]), rpm=_.number(out["rpm"], 0)))
+        + (f"<br><b>{e(_('Allocation:'))}</b> {e(_(t['allocation']))}."
+           if t.get("allocation") else "")
         + f"<br><b>{e(_('Rule:'))}</b> {e(_(t['rule']))}.</p>"
         + (  # planes judged alone show in the table of planes below
             f"<table><tr>{heads}</tr>{rows}</table>"

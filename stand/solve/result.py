@@ -153,6 +153,10 @@ class Tolerance:
         The grade form's G [m/s], the maximum speed [rad/s] (grade, API), ``U_per`` [kg m].
     bearing_planes_m : tuple of float or None
         The bearing planes judged in [m from support 1], where not the supports.
+    allocation : str
+        The grade form's allocation and why: the lever split, or resultant and moment for
+        an overhung or narrow rotor (:func:`stand.core.tolerance.rotor_shape`); empty for
+        the other forms.
     """
 
     form: str
@@ -165,6 +169,7 @@ class Tolerance:
     max_speed_rad_s: float | None = None
     U_per_kg_m: float | None = None
     bearing_planes_m: tuple[float, float] | None = None
+    allocation: str = ""
 
 
 @dataclass(frozen=True)

@@ -188,6 +188,8 @@ def _tolerance(r: Result) -> dict[str, Any]:
         out["permissible_g_mm"] = _g_mm(t.U_per_kg_m)
     if t.bearing_planes_m is not None:
         out["bearing_planes_m"] = list(t.bearing_planes_m)
+    if t.allocation:
+        out["allocation"] = t.allocation
     return out
 
 

@@ -27,6 +27,8 @@ from stand.core.tolerance import (
     permissible_unbalance,
     plane_criteria,
     plane_tolerances,
+    rotor_shape,
+    shape_limits,
     static_couple_criteria,
     static_couple_limits,
 )
@@ -97,16 +99,54 @@ def tolerance_of(
             grade=f"{t.grade_mm_s:g}",
             rpm=f"{t.max_speed_rpm:g}",
         )
+        shape = rotor_shape(x, x_cm, z)
+        if shape != "between":
+            S, P = shape_limits(U_per, z)
+            return Tolerance("grade", src, N_("resultant and moment about the centre of mass"),
+                             moment, static_couple_criteria(x, x_cm, S, P),
+                             static_couple_limits(x, x_cm, S, P), G, omega, U_per,
+                             None if t.bearing_planes_m is None else (z[0], z[1]),
+                             _shape_words(shape, x, x_cm, z))  # fmt: skip
+    bearing = None if t.bearing_planes_m is None else (z[0], z[1])
+    split = said(
+        "the lever rule about the centre of mass, shares {a} % and {b} % (each held within "
+        "30 to 70 %)",
+        a=f"{100 * limits[0] / U_per:.0f}",
+        b=f"{100 * limits[1] / U_per:.0f}",
+    )
     if t.bearing_planes_m is None and t.form == "grade":  # today's: the supports, worst phase
         per = plane_tolerances(params, U_per)
-        crit = plane_criteria(per)
-        judged_in = N_("correction planes (bearing-plane shares at the supports, any phase)")
+        at = N_("correction planes (bearing-plane shares at the supports, any phase)")
+        return Tolerance(t.form, src, at, moment, plane_criteria(per), per, G, omega, U_per,
+                         bearing, split)  # fmt: skip
+    return Tolerance(t.form, src, said("bearing planes at {where}", where=where), moment,
+                     bearing_criteria(x, z, limits), carried_limits(x, z, limits), G, omega,
+                     U_per, bearing, split if t.form == "grade" else "")  # fmt: skip
+
+
+def _shape_words(shape: str, x: Sequence[float], x_cm: float, z: Sequence[float]) -> str:
+    """Why a grade form is judged by resultant and moment, and what was assumed."""
+    span = z[1] - z[0]
+    if shape == "overhung":
+        a = 100 * (z[1] - x_cm) / span
+        why = said(
+            "the centre of mass lies outside the bearing planes (lever shares {a} % and {b} %)",
+            a=f"{a:.0f}",
+            b=f"{100 - a:.0f}",
+        )
     else:
-        per = carried_limits(x, z, limits)
-        crit = bearing_criteria(x, z, limits)
-        judged_in = said("bearing planes at {where}", where=where)
-    bearing = None if t.bearing_planes_m is None else (z[0], z[1])
-    return Tolerance(t.form, src, judged_in, moment, crit, per, G, omega, U_per, bearing)
+        why = said(
+            "a narrow rotor: correction planes {b} m apart, bearing planes {l} m (narrow "
+            "below a third, assumed)",
+            b=f"{abs(x[1] - x[0]):.3g}",
+            l=f"{span:.3g}",
+        )
+    return said(
+        "ISO 21940-11 judges resultant and moment apart where {why}; limits assumed (the "
+        "standard's sources give no number): resultant U_per, moment U_per x bearing "
+        "distance / 2",
+        why=why,
+    )
 
 
 def combined_error(

@@ -332,6 +332,8 @@ def check_screen(station: Station) -> None:
                 source=_(t["source"]), where=_(t["judged_in"]), rule=_(t["rule"])
             )
         )
+        if t.get("allocation"):
+            ui.label(_("Allocation: {rule}.").format(rule=_(t["allocation"])))
     names = {
         "plane": _("plane"),
         "before": _("before"),
