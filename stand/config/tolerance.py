@@ -129,9 +129,30 @@ class KeyTable(BaseModel):
         return self.width_mm * self.height_mm * self.length_mm * 1e-9 * self.density_kg_m3
 
 
+REACH_SHARE = 0.25
+"""The rotor reaches a quarter of the supports' span beyond its outermost support or
+correction plane (journal and shaft ends): bearing planes and keys lie within it."""
+KEYS_SHARE = 0.1
+"""All keys together weigh at most a tenth of the rotor."""
+
+
+def rotor_reach(p: StandParameters) -> tuple[float, float]:
+    """The axial extent a bearing plane or a key may lie in [m from support 1]: from the
+    outermost support or correction plane, :data:`REACH_SHARE` of the span further."""
+    lo, hi = min(0.0, p.a), max(p.L, p.a + p.b + p.c)
+    return lo - REACH_SHARE * p.L, hi + REACH_SHARE * p.L
+
+
+def _outside(value_m: float, p: StandParameters) -> str | None:
+    lo, hi = rotor_reach(p)
+    if lo <= value_m <= hi:
+        return None
+    return f"{value_m:g} m lies outside the rotor ({lo:.3g} to {hi:.3g} m from support 1)"
+
+
 def check_tolerance(t: ToleranceTable | None, p: StandParameters, source: str) -> None:
-    """The table against the rotor: bearing planes apart and around the centre of mass
-    side, journals that carry the rotor's mass (ConfigError naming the key and the figure)."""
+    """The table against the rotor: bearing planes apart and on the rotor, journals that
+    carry the rotor's mass (ConfigError naming the key and the figure)."""
     if t is None:
         return
     if t.bearing_planes_m is not None:
@@ -141,12 +162,10 @@ def check_tolerance(t: ToleranceTable | None, p: StandParameters, source: str) -
                 f"[{zA:g}, {zB:g}] m: bearing A must lie at least 1 mm before bearing B",
                 source=source, key="tolerance.bearing_planes_m",
             )  # fmt: skip
-        reach = 10 * p.L
-        if max(abs(zA), abs(zB - p.L)) > reach:
-            raise ConfigError(
-                f"[{zA:g}, {zB:g}] m: further than {reach:g} m (10 spans) from the supports",
-                source=source, key="tolerance.bearing_planes_m",
-            )  # fmt: skip
+        for k, z in enumerate((zA, zB)):
+            if (why := _outside(z, p)) is not None:
+                raise ConfigError(f"bearing {'AB'[k]} at {why}", source=source,
+                                  key="tolerance.bearing_planes_m")  # fmt: skip
     if t.api_journal_kg is not None:
         W = sum(t.api_journal_kg)
         if abs(W - p.M3) > JOURNALS_AGREE * p.M3:
@@ -157,19 +176,43 @@ def check_tolerance(t: ToleranceTable | None, p: StandParameters, source: str) -
             )  # fmt: skip
 
 
+def check_mass_on_rotor(
+    mass_kg: float, radius_m: float, p: StandParameters, source: str, key: str
+) -> None:
+    """A test or trial mass fixed on the rotor: within its largest correction radius and no
+    heavier than a tenth of it (ConfigError naming ``key``)."""
+    radius_mm = 1e3 * max(p.R1, p.R2)
+    if radius_m * 1e3 > radius_mm * (1 + 1e-9):
+        raise ConfigError(
+            f"{radius_m * 1e3:g} mm is beyond the rotor's largest correction radius "
+            f"({radius_mm:g} mm)", source=source, key=key,
+        )  # fmt: skip
+    if mass_kg > KEYS_SHARE * p.M3:
+        raise ConfigError(
+            f"{mass_kg * 1e3:g} g on a rotor of {p.M3:g} kg: more than a tenth of it",
+            source=source, key=key,
+        )  # fmt: skip
+
+
 def check_keys(keys: list[KeyTable], p: StandParameters, source: str) -> None:
-    """Each key on the rotor: within the planes' span by 10 spans, and no heavier than a
-    tenth of the rotor (ConfigError naming ``rotor.keys[k]``)."""
+    """Each key on the rotor: on its length, within its largest correction radius, and all
+    keys together no heavier than a tenth of it (ConfigError naming ``rotor.keys[k]``)."""
+    radius_mm = 1e3 * max(p.R1, p.R2)
+    total = 0.0
     for k, key in enumerate(keys):
         where = f"rotor.keys[{k}]"
-        if key.position_m is not None and abs(key.position_m - p.L / 2) > 10 * p.L:
+        if key.position_m is not None and (why := _outside(key.position_m, p)) is not None:
+            raise ConfigError(f"position_m {why}", source=source, key=f"{where}.position_m")
+        if key.radius_mm > radius_mm:
             raise ConfigError(
-                f"position_m {key.position_m:g} m is further than 10 spans from the stand",
-                source=source, key=f"{where}.position_m",
+                f"radius_mm {key.radius_mm:g} mm is beyond the rotor's largest correction "
+                f"radius ({radius_mm:g} mm): a key lies in the rotor",
+                source=source, key=f"{where}.radius_mm",
             )  # fmt: skip
-        if key.mass_kg > 0.1 * p.M3:
+        total += key.mass_kg
+        if total > KEYS_SHARE * p.M3:
             raise ConfigError(
-                f"a key of {key.mass_kg:.3g} kg on a rotor of {p.M3:g} kg: more than a tenth "
-                "of it (check width_mm, height_mm, length_mm, density_kg_m3)",
+                f"keys of {total:.3g} kg together (up to this one) on a rotor of {p.M3:g} kg: "
+                "more than a tenth of it (check width_mm, height_mm, length_mm, density_kg_m3)",
                 source=source, key=where,
             )  # fmt: skip

@@ -31,6 +31,7 @@ import numpy as np
 from pydantic import BaseModel, Field, FiniteFloat
 
 from stand.config import STRICT, Config, config_toml, validate
+from stand.config.tolerance import check_mass_on_rotor
 from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
 from stand.core.machine_tests import UMAR_POSITIONS, UMAR_TEST_FACTOR
 from stand.drivers.runs.recording import Recording, write_recording
@@ -252,8 +253,9 @@ def file_runs(
         source = str(read.rec.meta.get("source", ""))
         simulated = simulated or source.startswith(("simulated", "virtual:"))
         applied = np.zeros(2, complex)
-        for t in e.masses:
+        for j, t in enumerate(e.masses):
             R = t.radius_mm * 1e-3 if t.radius_mm else (p.R1, p.R2)[t.plane - 1]
+            check_mass_on_rotor(t.mass_g * 1e-3, R, p, path, f"runs[{k}].masses[{j}]")
             applied[t.plane - 1] += t.mass_g * 1e-3 * R * np.exp(-1j * math.radians(t.angle_deg))
         if e.test is None:
             raise ConfigError("name the run's test: reference, umar or urr", source=path,

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from stand.config import Config
+from stand.config.tolerance import check_mass_on_rotor
 from stand.core import StandParameters
 from stand.core.machine_tests import fit_circle
 from stand.core.tolerance import judge
@@ -133,8 +134,9 @@ def file_readings(
     p = found[0]
     by_plane: dict[int, list[Reading]] = {}
     trials: dict[int, set[float]] = {}
-    for name, t, U, why in read:
+    for k, (name, t, U, why) in enumerate(read):
         R = t.radius_mm * 1e-3 if t.radius_mm else (p.R1, p.R2)[t.plane - 1]
+        check_mass_on_rotor(t.mass_g * 1e-3, R, p, path, f"runs[{k}].masses[0]")
         by_plane.setdefault(t.plane, []).append(Reading(name, t.angle_deg, U, why))
         trials.setdefault(t.plane, set()).add(round(t.mass_g * 1e-3 * R, 12))
     for plane, values in trials.items():

@@ -275,7 +275,7 @@ def build_result(
     """Corrections, static and couple parts, tolerance and spread for a measurement."""
     c = cfg.correction
     noise = [abs(U) <= m.radius95_kg_m[i] for i, U in enumerate(m.solution.U_kg_m)]
-    tolerance = tolerance_of(cfg, params, options.acceptance)
+    tolerance = tolerance_of(cfg, params, options.acceptance, m.omega_rad_s)
     cal = calibration_radius(m, cfg, params, options)
     judgements, verdict = (
         ((), "none")

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.config import Config
-from stand.core import StandParameters, rpm_to_rad_s
+from stand.core import StandParameters, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.tolerance import (
     api_permissible,
     bearing_criteria,
@@ -47,15 +47,25 @@ RULES = {
 """The rule of each moment, as the outputs quote it."""
 
 
+SPEED_SLACK = 0.01
+"""A measuring speed this share above the maximum service speed is taken as above it (the
+speed's own spread and a nominal speed rounded in the table stay below)."""
+
+
 def _planes_x(p: StandParameters) -> tuple[float, float]:
     return p.a, p.a + p.b + p.c
 
 
 def tolerance_of(
-    cfg: Config, params: StandParameters, moment: str | None = None
+    cfg: Config,
+    params: StandParameters,
+    moment: str | None = None,
+    speed_rad_s: float | None = None,
 ) -> Tolerance | None:
     """The tolerance of ``[tolerance]`` (None without one); ``moment`` overrides the
-    table's ``acceptance``."""
+    table's ``acceptance``.  ``speed_rad_s``: the run's measuring speed; a maximum service
+    speed below it cannot be the rotor's, and the grade and API forms are then judged at
+    the measuring speed (stricter), the source saying so."""
     t = cfg.tolerance
     if t is None:
         return None
@@ -80,15 +90,19 @@ def tolerance_of(
                          moment, static_couple_criteria(x, x_cm, S, P),
                          static_couple_limits(x, x_cm, S, P))  # fmt: skip
     omega = float(rpm_to_rad_s(t.max_speed_rpm or 1.0))  # grade and API forms give it
+    faster = speed_rad_s is not None and speed_rad_s > omega * (1.0 + SPEED_SLACK)
+    if faster:
+        omega = float(speed_rad_s or omega)
     if t.form == "api":
         W = t.api_journal_kg or ()
-        limits = tuple(api_permissible(w, float(t.max_speed_rpm or 1)) for w in W)
+        limits = tuple(api_permissible(w, float(rad_s_to_rpm(omega))) for w in W)
         U_per, G = sum(limits), None
         src = t.source or said(
             "API 610/617/687: 6350 W / N at {rpm} rpm, journals {journals}",
             rpm=f"{t.max_speed_rpm:g}",
             journals=" and ".join(f"{w:g} kg" for w in W),
         )
+        src = _at_speed(src, t.max_speed_rpm, omega) if faster else src
     else:
         G = (t.grade_mm_s or 0) * 1e-3
         U_per = permissible_unbalance(params.M3, G, omega)
@@ -99,6 +113,7 @@ def tolerance_of(
             grade=f"{t.grade_mm_s:g}",
             rpm=f"{t.max_speed_rpm:g}",
         )
+        src = _at_speed(src, t.max_speed_rpm, omega) if faster else src
         shape = rotor_shape(x, x_cm, z)
         if shape != "between":
             S, P = shape_limits(U_per, z)
@@ -122,6 +137,16 @@ def tolerance_of(
     return Tolerance(t.form, src, said("bearing planes at {where}", where=where), moment,
                      bearing_criteria(x, z, limits), carried_limits(x, z, limits), G, omega,
                      U_per, bearing, split if t.form == "grade" else "")  # fmt: skip
+
+
+def _at_speed(source: str, max_rpm: float | None, omega: float) -> str:
+    return said(
+        "{source}; judged at the measuring speed {rpm} rpm: the maximum service speed "
+        "{max_rpm} rpm lies below it",
+        source=source,
+        rpm=f"{rad_s_to_rpm(omega):.0f}",
+        max_rpm=f"{max_rpm:g}",
+    )
 
 
 def _shape_words(shape: str, x: Sequence[float], x_cm: float, z: Sequence[float]) -> str:

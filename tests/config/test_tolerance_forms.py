@@ -46,7 +46,8 @@ REFUSED = {  # body -> what the one line must say
     "grade_mm_s = 6.3\nmax_speed_rpm = 1e300": "max_speed_rpm",
     'grade_mm_s = 6.3\nmax_speed_rpm = 1500\nacceptance = "someday"': "acceptance",
     "grade_mm_s = 6.3\nmax_speed_rpm = 1500\nbearing_planes_m = [1.0, 0.2]": "bearing A",
-    "grade_mm_s = 6.3\nmax_speed_rpm = 1500\nbearing_planes_m = [0, 900]": "10 spans",
+    "grade_mm_s = 6.3\nmax_speed_rpm = 1500\nbearing_planes_m = [0, 900]": "outside the rotor",
+    "grade_mm_s = 6.3\nmax_speed_rpm = 1500\nbearing_planes_m = [-5, 9]": "bearing A at -5 m",
     "api_journal_kg = [300, 300]\nmax_speed_rpm = 1500": "rotor's M3 is 60",
     "api_journal_kg = [30, 30]\nmax_speed_rpm = 0.5": "max_speed_rpm",
 }
@@ -79,7 +80,7 @@ convention = "half"
         ("", 240, "plane or its position_m"),
         ("plane = 1\nposition_m = 0.5", 240, "plane or its position_m"),
         ("plane = 3", 240, "rotor.keys"),
-        ("position_m = 90.0", 240, "10 spans"),
+        ("position_m = 90.0", 240, "lies outside the rotor"),
         ("plane = 1", 10000, "more than a tenth"),
     ],
 )
@@ -94,6 +95,19 @@ def test_keys_are_checked_against_the_rotor(
     with pytest.raises(ConfigError, match=r"rotor\.keys") as err:
         load_config(write(tmp_path, text))
     assert says in str(err.value)
+
+
+def test_a_key_beyond_the_rotor_and_keys_heavier_than_it_are_refused(tmp_path: Path) -> None:
+    """A key at 5 m radius on a rotor whose largest correction radius is 90 mm; sixteen keys
+    that weigh more together than a tenth of the rotor, each alone light enough."""
+    far = MINIMAL + KEY.format(where="plane = 1", length=240).replace(
+        "radius_mm = 40.0", "radius_mm = 5000.0"
+    )
+    with pytest.raises(ConfigError, match=r"rotor\.keys\[0\]\.radius_mm.*largest correction"):
+        load_config(write(tmp_path, far))
+    many = MINIMAL + KEY.format(where="plane = 1", length=2000) * 16  # 1.256 kg each
+    with pytest.raises(ConfigError, match=r"rotor\.keys\[4\].*together"):
+        load_config(write(tmp_path, many))
 
 
 def test_a_bad_form_is_one_line_and_exit_2_from_the_cli(

@@ -61,14 +61,20 @@ def test_a_rotor_between_its_bearings_keeps_the_lever_split(
 def test_a_narrow_rotor_is_judged_by_resultant_and_moment(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Bearing planes 8 m apart around correction planes 1.55 m apart: narrow (below a
-    third, the product's stated assumption)."""
-    cfg = config(tmp_path, "narrow", GRADE + "bearing_planes_m = [-3.0, 5.0]\n")
+    """Correction planes 0.55 m apart between supports 1.9 m apart: narrow (below a third,
+    the product's stated assumption); the moment's limit U_per x 1.9 m / 2."""
+    cfg = config(tmp_path, "narrow")
+    text = cfg.read_text()
+    for old, new in (("a = 0.15 ", "a = 0.60 "), ("b = 0.85 ", "b = 0.30 "),
+                     ("c = 0.70 ", "c = 0.25 "), ("d = 0.20 ", "d = 0.75 ")):  # fmt: skip
+        assert old in text
+        text = text.replace(old, new)
+    cfg.write_text(text)
     out = solve(simulate(tmp_path / "r.h5"), capsys, "--config", str(cfg))
     t = out["tolerance"]
     assert [c["name"] for c in t["criteria"]] == ["resultant", "moment"]
-    assert "narrow" in t["allocation"]
-    assert t["criteria"][1]["permissible_g_mm2"] == pytest.approx(U_PER_G_MM * 8000 / 2, rel=1e-4)
+    assert "narrow" in t["allocation"] and "0.55 m apart" in t["allocation"]
+    assert t["criteria"][1]["permissible_g_mm2"] == pytest.approx(U_PER_G_MM * 1900 / 2, rel=1e-4)
 
 
 @given(
@@ -87,3 +93,19 @@ def test_shape_follows_the_definitions(
         assert shape == "overhung"
     else:
         assert shape == ("narrow" if (x1 + gap) - x1 < (zB - zA) / 3 else "between")
+
+
+def test_a_maximum_speed_below_the_measuring_speed_is_judged_at_the_measuring_speed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``max_speed_rpm = 100`` on a 900 rpm run would make U_per nine times larger and pass
+    the untouched demo rotor; it is judged at 900 rpm (U_per = G m / Omega at 900 rpm) and
+    fails, the source saying why."""
+    slow = GRADE.replace("max_speed_rpm = 1500.0", "max_speed_rpm = 100.0")
+    cfg = config(tmp_path, "slow", slow)
+    out = solve(simulate(tmp_path / "r.h5"), capsys, "--config", str(cfg))
+    t = out["tolerance"]
+    at_900 = 6.3 * 60.0 / (900 * 2 * math.pi / 60) * 1e3
+    assert t["permissible_g_mm"] == pytest.approx(at_900, rel=2e-3)  # the run's speed, +-0.2 %
+    assert "judged at the measuring speed 900 rpm" in t["source"]
+    assert out["verdict"] == "fail"
