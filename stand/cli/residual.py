@@ -4,11 +4,12 @@ simulated scene: the circle through the readings, its centre the residual."""
 from __future__ import annotations
 
 import argparse
+import cmath
 from typing import Any
 
 from stand.cli.common import ACCEPTANCE_EXIT, add_force_argument, write_text_output
 from stand.cli.format import dump_json
-from stand.config import Config
+from stand.config import Config, load_config
 from stand.errors import ConfigError, UsageError
 from stand.health.residual import PlaneCheck, check_plane, check_trial, file_readings, scene_check
 from stand.sim import load_scene
@@ -26,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--config",
         metavar="CFG",
-        help="with RUNS.toml: the configuration (default: the one the runs carry)",
+        help="with RUNS.toml: the configuration (default: the one the runs carry); with "
+        "--scene: what the stand's software believes (the scene is the physical stand)",
     )
     p.add_argument(
         "--scene",
@@ -62,10 +64,12 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("stand residual: give RUNS.toml or --scene SCENE (one of them)")
     if args.scene is not None:
         scene, params, _ = load_scene(args.scene)
-        cfg, per = scene.config(), _permissible(scene.config(), params, args.scene)
+        belief = None if args.config is None else load_config(args.config)[:2]
+        cfg, q = belief or (scene.config(), params)
+        per = _permissible(cfg, q, args.config or args.scene)
         if not 1.0 <= args.trial <= 2.0:
             raise UsageError(f"--trial must be within 1 to 2 (x the permissible), got {args.trial}")
-        checks = scene_check(scene, params, per, args.trial, args.positions)
+        checks = scene_check(scene, params, per, args.trial, args.positions, belief)
     else:
         readings, trials, params, cfg = file_readings(args.runs, args.config)
         per = _permissible(cfg, params, args.runs)
@@ -98,24 +102,42 @@ def _g_mm(x: complex | float | None) -> float | None:
     return None if x is None else round(abs(x) * 1e6, 3)
 
 
-def to_json(checks: tuple[PlaneCheck, ...]) -> dict[str, Any]:
-    """The check's JSON form (g mm, deg)."""
-    import cmath
+def _fit(c: PlaneCheck) -> dict[str, Any] | None:
+    f = c.fit
+    if f is None:
+        return None
+    return {
+        "centre_read_g_mm": _g_mm(f.centre_kg_m), "centre_read_angle_deg": _angle(f.centre_kg_m),
+        "radius_read_g_mm": _g_mm(f.radius_kg_m),
+        "trial_read_share": round(abs(f.gain), 5),
+        "scale": round(1.0 / abs(f.gain), 5),
+        "scatter_g_mm": _g_mm(f.scatter_kg_m),
+        "scatter_share": round(f.scatter_kg_m / f.radius_kg_m, 5) if f.radius_kg_m else None,
+        "offset_share": round(abs(f.centre_kg_m) / f.radius_kg_m, 5) if f.radius_kg_m else None,
+    }  # fmt: skip
 
+
+def _angle(U: complex) -> float:
+    return round((-cmath.phase(U) * 180 / cmath.pi) % 360, 3)
+
+
+def to_json(checks: tuple[PlaneCheck, ...]) -> dict[str, Any]:
+    """The check's JSON form (g mm, deg).  A residual within its own error of zero has no
+    angle: the interval holds every angle."""
     states = [c.state for c in checks]
     verdict = next((s for s in ("fail", "not judged", "undecided") if s in states), "pass")
     planes = []
     for c in checks:
         angle = (
             None
-            if c.residual_kg_m is None
-            else round((-cmath.phase(c.residual_kg_m) * 180 / cmath.pi) % 360, 3)
+            if c.residual_kg_m is None or abs(c.residual_kg_m) <= (c.error_kg_m or 0.0)
+            else _angle(c.residual_kg_m)
         )
         planes.append({
             "plane": c.plane, "verdict": c.state, "why": c.why or None,
             "residual_g_mm": _g_mm(c.residual_kg_m), "residual_angle_deg": angle,
             "error95_g_mm": _g_mm(c.error_kg_m), "permissible_g_mm": _g_mm(c.permissible_kg_m),
-            "trial_g_mm": _g_mm(c.trial_kg_m),
+            "trial_g_mm": _g_mm(c.trial_kg_m), "fit": _fit(c),
             "readings": [{"run": r.name, "angle_deg": r.angle_deg,
                           "re_g_mm": None if r.U_kg_m is None else round(r.U_kg_m.real * 1e6, 3),
                           "im_g_mm": None if r.U_kg_m is None else round(r.U_kg_m.imag * 1e6, 3),
@@ -126,13 +148,23 @@ def to_json(checks: tuple[PlaneCheck, ...]) -> dict[str, Any]:
 
 def _print(out: dict[str, Any]) -> None:
     print("residual-unbalance check (API 610/617/687 annex B; the circle through the readings, "
-          "its centre the residual; ISO 21940-14's rule):")  # fmt: skip
+          "its centre scaled by the trial's known effect over the circle's radius; "
+          "ISO 21940-14's rule):")  # fmt: skip
     for p in out["planes"]:
+        f = p["fit"]
         if p["verdict"] == "not judged":
             print(f"  plane {p['plane']}: NOT JUDGED: {p['why']}")
             continue
+        at = (
+            " at {:.1f} deg".format(p["residual_angle_deg"])
+            if p["residual_angle_deg"] is not None
+            else " (no angle: within its error of 0)"
+        )
         print(f"  plane {p['plane']}: residual {p['residual_g_mm']:.1f} +- {p['error95_g_mm']:.1f}"
-              f" g mm at {p['residual_angle_deg']:.1f} deg against {p['permissible_g_mm']:.1f} "
+              f" g mm{at} against {p['permissible_g_mm']:.1f} "
               f"permissible ({len(p['readings'])} positions, trial {p['trial_g_mm']:.1f} g mm): "
               f"{p['verdict'].upper()}")  # fmt: skip
+        print(f"    fit: the trial read at {100 * f['trial_read_share']:.1f} % of its known "
+              f"effect (scale {f['scale']:.4f}), scatter {100 * f['scatter_share']:.2f} % of the "
+              f"radius, centre {100 * f['offset_share']:.1f} % of it from the origin")  # fmt: skip
     print(f"residual check: {out['verdict'].upper()}")

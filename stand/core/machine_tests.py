@@ -18,7 +18,9 @@ by a test mass in the other, in % of the reading in its own plane (:func:`cross_
 
 **Residual-unbalance check** (API 617 annex B): a trial mass indexed to 6 or 12 equally
 spaced positions, one run each; the readings lie on a circle whose centre is the
-residual unbalance (:func:`fit_circle`).
+residual unbalance (:func:`fit_circle`).  The circle's radius is the trial's effect as
+the stand reads it; API scales the centre by the trial's known effect over that radius,
+so a stand that reads wrong by a factor still gives the residual (:func:`fit_trial`).
 """
 
 from __future__ import annotations
@@ -125,3 +127,54 @@ def fit_circle(points_kg_m: ArrayLike) -> Circle:
     radius = float(np.sqrt(max(k + abs(centre) ** 2, 0.0)))
     rms = float(np.sqrt(np.mean((np.abs(z - centre) - radius) ** 2)))
     return Circle(centre, radius, rms)
+
+
+@dataclass(frozen=True)
+class TrialFit:
+    """The residual check's fit of readings ``z_k = C + g T e^{-i theta_k}`` at the trial's
+    known positions ``theta_k``: ``C`` the centre as read [kg m], ``g`` the stand's reading
+    of the trial over its known effect ``T`` (complex: amount and angle), the residual
+    ``C / g`` [kg m] (the centre scaled by ``T`` over the fitted radius ``|g| T``, its angle
+    referred to the trial's positions), the points' rms distance from the model [kg m] and
+    the residual's per-axis standard deviation [kg m], and ``T`` [kg m]."""
+
+    centre_kg_m: complex
+    gain: complex
+    residual_kg_m: complex
+    scatter_kg_m: float
+    sigma_kg_m: float
+    trial_kg_m: float
+
+    @property
+    def radius_kg_m(self) -> float:
+        """The fitted circle's radius as read [kg m]: ``|g| T``."""
+        return abs(self.gain) * self.trial_kg_m
+
+
+def fit_trial(readings_kg_m: ArrayLike, angles_deg: ArrayLike, trial_kg_m: float) -> TrialFit:
+    """Least squares of ``z_k = C + g T e^{-i theta_k}`` for a trial of effect ``T``
+    [kg m] at angles ``theta_k`` [deg] (the seed's sense ``U = q e^{-i phi}``).
+
+    The residual is ``C / g``; its per-axis variance, from the scatter ``s^2 =
+    sum |e_k|^2 / (2 (n - 2))`` per axis, is ``s^2 / (n |g|^2) (1 + |C/g|^2 / T^2)`` for
+    ``n`` equally spaced positions (first order in the errors of ``C`` and ``g``).
+
+    >>> t = np.radians(np.arange(6) * 60.0)
+    >>> z = 0.9 * (0.3 + 1.0 * np.exp(-1j * t))  # a stand reading 10 % short
+    >>> f = fit_trial(z, np.arange(6) * 60.0, 1.0)
+    >>> round(abs(f.residual_kg_m), 9), round(abs(f.gain), 9), round(f.scatter_kg_m, 9)
+    (0.3, 0.9, 0.0)
+    """
+    z = np.asarray(readings_kg_m, dtype=complex).ravel()
+    e = np.exp(-1j * np.radians(np.asarray(angles_deg, dtype=float).ravel()))
+    n = z.size
+    if n < 3 or e.size != n:
+        raise ValueError(f"the fit takes 3 readings or more, one per angle; got {n}")
+    A = np.column_stack([np.ones(n), trial_kg_m * e])
+    (C, g), *_ = np.linalg.lstsq(A, z, rcond=None)
+    err = z - A @ np.array([C, g])
+    scatter = float(np.sqrt(np.mean(np.abs(err) ** 2)))
+    s2 = float(np.sum(np.abs(err) ** 2)) / (2 * max(n - 2, 1))
+    res = complex(C / g)
+    var = s2 / (n * abs(g) ** 2) * (1 + abs(res) ** 2 / trial_kg_m**2)
+    return TrialFit(complex(C), complex(g), res, scatter, float(np.sqrt(var)), trial_kg_m)

@@ -13,7 +13,8 @@ from stand.report.certificate import CSS
 from stand.report.plots import png
 
 RULE = ("API 610/617/687 annex B: a trial mass at 6 or 12 equally spaced positions, one run "
-        "each; the readings lie on a circle whose centre is the residual unbalance. Judged by "
+        "each; the readings lie on a circle whose centre is the residual unbalance, scaled by "
+        "the trial's known effect over the circle's radius. Judged by "
         "ISO 21940-14 directly after balancing: pass if residual + its 95 % radius <= "
         "permissible, fail if residual - it > permissible, else undecided.")  # fmt: skip
 
@@ -35,12 +36,17 @@ def _polar(planes: list[dict[str, Any]]) -> str:
             ax.scatter(-np.angle(z), np.abs(z), color="0.2", s=18, zorder=3, label="readings")
         ax.plot(ring, np.full_like(ring, p["permissible_g_mm"]), color="tab:green", lw=1.5,
                 label=f"permissible {p['permissible_g_mm']:.1f} g mm")  # fmt: skip
-        if p["residual_g_mm"] is not None:
-            c = p["residual_g_mm"] * np.exp(-1j * math.radians(p["residual_angle_deg"]))
-            pts = c + p["trial_g_mm"] * np.exp(1j * ring)
+        f = p.get("fit")
+        if f is not None:  # the circle as read: its centre, its radius
+            c = f["centre_read_g_mm"] * np.exp(-1j * math.radians(f["centre_read_angle_deg"]))
+            pts = c + f["radius_read_g_mm"] * np.exp(1j * ring)
             ax.plot(-np.angle(pts), np.abs(pts), color="tab:blue", lw=1, label="fitted circle")
+        if p["residual_g_mm"] is not None:  # scaled by the trial's ratio
+            a = p["residual_angle_deg"]
+            c = p["residual_g_mm"] * np.exp(-1j * math.radians(0.0 if a is None else a))
             ax.scatter([-np.angle(c)], [abs(c)], color="tab:red", marker="x", s=60, zorder=4,
-                       label=f"residual {p['residual_g_mm']:.1f} g mm")  # fmt: skip
+                       label=f"residual {p['residual_g_mm']:.1f} g mm"
+                       + (" (no angle)" if a is None else ""))  # fmt: skip
         ax.set_title(f"plane {p['plane']} [g mm]")
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.06), fontsize=8, frameon=False)
     fig.tight_layout()
@@ -61,7 +67,12 @@ def residual_page(out: dict[str, Any]) -> str:
         res = "–"
         if p["residual_g_mm"] is not None:
             res = f"{p['residual_g_mm']:.1f} ± {p['error95_g_mm']:.1f}"
-            res += f" at {p['residual_angle_deg']:.1f}°"
+            a = p["residual_angle_deg"]
+            res += " (no angle: within its error of 0)" if a is None else f" at {a:.1f}°"
+            if p.get("fit"):
+                f = p["fit"]
+                res += (f"; trial read at {100 * f['trial_read_share']:.1f} %, scatter "
+                        f"{100 * f['scatter_share']:.2f} % of the radius")  # fmt: skip
         rows.append(f"<tr><td>{p['plane']}</td><td>{len(p['readings'])}</td>"
                     f"<td>{p['trial_g_mm']:.1f}</td><td>{res}</td>"
                     f"<td>{p['permissible_g_mm']:.1f}</td><td><b>{e(p['verdict'].upper())}</b>"

@@ -115,3 +115,78 @@ def test_recorded_trial_runs_and_the_refusals(
     spec.write_text(_toml(small))
     assert main(["residual", str(spec)]) == 2
     assert "the check takes 1 to 2 x" in capsys.readouterr().err
+
+
+def _off_by(cfg_text: str, factor: float) -> str:
+    """The scene's stand and rotor with every mass, inertia and stiffness times ``factor``:
+    the software's model reads every unbalance ``factor`` times its true value."""
+    out = []
+    for line in cfg_text.splitlines():
+        key = line.split("=")[0].strip()
+        if key == "description":  # a scene's, not a config's
+            continue
+        if key in ("M1", "M2", "C1", "C2", "M3", "J3"):
+            value = float(line.split("=")[1].split("#")[0])
+            line = f"{key} = {value * factor!r}"
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def test_a_stand_calibrated_off_is_put_right_by_the_trial(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The software's model 7.7 % short (every mass and stiffness x 0.923): the readings are
+    7.7 % short, and so is the circle; API's ratio (the trial's known effect over the fitted
+    radius) gives the residual within 1 % of the truth (550 and 300 g mm; the noise gives
+    about 0.1 %), and the 95 % error holds the truth."""
+    scene = residual_scene(tmp_path, (550.0, 300.0), (40.0, 250.0))
+    belief = tmp_path / "believed.toml"
+    text = scene.read_text()
+    belief.write_text(_off_by(text[: text.index("[run]")], 0.923))
+    capsys.readouterr()
+    code = main(["residual", "--scene", str(scene), "--config", str(belief), "--json"])
+    out = json.loads(capsys.readouterr().out)
+    for p, truth, angle in zip(out["planes"], (550.0, 300.0), (40.0, 250.0), strict=True):
+        assert p["fit"]["trial_read_share"] == pytest.approx(0.923, abs=0.003)
+        assert p["residual_g_mm"] == pytest.approx(truth, rel=0.01)
+        U = p["residual_g_mm"] * np.exp(-1j * math.radians(p["residual_angle_deg"]))
+        assert abs(U - truth * np.exp(-1j * math.radians(angle))) <= p["error95_g_mm"]
+    assert code == 0  # 550 of 1013.5 and 300 of 1126.2 permissible (the model's M3 x 0.923)
+
+
+def test_one_recording_for_every_position_and_shuffled_positions_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One file named for all six positions: refused in one line (its digest twice), not a
+    0.5 g mm PASS.  The six runs named for the wrong positions: the readings do not go round
+    the circle in the trial's order, the plane not judged (exit 3)."""
+    scene = residual_scene(tmp_path, (300.0, 300.0), (40.0, 250.0))
+    g1 = 1.5 * PER[0] / 0.09 * 1e3
+    runs = _record(tmp_path, scene, 1, g1, 6)
+    one = [dict(r, file=runs[0]["file"]) for r in runs]
+    spec = tmp_path / "runs.toml"
+    spec.write_text(_toml(one))
+    capsys.readouterr()
+    assert main(["residual", str(spec)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "same recording as runs[0]" in err and len(err.splitlines()) == 1
+    order = [0, 3, 1, 4, 2, 5]
+    shuffled = [dict(r, file=runs[order[k]]["file"]) for k, r in enumerate(runs)]
+    spec.write_text(_toml(shuffled))
+    assert main(["residual", str(spec), "--json"]) == 3
+    (p,) = json.loads(capsys.readouterr().out)["planes"]
+    assert p["verdict"] == "not judged" and "do not go round the circle" in p["why"]
+
+
+def test_a_residual_within_its_error_of_zero_has_no_angle() -> None:
+    """0.5 g mm +- 0.6: the interval holds the origin, so every angle; 0.7 +- 0.6 has one."""
+    from stand.cli.residual import to_json
+    from stand.health.residual import PlaneCheck
+
+    def check(residual_g_mm: float) -> PlaneCheck:
+        U = residual_g_mm * 1e-6 * np.exp(-1j * math.radians(80.0))
+        return PlaneCheck(1, (), 1.5 * PER[0], complex(U), 0.6e-6, PER[0], "pass")
+
+    inside, outside = to_json((check(0.5), check(0.7)))["planes"]
+    assert inside["residual_angle_deg"] is None
+    assert outside["residual_angle_deg"] == pytest.approx(80.0)
