@@ -181,6 +181,12 @@ def to_json(e: Evaluation) -> dict[str, Any]:
                     "applied_g_mm": [_g_mm(a) for a in r.applied_kg_m],
                     "indicated_g_mm": [_g_mm(a) for a in r.indicated_kg_m],
                     "urr_pct": [None if u is None else round(100 * u, 4) for u in r.urr],
+                    "verdict": "refused"
+                    if r.refused
+                    else (
+                        "pass" if all(u >= e.urr_claim for u in r.urr if u is not None) else "fail"
+                    ),
+                    "refused": r.refused or None,
                 }
                 for r in e.urr_runs
             ],
@@ -205,8 +211,8 @@ def _print(e: Evaluation, out: dict[str, Any]) -> None:
         )
     else:
         print("U_mar test: NOT JUDGED")
-    worst = [min([u for x in e.urr_runs if (u := x.urr[i]) is not None], default=None)
-             for i in range(2)]  # fmt: skip
+    worst = [min([u for x in e.urr_runs if (u := x.urr[i]) is not None and not x.refused],
+                 default=None) for i in range(2)]  # fmt: skip
     shown = " and ".join("-" if w is None else f"{100 * w:.2f} %" for w in worst)
     print(
         f"URR test (ISO 21940-21: each indication against the known applied unbalance): "

@@ -16,7 +16,10 @@ The procedure (as Bloch & Geitner reproduce ISO 21940-21; ``docs/health.md``):
 
 A run whose declared test unbalance contradicts what it read (the change from the
 reference further from the declared than half of it plus the 95 % radius) is named and
-left out; a test short of its runs is *not judged*, never judged on fewer.
+left out; a test short of its runs is *not judged*, never judged on fewer.  ISO 21940-21
+asks *every* run to reach the claim: a URR run left out makes the URR test ``not judged``
+(or ``fail`` where a run it kept fails), never ``pass``; the refused run stays in the list
+with its reason and the URR its indication gives.
 """
 
 from __future__ import annotations
@@ -52,6 +55,8 @@ class UrrRun:
     applied_kg_m: tuple[complex, complex]
     indicated_kg_m: tuple[complex, complex]
     urr: tuple[float | None, float | None]
+    refused: str = ""
+    """Why the run was left out of the verdict ("" when it was judged)."""
 
 
 @dataclass(frozen=True)
@@ -115,9 +120,12 @@ def evaluate_runs(
         (refused.append((r.name, bad)) if bad else kept.append(r))
     umar_runs = [r for r in kept if r.kind == "umar"]
     umar, u_mar, umar_verdict = _umar(umar_runs, why)
-    urr_runs = tuple(_urr_run(r) for r in kept if r.kind == "urr")
+    if umar_verdict == "not judged":
+        why += [f"U_mar: run {n} left out ({w})" for n, w in refused if n in _names(runs, "umar")]
+    left_out = dict(refused)
+    urr_runs = tuple(_urr_run(r, left_out.get(r.name, "")) for r in runs if r.kind == "urr")
     urr_verdict = _urr_verdict(urr_runs, urr_claim, why)
-    cross = _cross(kept, base) if len(refs) == 1 else (None, None)
+    cross = _cross(kept, base, why) if len(refs) == 1 else (None, None)
     return Evaluation(
         u_mar,
         None if u_mar is None else e_mar(u_mar, rotor_mass_kg),
@@ -148,28 +156,46 @@ def _umar(
     return res, u_mar, "pass" if all(x.passed for x in res) else "fail"
 
 
-def _urr_run(r: ProvingRun) -> UrrRun:
+def _names(runs: list[ProvingRun], kind: str) -> set[str]:
+    return {r.name for r in runs if r.kind == kind}
+
+
+def _urr_run(r: ProvingRun, refused: str) -> UrrRun:
     u = urr(r.applied_kg_m, r.U_kg_m)
     vals = tuple(None if np.isnan(x) else float(x) for x in u)
-    return UrrRun(r.name, r.applied_kg_m, r.U_kg_m, (vals[0], vals[1]))
+    return UrrRun(r.name, r.applied_kg_m, r.U_kg_m, (vals[0], vals[1]), refused)
 
 
 def _urr_verdict(runs: tuple[UrrRun, ...], claim: float, why: list[str]) -> str:
-    loaded = {i for r in runs for i in range(2) if r.urr[i] is not None}
+    """``fail`` if a judged run misses the claim; else ``not judged`` if a run was left out
+    or a plane is never loaded; else ``pass``."""
+    judged = [r for r in runs if not r.refused]
+    if any(u < claim for r in judged for u in r.urr if u is not None):
+        return "fail"
+    out = [r for r in runs if r.refused]
+    why += [f"URR: run {r.name} left out ({r.refused}): every run must reach the claim; "
+            "repeat it" for r in out]  # fmt: skip
+    loaded = {i for r in judged for i in range(2) if r.urr[i] is not None}
     if loaded != {0, 1}:
         why.append("URR: no run loads " + " or ".join(f"plane {i + 1}" for i in {0, 1} - loaded))
-        return "not judged"
-    ok = all(u >= claim for r in runs for u in r.urr if u is not None)
-    return "pass" if ok else "fail"
+    return "not judged" if out or loaded != {0, 1} else "pass"
 
 
-def _cross(runs: list[ProvingRun], base: np.ndarray) -> tuple[float | None, float | None]:
-    """The largest cross-effect of each plane's mass, from the runs loaded in it alone."""
+def _cross(
+    runs: list[ProvingRun], base: np.ndarray, why: list[str]
+) -> tuple[float | None, float | None]:
+    """The largest cross-effect of each plane's mass, from the runs loaded in it alone; a
+    run whose own plane read no change beyond its 95 % radius gives none (and says so)."""
     out: list[float | None] = [None, None]
     for r in runs:
         loaded = [i for i in range(2) if abs(r.applied_kg_m[i]) > 0]
         if len(loaded) == 1:
             i = loaded[0]
-            ce = cross_effect(np.asarray(r.U_kg_m) - base, i)
+            delta = np.asarray(r.U_kg_m) - base
+            if abs(delta[i]) <= r.radius95_kg_m[i]:
+                why.append(f"cross-effect: run {r.name} read no change in plane {i + 1}, "
+                           "its own (within its 95 % radius)")  # fmt: skip
+                continue
+            ce = cross_effect(delta, i)
             out[i] = ce if out[i] is None else max(out[i], ce)  # type: ignore[type-var]
     return out[0], out[1]

@@ -181,3 +181,50 @@ def test_an_evaluation_is_archived_with_its_due_date_and_health_says_when(
     assert main(["health", "--archive", other]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "evaluations" in err[0] and "verdict" in err[0]
+
+
+def test_a_urr_run_left_out_leaves_the_machine_not_judged_never_passed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """One URR run's declared masses 2.5 times what was put on: it reads 60 % short of the
+    declaration (its URR 40 %), is left out, and ISO 21940-21 asks every run to reach the
+    claim: the URR test is not judged (exit 3), the run listed as refused with its reason,
+    the reason in Q-DAS's remark (K0009) as well."""
+    _json(["evaluate", "--scene", str(short_demo(tmp_path)), "--record", str(tmp_path / "r")],
+          capsys, 0)  # fmt: skip
+    runs = tmp_path / "r" / "runs.toml"
+    text = runs.read_text()
+    block = re.search(r'file = "urr-2.h5"\ntest = "urr"\nmasses = \[.*\]', text)
+    assert block is not None
+    heavy = re.sub(r"mass_g = ([0-9.e+-]+)", lambda m: f"mass_g = {float(m[1]) * 2.5!r}",
+                   block[0])  # fmt: skip
+    runs.write_text(text.replace(block[0], heavy))
+    db = f"sqlite:///{tmp_path / 'a.db'}"
+    out = _json(["evaluate", str(runs), "--archive", db], capsys, 3)
+    assert out["verdict"] == "not judged" and out["urr_test"]["verdict"] == "not judged"
+    (left,) = [r for r in out["urr_test"]["runs"] if r["verdict"] == "refused"]
+    assert left["run"] == "urr-2.h5" and "declared" in left["refused"]
+    assert min(u for u in left["urr_pct"] if u is not None) == pytest.approx(40.0, abs=1.0)
+    assert any("urr-2.h5 left out" in w for w in out["not_judged_because"])
+    dfq = tmp_path / "m.dfq"
+    assert main(["export", "qdas", "--evaluations", "--archive", db, "--out", str(dfq)]) == 0
+    assert "urr-2.h5 left out" in dfq.read_text(encoding="cp1252")
+
+
+def test_a_test_mass_that_reads_nothing_gives_no_cross_effect_and_says_so(
+    recwarn: pytest.WarningsRecorder,
+) -> None:
+    """A run loaded in plane 2 alone whose plane 2 read no change from the reference: no
+    cross-effect from it (not a NaN, not a warning), and the evaluation says why."""
+    from stand.health.evaluate import evaluate_runs
+    from stand.health.proving import ProvingRun
+
+    base = (1e-6 + 0j, 2e-6 + 0j)
+    runs = [
+        ProvingRun("ref", "reference", (0j, 0j), base, (1e-6, 1e-6)),
+        ProvingRun("u2", "urr", (0j, 0.5e-6 + 0j), base, (1e-6, 1e-6)),
+    ]
+    e = evaluate_runs(runs, 60.0)
+    assert e.cross_effect == (None, None)
+    assert any("read no change in plane 2" in w for w in e.why_not_judged)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]

@@ -109,8 +109,10 @@ def evaluation_data(e: dict[str, Any]) -> Any:
         ProductId=PART,
         CreationTime=when,
         ResultEvaluation=ua.ResultEvaluationEnum(MACHINE_EVALUATION[e["verdict"]]),
-        ResultEvaluationDetails=ua.LocalizedText(f"machine evaluation {e['verdict']}"),
-    )
+        ResultEvaluationDetails=ua.LocalizedText(
+            "; ".join([f"machine evaluation {e['verdict']}",
+                       *(e["result"].get("not_judged_because") or [])])),
+    )  # fmt: skip
     content = ua.MachineEvaluationDataType(
         Standard=PART, Verdict=e["verdict"], Due=e["due"],
         **{k: None if v is None else float(v) for k, v in figures.items()},

@@ -3,7 +3,8 @@ quality engineer follows the stand's own figures beside its rotors'.
 
 The part is ``ISO 21940-21`` on one stand (K1081); each archived evaluation is one value
 line, known by ``evaluation <id>`` (K0014: the proving rotor has no serial of its own),
-its verdict in K0054 and, for simulated runs, a word in K0009.  Nine characteristics, each
+its verdict in K0054 and in K0009 a remark: simulated runs, and why a test was not judged
+(a run left out, with its reason).  Nine characteristics, each
 named as the standard names it: per plane the mean indication of the U_mar test [g mm]
 and its spread [%] (upper limit: the test's limit), the lowest URR of the URR test [%]
 (lower limit: the stand's claim), the cross-effect of each plane on the other [%], and
@@ -62,7 +63,7 @@ def _spread(i: int) -> Any:
 def _lowest_urr(i: int) -> Any:
     def get(r: dict[str, Any]) -> float | None:
         got = [x["urr_pct"][i] for x in (r.get("urr_test") or {}).get("runs") or []
-               if x["urr_pct"][i] is not None]  # fmt: skip
+               if x["urr_pct"][i] is not None and not x.get("refused")]  # fmt: skip
         return min(got) if got else None
 
     return get
@@ -129,8 +130,10 @@ def _line(e: dict[str, Any], zone: Zone) -> list[str]:
     ident = f"evaluation {e['id']}"
     lines = [VALUE_SEP.join(sets), f"K0014/0 {field('K0014', ident)}",
              f"K0054/0 {field('K0054', e['verdict'])}"]  # fmt: skip
-    if e["simulated"]:
-        lines.append(f"K0009/0 {field('K0009', 'simulated runs')}")
+    remark = "; ".join((["simulated runs"] if e["simulated"] else [])
+                       + list(e["result"].get("not_judged_because") or []))  # fmt: skip
+    if remark:
+        lines.append(f"K0009/0 {field('K0009', remark)}")
     return lines
 
 
