@@ -7,6 +7,7 @@ import json
 import math
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -34,6 +35,23 @@ def short_demo(tmp_path: Path, extra: str = "") -> Path:
     path = tmp_path / "demo3.toml"
     path.write_text(text + extra)
     return path
+
+
+def _recorded_with(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], run: str, key: str, change: Any
+) -> Path:
+    """The short demo's proving runs recorded, ``key`` of run ``run``'s masses changed in
+    its runs.toml (a declaration that is not what was put on)."""
+    _json(["evaluate", "--scene", str(short_demo(tmp_path)), "--record", str(tmp_path / "r")],
+          capsys, 0)  # fmt: skip
+    runs = tmp_path / "r" / "runs.toml"
+    text = runs.read_text()
+    block = re.search(rf'file = "{run}.h5"\ntest = "\w+"\nmasses = \[.*\]', text)
+    assert block is not None
+    wrong = re.sub(rf"{key} = ([0-9.e+-]+)", lambda m: f"{key} = {change(float(m[1]))!r}",
+                   block[0])  # fmt: skip
+    runs.write_text(text.replace(block[0], wrong))
+    return runs
 
 
 def test_hand_values() -> None:
@@ -89,15 +107,7 @@ def test_a_run_whose_test_mass_is_not_where_declared_is_named_not_averaged(
 ) -> None:
     """One U_mar run declared at 90 deg more than where its masses were: it is named and
     left out, and the U_mar test, one position short, is not judged (exit 3)."""
-    _json(["evaluate", "--scene", str(short_demo(tmp_path)), "--record", str(tmp_path / "r")],
-          capsys, 0)  # fmt: skip
-    runs = tmp_path / "r" / "runs.toml"
-    text = runs.read_text()
-    block = re.search(r'file = "umar-05.h5"\ntest = "umar"\nmasses = \[.*\]', text)
-    assert block is not None
-    wrong = re.sub(r"angle_deg = ([0-9.e+-]+)", lambda m: f"angle_deg = {float(m[1]) + 90!r}",
-                   block[0])  # fmt: skip
-    runs.write_text(text.replace(block[0], wrong))
+    runs = _recorded_with(tmp_path, capsys, "umar-05", "angle_deg", lambda x: x + 90)
     out = _json(["evaluate", str(runs)], capsys, 3)
     assert [r["run"] for r in out["refused"]] == ["umar-05.h5"]
     assert out["u_mar_test"]["verdict"] == "not judged" and out["verdict"] == "not judged"
@@ -190,15 +200,7 @@ def test_a_urr_run_left_out_leaves_the_machine_not_judged_never_passed(
     declaration (its URR 40 %), is left out, and ISO 21940-21 asks every run to reach the
     claim: the URR test is not judged (exit 3), the run listed as refused with its reason,
     the reason in Q-DAS's remark (K0009) as well."""
-    _json(["evaluate", "--scene", str(short_demo(tmp_path)), "--record", str(tmp_path / "r")],
-          capsys, 0)  # fmt: skip
-    runs = tmp_path / "r" / "runs.toml"
-    text = runs.read_text()
-    block = re.search(r'file = "urr-2.h5"\ntest = "urr"\nmasses = \[.*\]', text)
-    assert block is not None
-    heavy = re.sub(r"mass_g = ([0-9.e+-]+)", lambda m: f"mass_g = {float(m[1]) * 2.5!r}",
-                   block[0])  # fmt: skip
-    runs.write_text(text.replace(block[0], heavy))
+    runs = _recorded_with(tmp_path, capsys, "urr-2", "mass_g", lambda x: x * 2.5)
     db = f"sqlite:///{tmp_path / 'a.db'}"
     out = _json(["evaluate", str(runs), "--archive", db], capsys, 3)
     assert out["verdict"] == "not judged" and out["urr_test"]["verdict"] == "not judged"
