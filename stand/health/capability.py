@@ -10,6 +10,7 @@ differ by their noise only (its rotor is never taken off), which the output says
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
 
 import numpy as np
@@ -42,21 +43,43 @@ def scene_readings(
     return np.array(got), U
 
 
+def _stand(cfg: Config, p: StandParameters) -> tuple[object, ...]:
+    """What makes two runs one stand's: its id and its supports' model."""
+    return cfg.stand.id, p.M1, p.M2, p.C1, p.C2
+
+
 def file_readings(
     runs: list[str], config: str | None, on_run: OnRun | None = None
 ) -> tuple[np.ndarray, StandParameters, Config]:
     """Each run's reading (runs x 2) [kg m], read and measured as ``stand solve`` does, and
-    the parameters and config of the first."""
+    the parameters and config of the first.  One recording named twice, or runs of two
+    stands, are refused in one line (UsageError): a study is one stand's repeated runs."""
     got: list[np.ndarray] = []
     first: tuple[StandParameters, Config] | None = None
+    seen: dict[str, int] = {}
     for k, run in enumerate(runs):
+        digest = _digest(run)
+        if seen.setdefault(digest, k) != k:
+            raise UsageError(f"{run} is the same recording as {runs[seen[digest]]} (sha256 "
+                             f"{digest[:12]}): a study takes each run once")  # fmt: skip
         m, cfg, p, _ = measure_recording(run, config)
         first = first or (p, cfg)
+        if _stand(cfg, p) != _stand(first[1], first[0]):
+            raise UsageError(f"{run} is another stand's run than {runs[0]} (its [stand] "
+                             "differs): a capability study is one stand's")  # fmt: skip
         got.append(m.solution.U_kg_m)
         if on_run is not None:
             on_run(k + 1)
     assert first is not None
     return np.array(got), first[0], first[1]
+
+
+def _digest(path: str) -> str:
+    try:
+        with open(path, "rb") as f:
+            return hashlib.file_digest(f, "sha256").hexdigest()
+    except OSError as exc:
+        raise UsageError(f"{path}: cannot be read ({exc.strerror or exc})") from exc
 
 
 def study(
@@ -68,5 +91,11 @@ def study(
             f"{readings.shape[0]} runs: a capability study needs at least {MIN_RUNS} runs of "
             "the master rotor"
         )
+    for i in range(2):
+        z = readings[:, i]
+        spread = float(np.max(np.abs(z - z.mean())))
+        if spread <= 1e-9 * max(float(np.max(np.abs(z))), 1e-12):
+            raise UsageError(f"plane {i + 1}: the {z.size} readings do not spread (one run "
+                             "repeated?): a study needs the runs' own scatter")  # fmt: skip
     a, b = (capability(readings[:, i], complex(reference[i]), tolerance[i]) for i in range(2))
     return a, b

@@ -104,3 +104,28 @@ def test_recorded_runs_against_the_master(
     assert "at least 25" in capsys.readouterr().err
     assert main(["capability", *runs, "--master", "1:5000"]) == 2
     assert "PLANE:G_MM@DEG" in capsys.readouterr().err
+    master = ["--master", "1:5000@30", "--master", "2:3000@200"]
+    copies = []  # one run, copied 25 times under other names
+    for k in range(MIN_RUNS):
+        copies.append(str(tmp_path / f"copy{k:02d}.h5"))
+        Path(copies[-1]).write_bytes(Path(runs[0]).read_bytes())
+    assert main(["capability", *copies, *master]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "same recording as" in err and len(err.splitlines()) == 1
+    other = tmp_path / "other.toml"  # another stand: its supports' springs differ
+    other.write_text(scene.replace("C1 = 4.5e4", "C1 = 5.0e4"))
+    odd = tmp_path / "other.h5"
+    assert main(["simulate", str(other), "--out", str(odd), "--seed", "99"]) == 0
+    assert main(["capability", *runs[:-1], str(odd), *master]) == 2
+    assert "another stand's run" in capsys.readouterr().err
+
+
+def test_readings_that_do_not_spread_are_refused_not_an_internal_error() -> None:
+    """25 identical readings (one run measured 25 times, under other recordings' names):
+    no spread to judge, refused in one line (it raised ValueError from the root finder)."""
+    from stand.errors import UsageError
+    from stand.health.capability import study
+
+    readings = np.tile(np.array([5e-3 + 1e-3j, 3e-3 - 2e-3j]), (MIN_RUNS, 1))
+    with pytest.raises(UsageError, match="plane 1: the 25 readings do not spread"):
+        study(readings, readings[0], (1.1e-3, 1.2e-3))
