@@ -39,7 +39,8 @@ def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
             "[{length}]").format(unit=u.unbalance_unit, mass=u.mass_unit,
                                  length=u.length_unit))  # fmt: skip
     for p in out["planes"]:
-        figures = f"{p['angle_deg']:13.2f} {u.mass_value(p['mass_g']):10.3f}"
+        angle = f"{'-':>13}" if p.get("within_noise") else f"{p['angle_deg']:13.2f}"
+        figures = f"{angle} {u.mass_value(p['mass_g']):10.3f}"
         print(
             f"  {p['plane']}  {u.number(p['unbalance_g_mm']):>16} "
             f"{u.number(p['uncertainty_g_mm']):>10} {u.decimals(figures)} {_('at')} "

@@ -333,6 +333,10 @@ def _final_result(
     )
 
 
+SEED_ATTR = "scene_seed"
+"""The run file's attribute naming a simulated run's noise seed."""
+
+
 def measure_live(
     source: LiveSource,
     bus_kwargs: dict[str, Any],
@@ -357,6 +361,8 @@ def measure_live(
     check_matrix(options, cfg, live=True)
     attrs = {} if options.matrix is None else options.matrix.run_attrs()
     attrs[STAND_ATTR] = cfg.stand.stand_id()
+    if source.scene_seed is not None:
+        attrs[SEED_ATTR] = str(source.scene_seed)
     if job:
         attrs[JOB_ATTR] = job.to_text()
     with LiveSession(

@@ -35,6 +35,8 @@ class LiveSource:
     acquisition: Acquired | None = None
     """The family the config reads and its layout (None: the default family's)."""
     modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
+    scene_seed: int | None = None
+    """The simulated run's noise seed (recorded with the run), None on a real bus."""
 
 
 def live_source(
@@ -46,6 +48,7 @@ def live_source(
     index_deg: float | None = None,
     *,
     scene_hardware: bool = False,
+    seed: int | None = None,
 ) -> LiveSource:
     """A simulated scene (played in real time on a private virtual bus), or a config's bus.
 
@@ -55,12 +58,15 @@ def live_source(
     simulated rotor and its speed.  A config that reads another protocol than the scene
     sends is refused, unless ``scene_hardware`` (the station's simulated sources): then
     the scene's sensors are the stand's and its ``[bus]`` table replaces the config's, in
-    the run's stored config too.
+    the run's stored config too.  ``seed``: the simulated run's noise seed (default: the
+    scene's, or its own for a rotor carrying masses: :func:`stand.sim.scene.run_seed`).
     """
 
     if scene:
         sc, physical, _ = load_scene(scene)
         sc = with_masses(sc, masses, rpm, index_deg)
+        if seed is not None:
+            sc = sc.model_copy(update={"run": sc.run.model_copy(update={"seed": seed})})
         if config:
             cfg, params, text = load_config_text(config)
             sent = sc.config().bus
@@ -80,6 +86,7 @@ def live_source(
             scene_bus={"interface": "virtual", "channel": channel},
             acquisition=acq,
             modules=scene_modules(sc),
+            scene_seed=sc.run.seed,
         )
     if masses or rpm is not None or index_deg is not None:
         raise UsageError(

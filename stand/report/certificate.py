@@ -177,7 +177,7 @@ def _results(out: dict[str, Any], _: Language) -> str:
             if i in check and check[i]["urr"] is not None
             else f"<td>{now}</td>"
         )
-        angle = f"{plane['angle_deg']:.1f}°"
+        angle = "–" if plane.get("within_noise") else f"{plane['angle_deg']:.1f}°"
         state = tol[i]["verdict"] if i in tol else None
         verdict = (
             "–" if state is None

@@ -205,6 +205,10 @@ def with_masses(
     """The scene's rotor with masses added or removed, optionally at another speed and
     turned on its tooling by ``index_deg``.
 
+    A rotor with masses put on is another run: it draws its own noise, from a seed derived
+    from the scene's and the masses (:func:`run_seed`), so that a check run never replays
+    the noise of the run it checks (it read exactly 0.0 g mm before).
+
     A mass ``m`` at radius ``r`` and angle ``a`` adds ``m r e^{-i a}`` to its
     plane's unbalance ``U = q R e^{-i phi}``: a mass put where the software says
     the unbalance is makes it larger, material taken off there makes it smaller.
@@ -246,9 +250,22 @@ def with_masses(
     planes["distributed"] = scene.unbalance.distributed
     planes["axial"] = axial
     run = scene.run if rpm is None else scene.run.model_copy(update={"rpm": rpm})
+    if masses:
+        run = run.model_copy(update={"seed": run_seed(scene.run.seed, masses)})
     if index_deg is not None:
         run = run.model_copy(update={"index_deg": index_deg})
     return scene.model_copy(update={"unbalance": UnbalanceTable(**planes), "run": run})
+
+
+def run_seed(seed: int, masses: Sequence[Mass]) -> int:
+    """A seed of its own for the run of a rotor carrying ``masses``: numpy's
+    ``SeedSequence`` of the scene's seed and each mass (to the microgram and the
+    micro-degree), so the same masses give the same run and other masses another."""
+    words = [seed & 0xFFFFFFFF]
+    for m in masses:
+        words += [m.plane & 0xFFFF, round(m.grams * 1e6) & 0xFFFFFFFF,
+                  round(m.angle_deg * 1e6) & 0xFFFFFFFF]  # fmt: skip
+    return int(np.random.SeedSequence(words).generate_state(1)[0])
 
 
 def node_unbalance(scene: Scene, beam: Any) -> Any:

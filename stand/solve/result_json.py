@@ -70,6 +70,8 @@ def _planes(
             "mass_g": round(float(q[i]) / R * 1e3, 4),
             "radius_mm": round(R * 1e3, 3),
             "uncertainty_g_mm": _g_mm(m.radius95_kg_m[i]),
+            # the 95 % circle holds zero: every angle, so none is printed
+            "within_noise": bool(q[i] <= m.radius95_kg_m[i]),
         }
         corr = corrections[i] if i < len(corrections) else None
         if corr is not None and mode in ("drill", "mill"):

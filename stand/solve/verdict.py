@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from stand.config import Config
+from stand.config.tolerance import ToleranceTable
 from stand.core import StandParameters, rad_s_to_rpm, rpm_to_rad_s
 from stand.core.tolerance import (
     api_permissible,
@@ -72,12 +73,6 @@ def tolerance_of(
     moment = moment or t.acceptance
     x = _planes_x(params)
     x_cm = params.a + params.b
-    z = (0.0, params.L) if t.bearing_planes_m is None else tuple(t.bearing_planes_m)
-    where = (
-        N_("the supports")
-        if t.bearing_planes_m is None
-        else said("{z1} m and {z2} m", z1=f"{z[0]:g}", z2=f"{z[1]:g}")
-    )
     if t.form == "per_plane":
         per = tuple(u * 1e-6 for u in t.per_plane_g_mm or ())
         src = t.source or N_("drawing")
@@ -89,54 +84,68 @@ def tolerance_of(
         return Tolerance("static_couple", src, N_("resultant and moment about the centre of mass"),
                          moment, static_couple_criteria(x, x_cm, S, P),
                          static_couple_limits(x, x_cm, S, P))  # fmt: skip
+    return _at_a_speed(t, params, moment, speed_rad_s)
+
+
+def _at_a_speed(
+    t: ToleranceTable, params: StandParameters, moment: str, speed_rad_s: float | None
+) -> Tolerance:
+    """The grade and API forms: limits at the maximum service speed (or at the measuring
+    speed above it), the grade's allocation by the rotor's shape."""
+    x, x_cm = _planes_x(params), params.a + params.b
+    z = (0.0, params.L) if t.bearing_planes_m is None else tuple(t.bearing_planes_m)
+    bearing = None if t.bearing_planes_m is None else (z[0], z[1])
     omega = float(rpm_to_rad_s(t.max_speed_rpm or 1.0))  # grade and API forms give it
     faster = speed_rad_s is not None and speed_rad_s > omega * (1.0 + SPEED_SLACK)
-    if faster:
-        omega = float(speed_rad_s or omega)
-    if t.form == "api":
-        W = t.api_journal_kg or ()
-        limits = tuple(api_permissible(w, float(rad_s_to_rpm(omega))) for w in W)
-        U_per, G = sum(limits), None
-        src = t.source or said(
-            "API 610/617/687: 6350 W / N at {rpm} rpm, journals {journals}",
-            rpm=f"{t.max_speed_rpm:g}",
-            journals=" and ".join(f"{w:g} kg" for w in W),
-        )
-        src = _at_speed(src, t.max_speed_rpm, omega) if faster else src
-    else:
-        G = (t.grade_mm_s or 0) * 1e-3
-        U_per = permissible_unbalance(params.M3, G, omega)
-        s = lever_shares(x_cm, z)
-        limits = (s[0] * U_per, s[1] * U_per)
-        src = t.source or said(
-            "ISO 21940-11, G {grade} at {rpm} rpm",
-            grade=f"{t.grade_mm_s:g}",
-            rpm=f"{t.max_speed_rpm:g}",
-        )
-        src = _at_speed(src, t.max_speed_rpm, omega) if faster else src
-        shape = rotor_shape(x, x_cm, z)
-        if shape != "between":
-            S, P = shape_limits(U_per, z)
-            return Tolerance("grade", src, N_("resultant and moment about the centre of mass"),
-                             moment, static_couple_criteria(x, x_cm, S, P),
-                             static_couple_limits(x, x_cm, S, P), G, omega, U_per,
-                             None if t.bearing_planes_m is None else (z[0], z[1]),
-                             _shape_words(shape, x, x_cm, z))  # fmt: skip
-    bearing = None if t.bearing_planes_m is None else (z[0], z[1])
-    split = said(
+    omega = float(speed_rad_s or omega) if faster else omega
+    limits, U_per, G, src = _limits(t, params, x_cm, z, omega)
+    src = _at_speed(src, t.max_speed_rpm, omega) if faster else src
+    shape = rotor_shape(x, x_cm, z)
+    if t.form == "grade" and shape != "between":
+        S, P = shape_limits(U_per, z)
+        return Tolerance("grade", src, N_("resultant and moment about the centre of mass"),
+                         moment, static_couple_criteria(x, x_cm, S, P),
+                         static_couple_limits(x, x_cm, S, P), G, omega, U_per, bearing,
+                         _shape_words(shape, x, x_cm, z))  # fmt: skip
+    split = "" if t.form != "grade" else said(
         "the lever rule about the centre of mass, shares {a} % and {b} % (each held within "
         "30 to 70 %)",
         a=f"{100 * limits[0] / U_per:.0f}",
         b=f"{100 * limits[1] / U_per:.0f}",
-    )
+    )  # fmt: skip
     if t.bearing_planes_m is None and t.form == "grade":  # today's: the supports, worst phase
         per = plane_tolerances(params, U_per)
         at = N_("correction planes (bearing-plane shares at the supports, any phase)")
         return Tolerance(t.form, src, at, moment, plane_criteria(per), per, G, omega, U_per,
                          bearing, split)  # fmt: skip
+    where = (N_("the supports") if bearing is None
+             else said("{z1} m and {z2} m", z1=f"{z[0]:g}", z2=f"{z[1]:g}"))  # fmt: skip
     return Tolerance(t.form, src, said("bearing planes at {where}", where=where), moment,
                      bearing_criteria(x, z, limits), carried_limits(x, z, limits), G, omega,
-                     U_per, bearing, split if t.form == "grade" else "")  # fmt: skip
+                     U_per, bearing, split)  # fmt: skip
+
+
+def _limits(
+    t: ToleranceTable, params: StandParameters, x_cm: float, z: Sequence[float], omega: float
+) -> tuple[tuple[float, ...], float, float | None, str]:
+    """Bearing-plane limits [kg m], ``U_per`` [kg m], G [m/s] (None for API) and the
+    source, at ``omega`` [rad/s]."""
+    if t.form == "api":
+        W = t.api_journal_kg or ()
+        limits = tuple(api_permissible(w, float(rad_s_to_rpm(omega))) for w in W)
+        return limits, sum(limits), None, t.source or said(
+            "API 610/617/687: 6350 W / N at {rpm} rpm, journals {journals}",
+            rpm=f"{t.max_speed_rpm:g}",
+            journals=" and ".join(f"{w:g} kg" for w in W),
+        )  # fmt: skip
+    G = (t.grade_mm_s or 0) * 1e-3
+    U_per = permissible_unbalance(params.M3, G, omega)
+    s = lever_shares(x_cm, z)
+    return (s[0] * U_per, s[1] * U_per), U_per, G, t.source or said(
+        "ISO 21940-11, G {grade} at {rpm} rpm",
+        grade=f"{t.grade_mm_s:g}",
+        rpm=f"{t.max_speed_rpm:g}",
+    )  # fmt: skip
 
 
 def _at_speed(source: str, max_rpm: float | None, omega: float) -> str:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import datetime as dt
 import logging
 import re
+import secrets
 import threading
 import time
 from collections.abc import Callable
@@ -340,7 +341,8 @@ class Station(ArchiveSide):
 
         s = self._state
         scene = None if s.source == BUS else s.source
-        src = live_source(scene, str(config), "station", list(s.applied), scene_hardware=True)
+        src = live_source(scene, str(config), "station", list(s.applied), scene_hardware=True,
+                          seed=None if scene is None else secrets.randbelow(2**31))  # fmt: skip
         tol = tolerance_of(src.cfg, src.params)
         self._set(tolerance_kg_m=None if tol is None else tuple(tol.per_plane_kg_m))
         kwargs = src.scene_bus if src.scene_bus is not None else _bus(src.bus_table)
