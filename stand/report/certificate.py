@@ -43,6 +43,7 @@ table.job td, table.job th { text-align: left; }
 .sign div { border-top: 1px solid #222; padding-top: 3px; font-size: 0.9em; }
 .digest { font-family: monospace; font-size: 0.8em; word-break: break-all; }
 .released td { text-align: left; }
+.unreleased { font-weight: bold; letter-spacing: 0.1em; text-transform: uppercase; }
 img { max-width: 100%; }
 pre { font-size: 0.8em; background: #f6f6f6; padding: 0.6em; white-space: pre-wrap; }
 .appendix { margin-top: 2em; }
@@ -305,7 +306,7 @@ def _signatures(out: dict[str, Any], _: Language) -> str:
     e = html.escape
     op = out["job"].get("operator") or ""
     return (
-        f"{RELEASE_START}<div class=sign>"
+        f"{RELEASE_START}<p class=unreleased>{e(_('not released'))}</p><div class=sign>"
         f"<div>{e(_('balanced by {operator}').format(operator=op))}</div><div>{e(_('date'))}</div>"
         f"<div>{e(_('inspected by'))}</div><div>{e(_('date'))}</div>"
         f"</div>{RELEASE_END}"

@@ -15,15 +15,14 @@ from nicegui import app, ui
 
 from stand.errors import StandError, UsageError
 from stand.i18n.language import N_, Language
+from stand.station.guard import COOKIE, PUBLIC, ROLES, needs, refused
 from stand.station.service import Station
-from stand.station.sessions import Session, allowed_roles
+from stand.station.sessions import Session
 
 FORM_WORDS = {"account": N_("account"), "password": N_("password"),
               "badge": N_("or scan your badge"), "log_in": N_("LOG IN")}  # fmt: skip
 """The log-in form's words."""
 log = logging.getLogger(__name__)
-COOKIE = "stand_session"
-"""The cookie that carries the session's token."""
 FORM = """
 <style>.login input {{ width: 100%; font-size: 1.4rem; padding: 8px;
                       border: 2px solid #78909c; border-radius: 4px; }}</style>
@@ -38,16 +37,6 @@ FORM = """
 """
 
 
-ROLES = {"operator": N_("operator"), "setter": N_("setter"), "engineer": N_("engineer"),
-         "administrator": N_("administrator")}  # fmt: skip
-"""The roles, as the screens name them."""
-
-
-def session_of(station: Station, request: Any) -> Session | None:
-    """The live session the request's cookie names (None: none)."""
-    return station.sessions.get(request.cookies.get(COOKIE) if request is not None else None)
-
-
 def words(station: Station) -> Language:
     """The language of this screen's browser: its account's, else the station's."""
     return station.language(app.storage.client.get("lang"))
@@ -56,21 +45,6 @@ def words(station: Station) -> Language:
 def current(station: Station) -> Session | None:
     """The session of this screen's browser (its idle time starts again)."""
     return station.sessions.get(app.storage.client.get("session"))
-
-
-def refused(session: Session | None, right: str, what: str, _: Language) -> str | None:
-    """Why ``session`` may not ``what`` (needing ``right``), in its language; None if it
-    may."""
-    if session is None:
-        return _("log in to {what}").format(what=what)
-    if session.may(right):
-        return None
-    return _("{name} ({role}) may not {what}: it takes {roles}").format(
-        name=session.name,
-        role=_(ROLES[session.role]),
-        what=what,
-        roles=_(" or ").join(_(ROLES[r]) for r in allowed_roles(right)),
-    )
 
 
 def require(station: Station, right: str, what: str) -> None:
@@ -103,6 +77,13 @@ def login_screen(_: Language, *, failed: str | None) -> None:
     ui.html(form, sanitize=False).mark("login")  # our own form: only our words in it
 
 
+LOGOUT = """<form method="post" action="/logout" style="margin:0">
+<button type="submit" class="logout" style="font-size:1rem;padding:6px 14px;background:none;
+        color:#fff;border:1px solid #fff;border-radius:4px;cursor:pointer">{log_out}</button>
+</form>"""
+"""Log out: a POST (a link or a prefetcher never ends a session)."""
+
+
 def who_line(station: Station, session: Session | None, _: Language) -> None:
     """The header's part that says who works the station, with Log out."""
     if not station.sessions.required():
@@ -112,48 +93,35 @@ def who_line(station: Station, session: Session | None, _: Language) -> None:
         return
     assert session is not None
     ui.label(f"{session.name} ({_(ROLES[session.role])})").classes("text-h6").mark("who")
-    ui.button(_("Log out"), on_click=lambda: ui.navigate.to("/logout")).props(
-        "flat color=white"
-    ).mark("logout")
+    ui.html(LOGOUT.format(log_out=html.escape(_("Log out"))), sanitize=False).mark("logout")
 
 
-def add_login_routes(station: Station) -> None:
-    """``POST /login`` (the form) and ``GET /logout``."""
+def add_login_routes(station: Station, *, secure: bool = False) -> None:
+    """``POST /login`` (the form; argon2 in the thread pool, never on the event loop that
+    serves the screens) and ``POST /logout``; the session's cookie ``Secure`` under TLS."""
     from fastapi.responses import RedirectResponse
+    from starlette.concurrency import run_in_threadpool
 
-    @app.post("/login")
+    @app.post("/login", dependencies=[needs(station, PUBLIC)])
     async def login(request: Request) -> Any:
         form = await request.form()
         account, password = str(form.get("account", "")), str(form.get("password", ""))
         badge = str(form.get("badge", ""))
         try:
-            s = (station.sessions.log_in_badge(badge) if badge
-                 else station.sessions.log_in(account, password))  # fmt: skip
+            s = await run_in_threadpool(
+                lambda: station.sessions.log_in_badge(badge) if badge
+                else station.sessions.log_in(account, password))  # fmt: skip
         except StandError as exc:  # the accounts do not read: said here and in the log
             log.warning("log-in not possible: %s", exc)
             return RedirectResponse("/?login=unavailable", status_code=303)
         reply = RedirectResponse("/" if s else "/?login=failed", status_code=303)
         if s is not None:
-            reply.set_cookie(COOKIE, s.token, httponly=True, samesite="strict")
+            reply.set_cookie(COOKIE, s.token, httponly=True, samesite="strict", secure=secure)
         return reply
 
-    @app.get("/logout")
+    @app.post("/logout", dependencies=[needs(station, PUBLIC)])
     def logout(request: Request) -> Any:
         station.sessions.log_out(request.cookies.get(COOKIE))
         reply = RedirectResponse("/", status_code=303)
         reply.delete_cookie(COOKIE)
         return reply
-
-
-def forbidden(station: Station, request: Any, right: str, what: str) -> Any | None:
-    """A 403 answer saying why this request's account may not ``what`` (an English
-    message, said in the account's language); None if it may (or the stand has no
-    accounts)."""
-    from fastapi.responses import PlainTextResponse
-
-    if not station.sessions.required():
-        return None
-    session = session_of(station, request)
-    _ = station.language(None if session is None else session.language)
-    why = refused(session, right, _(what), _)
-    return None if why is None else PlainTextResponse(why, status_code=403)

@@ -9,6 +9,7 @@ read from two metres and worked with a keyboard or a finger.
 
 from __future__ import annotations
 
+import html
 from typing import Any
 
 from nicegui import app, ui
@@ -18,12 +19,13 @@ from stand.i18n.language import LANGUAGES, N_, Language
 from stand.plant import TokenGate
 from stand.solve import to_json
 from stand.station.face import SEEN_FROM, face_svg
+from stand.station.guard import session_of
 from stand.station.history import add_routes, guard, history_screen, notify
 from stand.station.login import (
     add_login_routes,
+    current,
     login_screen,
     require,
-    session_of,
     who_line,
     words,
 )
@@ -185,7 +187,12 @@ def measure_screen(station: Station) -> None:
     """Measure: speed, per plane the live polar plot, the supports, the warnings."""
     _ = words(station)
     with ui.row().classes("w-full items-center gap-4"):  # Stop first: on every screen size
-        stop = ui.button(_("Stop"), on_click=station.stop).props("size=xl color=negative")
+
+        def stop_run() -> None:
+            require(station, "measure", _("stop a run"))
+            station.stop()
+
+        stop = ui.button(_("Stop"), on_click=guard(stop_run)).props("size=xl color=negative")
         stop.mark("stop")
         onward = ui.button(
             _("Go on"),
@@ -349,6 +356,7 @@ def check_screen(station: Station) -> None:
         _certificate_links(station, s.result, _)
 
         def next_rotor() -> None:
+            require(station, "measure", _("start the next rotor"))
             station.next_rotor()
 
         ui.button(_("Next rotor"), on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
@@ -377,6 +385,10 @@ def _certificate_links(station: Station, result: Any, _: Language) -> None:
                 "text-h5").mark("certificate")  # fmt: skip
             ui.link(_("as PDF"), f"/report/{s.run_id}/pdf{lang}", new_tab=True).classes(
                 "text-h5").mark("certificate-pdf")  # fmt: skip
+            session = current(station)
+            if session is not None and session.may("release"):
+                dialog = _release_dialog(s.run_id, chosen["lang"], _)
+                ui.button(_("Release…"), on_click=dialog.open).props("size=lg").mark("release")
 
             def choose(e: Any) -> None:
                 chosen["lang"] = e.value
@@ -387,6 +399,32 @@ def _certificate_links(station: Station, result: Any, _: Language) -> None:
 
     timer = ui.timer(REFRESH_S, fill)
     fill()
+
+
+RELEASE_FORM = """<form method="post" action="/report/{run}/release" target="_blank"
+      style="display:flex;flex-direction:column;gap:14px;font-size:1.2rem;min-width:420px">
+  <input type="hidden" name="lang" value="{lang}">
+  <label>{password} <input name="password" type="password" autocomplete="current-password"
+         required style="width:100%;font-size:1.2rem;padding:6px"></label>
+  <label><input type="checkbox" name="meaning" value="released" required> {meaning}</label>
+  <button type="submit" style="font-size:1.2rem;padding:10px;background:#1976d2;color:#fff;
+          border:0;border-radius:4px">{sign}</button>
+</form>"""
+"""Releasing: the password entered again and the meaning confirmed, posted (never a link)."""
+
+
+def _release_dialog(run_id: int, lang: str, _: Language) -> Any:
+    """The dialog that signs run ``run_id``'s certificate in the language ``lang``."""
+    with ui.dialog() as dialog, ui.card():
+        ui.label(_("Release the certificate of run {run}").format(run=run_id)).classes("text-h6")
+        ui.html(RELEASE_FORM.format(
+            run=run_id, lang=html.escape(lang), password=html.escape(_("your password")),
+            meaning=html.escape(_("released: the rotor was balanced and measured as this "
+                                  "certificate states")),
+            sign=html.escape(_("SIGN AND RELEASE"))),
+            sanitize=False).mark("release-form")  # fmt: skip
+        ui.button(_("Cancel"), on_click=dialog.close).props("flat")
+    return dialog
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:

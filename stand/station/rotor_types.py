@@ -39,7 +39,7 @@ from stand.health.recalibrate import fits_text, kept_line, refitted_config, sign
 from stand.i18n.language import Language
 from stand.solve.tooling import folder, stored_toolings
 from stand.solve.verdict import tolerance_of
-from stand.station.login import refused
+from stand.station.guard import refused
 from stand.station.service import Station
 from stand.station.sessions import Session, actor
 

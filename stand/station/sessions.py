@@ -16,9 +16,17 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
-from stand.actions import Actor, log_in, log_in_badge, log_out, os_actor, session_ended
+from stand.actions import (
+    Actor,
+    account_actor,
+    log_in,
+    log_in_badge,
+    log_out,
+    os_actor,
+    session_ended,
+)
 from stand.archive.accounts import account, accounts_of, may
-from stand.errors import StandError
+from stand.errors import RefusedError, StandError
 
 log = logging.getLogger(__name__)
 IDLE_S = 15 * 60.0
@@ -138,6 +146,16 @@ class Sessions:
         except StandError as exc:
             log.warning("session of %s ended (%s), not journaled: %s", s.name, why, exc)
         return None
+
+    def signer(self, session: Session | None, password: str) -> Actor:
+        """Who signs: the session's account once its password, entered again, checks
+        (journaled either way; RefusedError when it does not); on a lone stand the
+        operating system's user."""
+        if not self.required():
+            return os_actor("station")
+        if session is None:
+            raise RefusedError("log in to release a certificate", who="(none)", right="release")
+        return account_actor(self.archive_url, session.name, password, "station")
 
     def log_out(self, token: str | None) -> None:
         """End the session of ``token`` (journaled)."""

@@ -15,8 +15,9 @@ from nicegui import ui
 
 from stand.errors import StandError
 from stand.i18n.language import N_, Language
+from stand.station.guard import refused
 from stand.station.history import notify
-from stand.station.login import current, refused, words
+from stand.station.login import current, words
 from stand.station.rotor_types import (
     grade_of,
     load_rotor_type,

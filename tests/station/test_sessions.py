@@ -10,7 +10,7 @@ import pytest
 from accounts import change, with_accounts
 
 from stand.i18n.language import ENGLISH, language
-from stand.station.login import refused
+from stand.station.guard import refused
 from stand.station.sessions import Sessions
 
 

@@ -436,6 +436,22 @@ def _fetch(base: str, path: str, cookies: list[dict[str, Any]]) -> tuple[int, by
         return exc.code, exc.read()
 
 
+def _post(
+    base: str, path: str, cookies: list[dict[str, Any]], form: dict[str, str]
+) -> tuple[int, bytes]:
+    """POST the form ``form`` to ``path`` with the browser's cookies: status and body."""
+    import urllib.parse
+
+    jar = "; ".join(f"{c['name']}={c['value']}" for c in cookies)
+    req = urllib.request.Request(base + path, data=urllib.parse.urlencode(form).encode(),
+                                 headers={"Cookie": jar}, method="POST")  # fmt: skip
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, r.read()
+    except urllib.error.HTTPError as exc:
+        return exc.code, exc.read()
+
+
 def _log_in(browser: Any, account: str, password: str) -> None:
     """The log-in form filled and sent, once it is mounted (NiceGUI mounts the page after
     its first HTML: an element found before may go stale)."""
@@ -499,6 +515,10 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
         (run,) = found
         assert run["operator"] == "kim"
         status, body = _fetch(base, f"/report/{run['id']}/pdf", browser.get_cookies())
+        assert status == 200 and body.startswith(b"%PDF"), body[:100]  # unsigned: every reader
+        release = f"/report/{run['id']}/release"
+        form = {"password": "a-long-password", "meaning": "released"}
+        status, body = _post(base, release, browser.get_cookies(), form)
         assert status == 403 and b"kim (operator) may not release a certificate" in body, body
         _button(browser, "Log out").click()
         _see(browser, "Log in")
@@ -506,7 +526,13 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
         browser.find_element(By.NAME, "badge").send_keys("BADGE-0042\n")  # code, then Enter
         _see(browser, "ana (setter)")
         _shot(browser, tmp_path, "who")
-        status, pdf = _fetch(base, f"/report/{run['id']}/pdf", browser.get_cookies())
+        status, body = _fetch(base, release, browser.get_cookies())
+        assert status == 405, body  # a GET never signs
+        status, body = _post(base, release, browser.get_cookies(), {"password": "a-long-password"})
+        assert status == 400 and b"confirm the meaning" in body, body
+        status, body = _post(base, release, browser.get_cookies(), {**form, "password": "guess"})
+        assert status == 403 and b"wrong account or password" in body, body
+        status, pdf = _post(base, release, browser.get_cookies(), form)
         assert status == 200 and pdf.startswith(b"%PDF"), pdf[:100]
     kept = tmp_path / "released.pdf"
     kept.write_bytes(pdf)
