@@ -99,8 +99,13 @@ def _same_rotor_and_stand(previous: str, theirs: Any, ours: Any) -> None:
             )
 
 
-def check_notes(check: Check) -> list[Diagnostic]:
-    """What a check says beyond its numbers: a correction that made a plane worse."""
+def check_notes(check: Check, radius95_kg_m: Any = (0.0, 0.0)) -> list[Diagnostic]:
+    """What a check says beyond its numbers: a correction that made a plane worse, by more
+    than the two readings' noise (``radius95``: the check run's 95 % radii [kg m]; the run
+    before, on the same stand, reads about as precisely, so a growth within twice it is
+    noise: a plane left alone reads a little more or less each run)."""
+    pairs = zip(check.after_kg_m, check.before_kg_m, radius95_kg_m, strict=True)
+    grew = [abs(a) - abs(b) > 2 * float(r) for a, b, r in pairs]
     return [
         Diagnostic(
             "correction_made_worse",
@@ -115,7 +120,7 @@ def check_notes(check: Check) -> list[Diagnostic]:
             float(u),
         )
         for i, u in enumerate(check.urr)
-        if u is not None and u < 0
+        if u is not None and u < 0 and grew[i]
     ]
 
 
@@ -132,7 +137,13 @@ def with_check(
     plane suggests (:func:`check_against`, :func:`check_notes`)."""
     check = check_against(previous, cfg, params, result.measurement, strict=strict, matrix=matrix)
     return replace(
-        result, check=check, warnings=(*result.warnings, *check.warnings, *check_notes(check))
+        result,
+        check=check,
+        warnings=(
+            *result.warnings,
+            *check.warnings,
+            *check_notes(check, result.measurement.radius95_kg_m),
+        ),
     )
 
 
