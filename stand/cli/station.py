@@ -10,7 +10,8 @@ from stand.archive import url_for
 from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
 from stand.config import data_folder
 from stand.config.paths import SHIPPED_ROTORS
-from stand.errors import UsageError
+from stand.errors import RecordingError, UsageError
+from stand.files import check_input
 from stand.i18n.language import LANGUAGES
 from stand.plant import ResultServer, check_bind, read_token
 from stand.solve.pipeline import precision_targets
@@ -38,6 +39,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--token-file", metavar="FILE", help="the token, in a file's first line")
     p.add_argument("--no-browser", action="store_true", help="do not open a browser")
     p.add_argument(
+        "--server-name",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="a name the station is reached by (its Host: header), beside its bind address; "
+        "repeat for several (another Host: is refused)",
+    )
+    p.add_argument("--certfile", metavar="PEM", help="serve HTTPS: the station's certificate")
+    p.add_argument("--keyfile", metavar="PEM", help="serve HTTPS: its private key")
+    p.add_argument(
         "--opcua",
         action="store_true",
         help="also serve the results over OPC UA (stand opcua), on --opcua-port",
@@ -57,10 +68,29 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _check_tls(certfile: str | None, keyfile: str | None) -> None:
+    """Both or neither, each a readable PEM file (one line naming which, exit 2)."""
+    if (certfile is None) != (keyfile is None):
+        raise UsageError("stand station: HTTPS takes --certfile and --keyfile together")
+    for opt, path in (("--certfile", certfile), ("--keyfile", keyfile)):
+        if path is None:
+            continue
+        try:
+            with check_input(path).open("rb") as f:  # a FIFO refused before it is opened
+                head = f.read(4096)
+        except RecordingError as exc:
+            raise UsageError(f"{opt} {exc}") from exc
+        except OSError as exc:
+            raise UsageError(f"{opt} {path}: cannot be read ({exc.strerror or exc})") from exc
+        if b"-----BEGIN " not in head:
+            raise UsageError(f"{opt} {path}: not a PEM file")
+
+
 def run(args: argparse.Namespace) -> int:
 
     token = read_token(args.token, args.token_file)
     check_bind(args.host, token)
+    _check_tls(args.certfile, args.keyfile)
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     if not args.max_seconds > 0:
@@ -89,8 +119,10 @@ def run(args: argparse.Namespace) -> int:
                           rotor_types=station.rotor_types)  # fmt: skip
         ua.run_in_thread()
         print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
-    where = f"http://{args.host}:{args.port}/" + (f"?token={token}" if token else "")
+    scheme = "https" if args.certfile else "http"
+    where = f"{scheme}://{args.host}:{args.port}/" + (" (type the token once)" if token else "")
     print(f"station at {where} (rotor types in {config_dir}; runs in {runs}; Ctrl-C ends)",
           file=sys.stderr)  # fmt: skip
-    serve(station, host=args.host, port=args.port, token=token, show=not args.no_browser)
+    serve(station, host=args.host, port=args.port, token=token, show=not args.no_browser,
+          names=args.server_name, certfile=args.certfile, keyfile=args.keyfile)  # fmt: skip
     return 0

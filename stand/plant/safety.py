@@ -2,9 +2,9 @@
 
 The station binds to the loopback address by default.  Any other address
 opens it to the network and needs a token (:func:`check_bind`); then every
-request carries it (:class:`TokenGate`): in the address once
-(``?token=...``), which sets a cookie the browser sends with every later
-request and with the page's websocket.
+request carries it (:class:`TokenGate`): typed once into a form, which sets a
+cookie the browser sends with every later request and with the page's
+websocket; never in a URL.
 """
 
 from __future__ import annotations
@@ -68,53 +68,79 @@ def check_bind(host: str, token: str | None) -> None:
         )
 
 
+TOKEN_FORM = b"""<!doctype html><html><head><meta charset="utf-8"><title>Balancing station</title>
+</head><body style="font-family:sans-serif;font-size:1.3rem;margin:3rem">
+<form method="post" action="/token">
+<label>The station's token <input name="token" type="password" autocomplete="off" autofocus
+ style="font-size:1.3rem"></label> <button type="submit" style="font-size:1.3rem">Open</button>
+</form></body></html>
+"""
+"""What a browser without the token is shown: a form, so the token never enters a URL (a
+URL lands in the browser's history, a proxy's log and a Referer)."""
+
+
 class TokenGate:
     """ASGI middleware: every HTTP request and websocket must carry the token.
 
-    The token is accepted from the query (``?token=``), the cookie :data:`COOKIE`
-    or an ``Authorization: Bearer`` header; a request with it in the query gets
-    the cookie back.  Anything else gets 401 (a websocket is closed).
+    The token is accepted from the cookie :data:`COOKIE` or an ``Authorization: Bearer``
+    header, never from a URL; a browser without it gets a form (401) that posts it to
+    ``/token``, which sets the cookie (``Secure`` under TLS) and sends the browser on.
+    Anything else gets 401 (a websocket is closed).
     """
 
-    def __init__(self, app: ASGIApp, token: str) -> None:
+    def __init__(self, app: ASGIApp, token: str, tls: bool = False) -> None:
         self.app = app
         self.token = token.encode()
+        self.tls = tls
 
-    def _given(self, scope: Scope) -> tuple[bytes | None, bool]:
-        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        if "token" in query:
-            return query["token"][0].encode(), True
+    def _given(self, scope: Scope) -> bytes | None:
         for name, value in scope.get("headers", []):
             if name == b"authorization" and value.lower().startswith(b"bearer "):
-                return value[7:].strip(), False
+                return bytes(value[7:].strip())
             if name == b"cookie":
                 for part in value.split(b";"):
                     key, _, val = part.strip().partition(b"=")
                     if key == COOKIE.encode():
-                        return val, False
-        return None, False
+                        return bytes(val)
+        return None
+
+    def _good(self, given: bytes | None) -> bool:
+        return given is not None and hmac.compare_digest(given, self.token)
 
     async def __call__(self, scope: Scope, receive: Any, send: Any) -> None:
         if scope["type"] not in ("http", "websocket"):
             return await self.app(scope, receive, send)
-        given, in_query = self._given(scope)
-        if given is None or not hmac.compare_digest(given, self.token):
-            if scope["type"] == "websocket":
-                await send({"type": "websocket.close", "code": 1008})
-                return
-            body = b"the station needs its token: open the address with ?token=...\n"
-            await send({"type": "http.response.start", "status": 401,
-                        "headers": [(b"content-type", b"text/plain; charset=utf-8"),
-                                    (b"content-length", str(len(body)).encode())]})  # fmt: skip
-            await send({"type": "http.response.body", "body": body})
-            return
-        if not (in_query and scope["type"] == "http"):
+        if self._good(self._given(scope)):
             return await self.app(scope, receive, send)
+        if scope["type"] == "websocket":
+            await send({"type": "websocket.close", "code": 1008})
+            return
+        if scope.get("path") == "/token" and scope.get("method") == "POST":
+            return await self._take(receive, send)
+        await _answer(send, 401, TOKEN_FORM, b"text/html; charset=utf-8")
 
-        async def with_cookie(message: Message) -> None:
-            if message["type"] == "http.response.start":
-                cookie = f"{COOKIE}={self.token.decode()}; Path=/; HttpOnly; SameSite=Strict"
-                message["headers"] = [*message.get("headers", []), (b"set-cookie", cookie.encode())]
-            await send(message)
+    async def _take(self, receive: Any, send: Any) -> None:
+        """``POST /token``: the form's token checked; the cookie set and on to ``/``."""
+        body = b""
+        while len(body) <= 4096:
+            message = await receive()
+            body += message.get("body", b"")
+            if not message.get("more_body"):
+                break
+        given = parse_qs(body[:4096].decode("latin-1")).get("token", [""])[0].encode("latin-1")
+        if not self._good(given):
+            await _answer(send, 401, TOKEN_FORM, b"text/html; charset=utf-8")
+            return
+        cookie = f"{COOKIE}={self.token.decode()}; Path=/; HttpOnly; SameSite=Strict"
+        cookie += "; Secure" if self.tls else ""
+        await send({"type": "http.response.start", "status": 303,
+                    "headers": [(b"location", b"/"), (b"set-cookie", cookie.encode()),
+                                (b"content-length", b"0")]})  # fmt: skip
+        await send({"type": "http.response.body", "body": b""})
 
-        await self.app(scope, receive, with_cookie)
+
+async def _answer(send: Any, status: int, body: bytes, kind: bytes) -> None:
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(b"content-type", kind),
+                            (b"content-length", str(len(body)).encode())]})  # fmt: skip
+    await send({"type": "http.response.body", "body": body})

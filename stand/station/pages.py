@@ -10,6 +10,7 @@ read from two metres and worked with a keyboard or a finger.
 from __future__ import annotations
 
 import html
+from collections.abc import Sequence
 from typing import Any
 
 from nicegui import app, ui
@@ -42,6 +43,7 @@ from stand.station.views import (
     planes_live,
     polar_chart,
 )
+from stand.station.web import harden, served_hosts
 
 REFRESH_S = 0.25
 """How often a live screen looks at the station's state [s]."""
@@ -427,13 +429,19 @@ def _release_dialog(run_id: int, lang: str, _: Language) -> Any:
     return dialog
 
 
-def serve(station: Station, *, host: str, port: int, token: str | None, show: bool) -> None:
-    """Serve the station until interrupted (the token, if any, on every request)."""
+def serve(station: Station, *, host: str, port: int, token: str | None, show: bool,
+          names: Sequence[str] = (), certfile: str | None = None,
+          keyfile: str | None = None) -> None:  # fmt: skip
+    """Serve the station until interrupted: its routes behind their rights, the hosts it
+    answers (its bind and ``names``), the security headers, changes from its own pages only,
+    the token (if any) on every request, TLS with ``certfile``/``keyfile`` (uvicorn's)."""
 
+    tls = certfile is not None
     add_routes(station)
-    add_login_routes(station)
+    add_login_routes(station, secure=tls)
+    harden(app, served_hosts(host, names), port, tls)
     if token:
-        app.add_middleware(TokenGate, token=token)
+        app.add_middleware(TokenGate, token=token, tls=tls)
     ui.run(
         lambda: frame(station),
         host=host,
@@ -443,4 +451,6 @@ def serve(station: Station, *, host: str, port: int, token: str | None, show: bo
         reload=False,
         show_welcome_message=False,
         reconnect_timeout=10.0,
+        ssl_certfile=certfile,
+        ssl_keyfile=keyfile,
     )

@@ -106,3 +106,119 @@ def test_the_real_station_refuses_without_a_session_and_bounds_what_it_takes(
 def test_plain_keeps_file_names_and_drops_folders() -> None:
     assert plain("no run at /srv/stand/runs/run-7.h5 (gone)") == "no run at run-7.h5 (gone)"
     assert plain("a ratio 1/2 and http://x/y stay") == "a ratio 1/2 and http://x/y stay"
+
+
+def _ask(
+    base: str, path: str, headers: dict[str, str], method: str = "GET",
+    body: bytes | None = None, context: object = None,
+) -> tuple[int, dict[str, str], str]:  # fmt: skip
+    """One request, not followed: status, headers (lower-case names) and body."""
+    import http.client
+    from urllib.parse import urlsplit
+
+    u = urlsplit(base)
+    conn = (http.client.HTTPSConnection(u.hostname or "", u.port, timeout=60, context=context)  # type: ignore[arg-type]
+            if u.scheme == "https" else http.client.HTTPConnection(u.hostname or "", u.port,
+                                                                   timeout=60))  # fmt: skip
+    conn.request(method, path, body, headers)
+    r = conn.getresponse()
+    out = r.status, {k.lower(): v for k, v in r.getheaders()}, r.read().decode("utf-8", "replace")
+    conn.close()
+    return out
+
+
+FORM = {"Content-Type": "application/x-www-form-urlencoded"}
+
+
+@pytest.mark.realtime
+def test_the_station_answers_its_own_hosts_and_pages_only(tmp_path: Path) -> None:
+    """A foreign ``Host:`` (DNS rebinding) is 400; every answer carries CSP with
+    ``frame-ancestors 'none'``, ``X-Frame-Options: DENY``, ``nosniff`` and a referrer
+    policy; a log-in posted from another site's page is 403 (from the station's own page it
+    logs in); socket.io refuses another site's origin."""
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    with_accounts(url, ("kim", "operator", "a-long-password"))
+    with served(tmp_path) as base:
+        own = base.removeprefix("http://")
+        assert _ask(base, "/", {"Host": "evil.example"})[0] == 400
+        status, headers, _ = _ask(base, "/", {"Host": own})
+        assert status == 200
+        assert "frame-ancestors 'none'" in headers["content-security-policy"]
+        assert headers["x-frame-options"] == "DENY"
+        assert headers["x-content-type-options"] == "nosniff"
+        assert headers["referrer-policy"] == "same-origin"
+        form = b"account=kim&password=a-long-password"
+        evil = {**FORM, "Host": own, "Origin": "http://evil.example"}
+        assert _ask(base, "/login", evil, "POST", form)[0] == 403
+        status, headers, _ = _ask(base, "/login", {**FORM, "Host": own, "Origin": base}, "POST",
+                                  form)  # fmt: skip
+        assert status == 303 and headers["set-cookie"].startswith("stand_session=")
+        poll = "/_nicegui_ws/socket.io/?EIO=4&transport=polling"
+        assert _ask(base, poll, {"Host": own, "Origin": "http://evil.example"})[0] == 400
+        assert _ask(base, poll, {"Host": own, "Origin": base})[0] == 200
+
+
+def _self_signed(tmp_path: Path) -> tuple[Path, Path]:
+    """A certificate for 127.0.0.1 and its key (``cryptography``), as PEM files."""
+    import datetime as dt
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    key = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "127.0.0.1")])
+    now = dt.datetime.now(dt.UTC)
+    cert = (x509.CertificateBuilder().subject_name(name).issuer_name(name)
+            .public_key(key.public_key()).serial_number(x509.random_serial_number())
+            .not_valid_before(now - dt.timedelta(minutes=5))
+            .not_valid_after(now + dt.timedelta(days=1))
+            .add_extension(x509.SubjectAlternativeName(
+                [x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]), critical=False)
+            .sign(key, hashes.SHA256()))  # fmt: skip
+    cert_pem, key_pem = tmp_path / "station.crt", tmp_path / "station.key"
+    cert_pem.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    key_pem.write_bytes(key.private_bytes(serialization.Encoding.PEM,
+                                          serialization.PrivateFormat.PKCS8,
+                                          serialization.NoEncryption()))  # fmt: skip
+    return cert_pem, key_pem
+
+
+@pytest.mark.realtime
+def test_the_station_serves_https_with_secure_cookies(tmp_path: Path) -> None:
+    """``--certfile/--keyfile``: HTTPS a client verifies against the station's certificate,
+    ``Strict-Transport-Security``, the session cookie ``Secure``."""
+    import ssl
+
+    cert, key = _self_signed(tmp_path)
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    with_accounts(url, ("kim", "operator", "a-long-password"))
+    context = ssl.create_default_context(cafile=str(cert))
+    with served(tmp_path, "--certfile", str(cert), "--keyfile", str(key)) as base:
+        tls = base.replace("http://", "https://")
+        own = base.removeprefix("http://")
+        status, headers, _ = _ask(tls, "/", {"Host": own}, context=context)
+        assert status == 200 and "max-age" in headers["strict-transport-security"]
+        status, headers, _ = _ask(tls, "/login", {**FORM, "Host": own}, "POST",
+                                  b"account=kim&password=a-long-password", context)  # fmt: skip
+        assert status == 303 and "secure" in headers["set-cookie"].lower()
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["--certfile", "x.pem"], "--certfile and --keyfile together"),
+        (["--certfile", "/dev/null", "--keyfile", "/dev/null"], "is a device"),
+        (["--certfile", "README.md", "--keyfile", "README.md"], "not a PEM file"),
+    ],
+)
+def test_tls_options_are_checked_in_one_line(
+    argv: list[str], says: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from stand.cli import main
+
+    assert main(["station", "--no-browser", *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert says in err and len(err.splitlines()) == 1

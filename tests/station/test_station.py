@@ -198,7 +198,7 @@ def test_weak_or_unsafe_tokens_are_refused(token: str, tmp_path: Path) -> None:
         read_token(TOKEN, str(f))
 
 
-def _call(gate: TokenGate, scope: dict[str, Any]) -> list[dict[str, Any]]:
+def _call(gate: TokenGate, scope: dict[str, Any], body: bytes = b"") -> list[dict[str, Any]]:
     sent: list[dict[str, Any]] = []
 
     async def app(scope: Any, receive: Any, send: Any) -> None:
@@ -208,7 +208,7 @@ def _call(gate: TokenGate, scope: dict[str, Any]) -> list[dict[str, Any]]:
         sent.append(message)
 
     async def receive() -> dict[str, Any]:
-        return {}
+        return {"type": "http.request", "body": body, "more_body": False}
 
     gate.app = app
     asyncio.run(gate(scope, receive, send))
@@ -220,7 +220,7 @@ def _call(gate: TokenGate, scope: dict[str, Any]) -> list[dict[str, Any]]:
     [
         ("http", b"", [], 401),
         ("http", b"token=wrong-token-12345", [], 401),
-        ("http", b"token=" + TOKEN.encode(), [], 200),
+        ("http", b"token=" + TOKEN.encode(), [], 401),  # never from a URL
         ("http", b"", [(b"cookie", b"a=b; stand_token=" + TOKEN.encode())], 200),
         ("http", b"", [(b"cookie", b"stand_token=" + TOKEN.encode() + b"x")], 401),
         ("http", b"", [(b"authorization", b"Bearer " + TOKEN.encode())], 200),
@@ -231,14 +231,31 @@ def _call(gate: TokenGate, scope: dict[str, Any]) -> list[dict[str, Any]]:
 def test_every_request_must_carry_the_token(
     kind: str, query: bytes, headers: list[Any], status: Any
 ) -> None:
-    sent = _call(TokenGate(None, TOKEN), {"type": kind, "query_string": query, "headers": headers})  # type: ignore[arg-type]
+    scope = {"type": kind, "query_string": query, "headers": headers, "path": "/"}
+    sent = _call(TokenGate(None, TOKEN), scope)  # type: ignore[arg-type]
     if kind == "websocket":
         closed = sent and sent[0]["type"] == "websocket.close"
         assert ("closed" if closed else "passed") == status
         return
     assert sent[0]["status"] == status
-    cookie = [v for k, v in sent[0]["headers"] if k == b"set-cookie"]
-    assert bool(cookie) == (status == 200 and bool(query))
+    assert not [v for k, v in sent[0]["headers"] if k == b"set-cookie"]
+
+
+@pytest.mark.parametrize(("typed", "status"), [(TOKEN, 303), ("wrong-token-12345", 401)])
+@pytest.mark.parametrize("tls", [False, True])
+def test_the_token_is_typed_into_a_form_that_sets_the_cookie(
+    typed: str, status: int, tls: bool
+) -> None:
+    """``POST /token`` with the form's token: the cookie (``Secure`` under TLS) and on to
+    the screens; a wrong one gets the form again."""
+    scope = {"type": "http", "method": "POST", "path": "/token", "headers": []}
+    sent = _call(TokenGate(None, TOKEN, tls=tls), scope, f"token={typed}".encode())  # type: ignore[arg-type]
+    assert sent[0]["status"] == status
+    cookie = [v.decode() for k, v in sent[0]["headers"] if k == b"set-cookie"]
+    if status == 303:
+        assert cookie[0].startswith(f"stand_token={TOKEN};") and ("Secure" in cookie[0]) == tls
+    else:
+        assert not cookie
 
 
 @pytest.mark.realtime

@@ -297,13 +297,17 @@ def test_a_drilled_correction_through_the_screens(browser: Any, tmp_path: Path) 
 def test_the_screens_load_nothing_from_outside_and_need_the_token(
     browser: Any, tmp_path: Path
 ) -> None:
-    """With a token every request must carry it (the first one in the address, then the
-    cookie, also on the websocket); every script, style and font comes from the station."""
+    """With a token every request must carry it (typed once into the form, never in a
+    URL, then the cookie, also on the websocket); every script, style and font comes from
+    the station; the station's log never holds the token."""
     with served(tmp_path, "--token", TOKEN) as base:
         with pytest.raises(urllib.error.HTTPError) as refused:
-            urllib.request.urlopen(base + "/", timeout=10)
+            urllib.request.urlopen(base + f"/?token={TOKEN}", timeout=10)
         assert refused.value.code == 401
-        browser.get(f"{base}/?token={TOKEN}")
+        from selenium.webdriver.common.by import By
+
+        browser.get(base + "/")
+        browser.find_element(By.NAME, "token").send_keys(TOKEN + "\n")
         _see(browser, "New rotor")
         for name in ("Measure", "Correct", "Check", "History", "Start"):
             _button(browser, name).click()
@@ -317,6 +321,7 @@ def test_the_screens_load_nothing_from_outside_and_need_the_token(
                    and urlsplit(u).netloc != host]  # fmt: skip
         assert len(urls) > 10 and not outside, outside
         assert any("/_nicegui_ws/" in u for u in urls)  # the page's socket, through the gate
+    assert TOKEN not in (tmp_path / "station.log").read_text()
 
 
 def _tab_to(driver: Any, what: str, timeout_s: float = 30.0) -> Any:
