@@ -343,6 +343,11 @@ class RefusedError(StandError, PermissionError):
         super().__init__(message)
 
 
+class ThrottledError(RefusedError):
+    """A log-in tried before the wait its earlier failures set has passed: not checked at
+    all (a guess costs the guesser time, never the stand)."""
+
+
 class KeyFileError(StandError, OSError):
     """The stand's signing key (or the journal's anchor beside it) cannot be made or
     read, or is not what this software wrote.

@@ -12,6 +12,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import resource
 import stat
 import tempfile
@@ -23,6 +24,21 @@ from typing import Any
 import numpy as np
 
 from stand.errors import DiskFullError, RecordingError, UsageError, WriteError
+
+_ABSOLUTE = re.compile(r"(?<![\w./:])(?:/[^\s/:'\"]+)+/([^\s/:'\"]+)")
+"""An absolute POSIX path in a sentence: its last part is what is kept."""
+
+
+def without_folders(text: str) -> str:
+    """``text`` with every absolute path cut to its last part: what a plant's systems and
+    its IT are shown (a file is named by its name and digest, never by the folders of the
+    stand's machine).
+
+    >>> without_folders("/srv/stand/runs/run-7.h5 (stored); a ratio 1/2, http://x/y")
+    'run-7.h5 (stored); a ratio 1/2, http://x/y'
+    """
+    return _ABSOLUTE.sub(lambda m: m.group(1), text)
+
 
 HEADROOM_BYTES = 1 << 18
 """Room kept free beyond each write's own need (HDF5's metadata, the file system's)."""

@@ -29,6 +29,7 @@ SAMPLES = {
     "ClusterError": {"address": "tcp://10.0.0.1:8786"},
     "StationBusyError": {"running": "the check run of A-1"},
     "RefusedError": {"who": "os:kim", "right": "accounts"},
+    "ThrottledError": {"who": "kim", "right": "log in"},
     "KeyFileError": {"path": "audit/stand-key.pem"},
     "TooLargeError": {"what": "run.log", "needed_bytes": 10**11, "available_bytes": 10**10},
 }  # fmt: skip

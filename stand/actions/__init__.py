@@ -6,7 +6,7 @@ themselves; an :class:`Actor` says who (an account, or the operating system's us
 lone stand) and from where.
 """
 
-from stand.actions.accounts import add_account, set_account
+from stand.actions.accounts import add_account, lock_account, set_account
 from stand.actions.calibration import save_calibration, save_matrix
 from stand.actions.door import Actor, Rights, os_actor, os_user
 from stand.actions.evaluations import archive_evaluation
@@ -30,6 +30,7 @@ __all__ = [
     "import_runs",
     "keep_tooling",
     "leave_job",
+    "lock_account",
     "log_in",
     "log_in_badge",
     "log_out",

@@ -64,6 +64,24 @@ def set_account(url: str, actor: Actor, name: str, *, role: str | None = None,
     return after, entry
 
 
+def lock_account(url: str, actor: Actor, name: str, why: str) -> bool:
+    """Disable account ``name`` for ``why`` (too many failed log-ins), by the stand itself
+    (``actor``: the process that saw them; no right asked: the stand protects an account,
+    an administrator enables it again with ``stand users set NAME --enable``); journaled.
+    False when there is no such active account."""
+    from stand.archive.accounts import account_in
+
+    with door(url, actor, None, "lock an account") as p:
+        found = account_in(p.conn, name)
+        if found is None or not found["active"]:
+            p.unchanged = True
+            return False
+        before, after = update_account(p.conn, name, {"active": False})
+        p.journal(Change("account", name, digest(before), digest(after), why,
+                         detail=state_of(after)))  # fmt: skip
+    return True
+
+
 def _keep_an_administrator(conn: Any, actor: Actor, name: str, changes: dict[str, Any]) -> None:
     """Refuse a change that leaves the archive without an active administrator."""
     import sqlalchemy as sa

@@ -142,8 +142,8 @@ def _make(path: Path, data: bytes) -> None:
 def _publish_public(path: Path, pem: str) -> None:
     if path.is_file() and path.read_text(encoding="ascii", errors="replace") == pem:
         return
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_text(pem, encoding="ascii")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+    tmp.write_text(pem, encoding="ascii")  # a name of its own: threads publish at once
     os.replace(tmp, path)
 
 

@@ -46,6 +46,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="a name the station is reached by (its Host: header), beside its bind address; "
         "repeat for several (another Host: is refused)",
     )
+    p.add_argument(
+        "--session-hours",
+        type=float,
+        default=8.0,
+        metavar="H",
+        help="a session ends this long after its log-in, used or not (a shift; default: 8)",
+    )
     p.add_argument("--certfile", metavar="PEM", help="serve HTTPS: the station's certificate")
     p.add_argument("--keyfile", metavar="PEM", help="serve HTTPS: its private key")
     p.add_argument(
@@ -91,6 +98,8 @@ def run(args: argparse.Namespace) -> int:
     token = read_token(args.token, args.token_file)
     check_bind(args.host, token)
     _check_tls(args.certfile, args.keyfile)
+    if not 0.05 <= args.session_hours <= 24:
+        raise UsageError(f"--session-hours must be within 0.05 to 24, got {args.session_hours}")
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     if not args.max_seconds > 0:
@@ -110,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
 
     station = Station(config_dir, runs, url, targets, max_seconds=args.max_seconds)
     station.default_language = args.lang
+    station.sessions.lifetime_s = args.session_hours * 3600.0
     if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
 
         def state() -> str:

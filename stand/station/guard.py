@@ -14,11 +14,11 @@ Error texts never carry an absolute path (:func:`plain`): a plant's IT reads the
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 from fastapi import Depends, HTTPException, Request
 
+from stand.files import without_folders
 from stand.i18n.language import N_, Language
 from stand.station.service import Station
 from stand.station.sessions import Session, allowed_roles
@@ -36,8 +36,6 @@ WHAT = {
     PUBLIC: "",
 }
 """What each right lets a route do, as the refusal says it."""
-_ABSOLUTE = re.compile(r"(?<![\w./:])(?:/[^\s/:'\"]+)+/([^\s/:'\"]+)")
-"""An absolute POSIX path in a sentence: its last part is what is kept."""
 
 
 def session_of(station: Station, request: Any) -> Session | None:
@@ -61,12 +59,13 @@ def refused(session: Session | None, right: str, what: str, _: Language) -> str 
 
 
 def plain(text: str) -> str:
-    """``text`` with every absolute path cut to its file's name.
+    """``text`` with every absolute path cut to its file's name
+    (:func:`stand.files.without_folders`).
 
     >>> plain("run 4 is outside /home/ops/stand/runs: not served")
     'run 4 is outside runs: not served'
     """
-    return _ABSOLUTE.sub(lambda m: m.group(1), text)
+    return without_folders(text)
 
 
 def needs(station: Station, right: str) -> Any:

@@ -13,7 +13,7 @@ from typing import Any
 from fastapi import Request  # a route's request: FastAPI resolves it by name
 from nicegui import app, ui
 
-from stand.errors import StandError, UsageError
+from stand.errors import StandError, ThrottledError, UsageError
 from stand.i18n.language import N_, Language
 from stand.station.guard import COOKIE, PUBLIC, ROLES, needs, refused
 from stand.station.service import Station
@@ -60,23 +60,25 @@ def require(station: Station, right: str, what: str) -> None:
 
 
 def login_screen(_: Language, *, failed: str | None) -> None:
-    """The log-in form (``failed``: why the last try was refused: ``failed``, or
-    ``unavailable`` when the accounts did not read)."""
+    """The log-in form (``failed``: why the last try was refused: ``failed``, ``wait``
+    after too many failures, or ``unavailable`` when the accounts did not read)."""
     ui.label(_("Log in")).classes("big")
     if failed:
-        why = (
-            _(
-                "the accounts cannot be read now (the station's log says why): try again "
-                "or ask the administrator"
-            )
-            if failed == "unavailable"
-            else _("wrong account, password or badge (or the account is disabled)")
-        )
+        wrong = _("wrong account, password or badge (or the account is disabled)")
+        why = {
+            "unavailable": _("the accounts cannot be read now (the station's log says why): "
+                             "try again or ask the administrator"),
+            "wait": _("too many failed log-ins: wait a little before the next try (after "
+                      "20 the account is locked; an administrator unlocks it)"),
+        }.get(failed, wrong)  # fmt: skip
         ui.label(why).classes("text-h6 text-red-10").mark("login-failed")
     form = FORM.format(**{k: html.escape(_(v)) for k, v in FORM_WORDS.items()})
     ui.html(form, sanitize=False).mark("login")  # our own form: only our words in it
 
 
+LOGIN_THREADS = 2
+"""Log-ins checked at once (argon2 and the journal's write, off the event loop); more wait
+their turn, so that a flood of log-ins never takes the processor from the screens."""
 LOGOUT = """<form method="post" action="/logout" style="margin:0">
 <button type="submit" class="logout" style="font-size:1rem;padding:6px 14px;background:none;
         color:#fff;border:1px solid #fff;border-radius:4px;cursor:pointer">{log_out}</button>
@@ -99,18 +101,24 @@ def who_line(station: Station, session: Session | None, _: Language) -> None:
 def add_login_routes(station: Station, *, secure: bool = False) -> None:
     """``POST /login`` (the form; argon2 in the thread pool, never on the event loop that
     serves the screens) and ``POST /logout``; the session's cookie ``Secure`` under TLS."""
+    import anyio
     from fastapi.responses import RedirectResponse
-    from starlette.concurrency import run_in_threadpool
+
+    checking = anyio.CapacityLimiter(LOGIN_THREADS)  # a flood queues, the screens go on
 
     @app.post("/login", dependencies=[needs(station, PUBLIC)])
     async def login(request: Request) -> Any:
         form = await request.form()
         account, password = str(form.get("account", "")), str(form.get("password", ""))
         badge = str(form.get("badge", ""))
+        source = request.client.host if request.client else ""
         try:
-            s = await run_in_threadpool(
-                lambda: station.sessions.log_in_badge(badge) if badge
-                else station.sessions.log_in(account, password))  # fmt: skip
+            s = await anyio.to_thread.run_sync(
+                lambda: station.sessions.log_in_badge(badge, source) if badge
+                else station.sessions.log_in(account, password, source),
+                limiter=checking)  # fmt: skip
+        except ThrottledError:  # not even checked: the page says to wait
+            return RedirectResponse("/?login=wait", status_code=303)
         except StandError as exc:  # the accounts do not read: said here and in the log
             log.warning("log-in not possible: %s", exc)
             return RedirectResponse("/?login=unavailable", status_code=303)

@@ -9,27 +9,27 @@ read from two metres and worked with a keyboard or a finger.
 
 from __future__ import annotations
 
-import html
 from collections.abc import Sequence
 from typing import Any
 
 from nicegui import app, ui
 
 from stand.i18n import Display
-from stand.i18n.language import LANGUAGES, N_, Language
+from stand.i18n.language import N_, Language
 from stand.plant import TokenGate
 from stand.solve import to_json
+from stand.station.certificates import certificate_links
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.guard import session_of
-from stand.station.history import add_routes, guard, history_screen, notify
+from stand.station.history import REFRESH_S, guard, history_screen, notify
 from stand.station.login import (
     add_login_routes,
-    current,
     login_screen,
     require,
     who_line,
     words,
 )
+from stand.station.routes import add_routes
 from stand.station.service import Station
 from stand.station.setup import setup_screen
 from stand.station.start import start_screen
@@ -45,8 +45,6 @@ from stand.station.views import (
 )
 from stand.station.web import harden, served_hosts
 
-REFRESH_S = 0.25
-"""How often a live screen looks at the station's state [s]."""
 SCREENS = (("/", N_("Start")), ("/measure", N_("Measure")), ("/correct", N_("Correct")),
            ("/check", N_("Check")), ("/history", N_("History")),
            ("/setup", N_("Setup")))  # fmt: skip
@@ -355,78 +353,13 @@ def check_screen(station: Station) -> None:
                for k, v in names.items()]  # fmt: skip
     ui.table(columns=columns, rows=check_rows(out, _)).classes("text-h6").mark("check-table")
     with ui.row().classes("gap-4 q-mt-md"):
-        _certificate_links(station, s.result, _)
+        certificate_links(station, s.result, _)
 
         def next_rotor() -> None:
             require(station, "measure", _("start the next rotor"))
             station.next_rotor()
 
         ui.button(_("Next rotor"), on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
-
-
-def _certificate_links(station: Station, result: Any, _: Language) -> None:
-    """The certificate's links once the run is filed (the answer shows before: the report
-    and the archive are written while the operator reads it)."""
-    box = ui.row().classes("gap-4 items-center")
-    chosen = {"lang": _.code}  # the certificate's language: the customer's
-
-    def fill() -> None:
-        s = station.snapshot()
-        if s.result is result and s.run_id is None and s.waiting:
-            with box:
-                box.clear()
-                ui.label(s.waiting).classes("text-h6 text-grey-8")
-            return
-        timer.deactivate()
-        box.clear()
-        if s.result is not result or s.run_id is None:  # moved on, or not archived (notes)
-            return
-        lang = "" if chosen["lang"] == station.default_language else f"?lang={chosen['lang']}"
-        with box:
-            ui.link(_("Open the certificate"), f"/report/{s.run_id}{lang}", new_tab=True).classes(
-                "text-h5").mark("certificate")  # fmt: skip
-            ui.link(_("as PDF"), f"/report/{s.run_id}/pdf{lang}", new_tab=True).classes(
-                "text-h5").mark("certificate-pdf")  # fmt: skip
-            session = current(station)
-            if session is not None and session.may("release"):
-                dialog = _release_dialog(s.run_id, chosen["lang"], _)
-                ui.button(_("Release…"), on_click=dialog.open).props("size=lg").mark("release")
-
-            def choose(e: Any) -> None:
-                chosen["lang"] = e.value
-                fill()
-
-            ui.select(dict(LANGUAGES), value=chosen["lang"], label=_("certificate language"),
-                      on_change=choose).classes("w-48").mark("certificate-language")  # fmt: skip
-
-    timer = ui.timer(REFRESH_S, fill)
-    fill()
-
-
-RELEASE_FORM = """<form method="post" action="/report/{run}/release" target="_blank"
-      style="display:flex;flex-direction:column;gap:14px;font-size:1.2rem;min-width:420px">
-  <input type="hidden" name="lang" value="{lang}">
-  <label>{password} <input name="password" type="password" autocomplete="current-password"
-         required style="width:100%;font-size:1.2rem;padding:6px"></label>
-  <label><input type="checkbox" name="meaning" value="released" required> {meaning}</label>
-  <button type="submit" style="font-size:1.2rem;padding:10px;background:#1976d2;color:#fff;
-          border:0;border-radius:4px">{sign}</button>
-</form>"""
-"""Releasing: the password entered again and the meaning confirmed, posted (never a link)."""
-
-
-def _release_dialog(run_id: int, lang: str, _: Language) -> Any:
-    """The dialog that signs run ``run_id``'s certificate in the language ``lang``."""
-    with ui.dialog() as dialog, ui.card():
-        ui.label(_("Release the certificate of run {run}").format(run=run_id)).classes("text-h6")
-        ui.html(RELEASE_FORM.format(
-            run=run_id, lang=html.escape(lang), password=html.escape(_("your password")),
-            meaning=html.escape(_("released: the rotor was balanced and measured as this "
-                                  "certificate states")),
-            sign=html.escape(_("SIGN AND RELEASE"))),
-            sanitize=False).mark("release-form")  # fmt: skip
-        ui.button(_("Cancel"), on_click=dialog.close).props("flat")
-    return dialog
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool,

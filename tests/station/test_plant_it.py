@@ -34,8 +34,8 @@ def test_every_route_of_the_station_declares_its_right(tmp_path: Path) -> None:
     from fastapi.routing import APIRoute
     from nicegui import app
 
-    from stand.station.history import add_routes
     from stand.station.login import add_login_routes
+    from stand.station.routes import add_routes
     from stand.station.service import Station
 
     station = Station(tmp_path, tmp_path / "runs", f"sqlite:///{tmp_path / 'a.db'}",
@@ -153,6 +153,10 @@ def test_the_station_answers_its_own_hosts_and_pages_only(tmp_path: Path) -> Non
         status, headers, _ = _ask(base, "/login", {**FORM, "Host": own, "Origin": base}, "POST",
                                   form)  # fmt: skip
         assert status == 303 and headers["set-cookie"].startswith("stand_session=")
+        wrong = b"account=kim&password=guessing"
+        places = [_ask(base, "/login", {**FORM, "Host": own}, "POST", wrong)[1]["location"]
+                  for _ in range(6)]  # fmt: skip
+        assert places[:5] == ["/?login=failed"] * 5 and places[5] == "/?login=wait", places
         poll = "/_nicegui_ws/socket.io/?EIO=4&transport=polling"
         assert _ask(base, poll, {"Host": own, "Origin": "http://evil.example"})[0] == 400
         assert _ask(base, poll, {"Host": own, "Origin": base})[0] == 200

@@ -92,3 +92,57 @@ def test_an_archive_that_stops_answering_keeps_the_last_answer(tmp_path: Path,
     monkeypatch.setattr(sessions_module, "accounts_of", gone)
     assert lone.required() is False  # as it last said
     assert Sessions(f"sqlite:///{tmp_path / 'b.sqlite'}").required() is True  # never said
+
+
+def test_every_use_reads_the_account_and_a_shift_ends_the_session(url: str) -> None:
+    """A disabled account's session ends at its next use (no grace period); a session used
+    all the time still ends after its lifetime (0.3 s here, a shift at the station), the
+    end journaled with why."""
+    from stand.archive.audit import entries
+
+    s = Sessions(url, lifetime_s=0.3)
+    kim = s.log_in("kim", "a-long-password")
+    assert kim is not None and s.get(kim.token) is not None
+    change(url, "kim", active=False)
+    assert s.get(kim.token) is None  # at once
+    ana = s.log_in("ana", "another-password")
+    assert ana is not None
+    end = time.monotonic() + 0.6
+    while time.monotonic() < end:  # used all along: the idle time never runs out
+        last = s.get(ana.token)
+        time.sleep(0.05)
+    assert last is None and s.get(ana.token) is None
+    why = [e["reason"] for e in entries(url) if e["action"] == "session_end"]
+    assert any("disabled" in w for w in why) and any("lifetime" in w for w in why), why
+
+
+def test_failures_make_the_next_try_wait_and_twenty_lock_the_account(
+    url: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """After 5 failures of an account (from any source) or of a source (any account) the
+    next try waits, unchecked: even the right password is refused until the wait is over;
+    after 20 failures the account is disabled, journaled, and an administrator's enable
+    lets it in again."""
+    from stand.archive.audit import entries
+    from stand.errors import ThrottledError
+    from stand.station import sessions as sessions_module
+
+    s = Sessions(url)
+    for k in range(5):
+        assert s.log_in("kim", "wrong", f"10.0.0.{k}") is None
+    with pytest.raises(ThrottledError, match="too many failed log-ins"):
+        s.log_in("kim", "a-long-password", "10.0.0.9")  # the account waits
+    for k in range(5):
+        assert s.log_in(f"guess{k}", "wrong", "10.0.0.20") is None
+    with pytest.raises(ThrottledError):
+        s.log_in("ana", "another-password", "10.0.0.20")  # the source waits
+    assert s.log_in("ana", "another-password", "10.0.0.21") is not None
+
+    monkeypatch.setattr(sessions_module, "wait_after", lambda n: 0.0)  # no waits: count
+    for _ in range(20 - 5):
+        assert s.log_in("kim", "wrong", "10.0.0.30") is None
+    assert s.log_in("kim", "a-long-password", "10.0.0.31") is None  # locked
+    (lock,) = [e for e in entries(url, action="account") if "locked" in (e["reason"] or "")]
+    assert lock["subject"] == "kim" and "locked after 20 failed log-ins" in lock["reason"]
+    change(url, "kim", active=True)  # the administrator unlocks it
+    assert s.log_in("kim", "a-long-password", "10.0.0.31") is not None

@@ -269,8 +269,8 @@ async def _flow(station: Station) -> None:
     from nicegui import ui
     from nicegui.testing.user_simulation import user_simulation
 
-    from stand.station.history import add_routes
     from stand.station.pages import frame
+    from stand.station.routes import add_routes
 
     async def until(cond: Any, timeout_s: float = 30.0) -> None:
         end = time.monotonic() + timeout_s
