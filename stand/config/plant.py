@@ -5,7 +5,7 @@ from __future__ import annotations
 import zoneinfo
 from typing import Annotated
 
-from pydantic import BaseModel, Field, field_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from stand.config.tables import STRICT
 
@@ -23,9 +23,30 @@ class PlantTable(BaseModel):
     mqtt_url: Annotated[str, Field(pattern=MQTT_URL)] | None = None
     """``mqtt://host[:port]`` (1883) or ``mqtts://`` (8883, TLS), the port 1 to 65535: each
     archived result is published as JSON on ``stand/<stand id>/result``."""
+    mqtt_password_file: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
+    """A file with the broker's user name (first line) and password (second line): never
+    in the URL, never in the run files (only this path is)."""
+    mqtt_ca_file: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
+    """With ``mqtts://``: the CA (PEM) the broker's certificate is checked against (else
+    the system's trust store)."""
+    mqtt_cert_file: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
+    """With ``mqtts://``: the stand's client certificate (PEM), with ``mqtt_key_file``."""
+    mqtt_key_file: Annotated[str, Field(min_length=1, max_length=4096)] | None = None
+    """The client certificate's private key (PEM)."""
     qdas_timezone: Annotated[str, Field(min_length=1, max_length=64)] | None = None
     """The IANA time zone Q-DAS dates (K0004) are written in (``Europe/Berlin``); default
     the machine's own."""
+
+    @model_validator(mode="after")
+    def _tls_files(self) -> PlantTable:
+        if (self.mqtt_cert_file is None) != (self.mqtt_key_file is None):
+            raise ValueError("mqtt_cert_file and mqtt_key_file go together")
+        tls = (self.mqtt_url or "").startswith("mqtts://")
+        if not tls and (self.mqtt_ca_file or self.mqtt_cert_file):
+            raise ValueError("mqtt_ca_file, mqtt_cert_file and mqtt_key_file need mqtts://")
+        if (self.mqtt_password_file or self.mqtt_ca_file) and not self.mqtt_url:
+            raise ValueError("the broker's files need mqtt_url")
+        return self
 
     @field_validator("qdas_timezone")
     @classmethod
