@@ -248,3 +248,50 @@ def write_anchor(archive_id: str, head: str, folder: Path | None = None) -> None
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
         tmp.write_text(json.dumps({"archive": archive_id, "head": head}), encoding="utf-8")
         os.replace(tmp, path)
+
+
+TRUSTED_CLIENTS = "trusted"
+"""The folder, beside an OPC UA server's certificate, of the client applications (or CAs)
+it trusts."""
+
+
+def read_certificate(path: str | Path) -> Any:
+    """An X.509 certificate from a PEM or DER file (UsageError naming the file)."""
+    from cryptography import x509
+
+    from stand.errors import RecordingError
+    from stand.files import check_input
+
+    try:
+        data = check_input(path).read_bytes()
+    except (RecordingError, OSError) as exc:
+        raise UsageError(f"{path}: cannot be read ({exc})") from exc
+    try:
+        return (x509.load_pem_x509_certificate(data) if b"-----BEGIN" in data
+                else x509.load_der_x509_certificate(data))  # fmt: skip
+    except ValueError as exc:
+        raise UsageError(f"{path}: not an X.509 certificate (PEM or DER)") from exc
+
+
+def thumbprint(cert: Any) -> str:
+    """A certificate's SHA-256 thumbprint, hex (its file name in ``trusted/``)."""
+    from cryptography.hazmat.primitives import hashes
+
+    return str(cert.fingerprint(hashes.SHA256()).hex())
+
+
+def trust_client(folder: Path, path: str | Path) -> tuple[Path, Any]:
+    """Copy the client certificate (or CA) in ``path`` into ``folder``'s
+    :data:`TRUSTED_CLIENTS` as DER, named by its thumbprint (written whole, then renamed);
+    the file made and the certificate.  The caller journals it
+    (:func:`stand.actions.keys.trust_opcua_client`)."""
+    from cryptography.hazmat.primitives.serialization import Encoding
+
+    cert = read_certificate(path)
+    trusted = folder / TRUSTED_CLIENTS
+    trusted.mkdir(parents=True, exist_ok=True)
+    target = trusted / f"{thumbprint(cert)}.der"
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.{os.urandom(4).hex()}.tmp")
+    tmp.write_bytes(cert.public_bytes(Encoding.DER))
+    os.replace(tmp, target)
+    return target, cert

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from stand.archive import Archive, url_for
-from stand.cli.common import add_archive_argument
+from stand.cli.common import actor_of, add_actor_arguments, add_archive_argument
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.errors import UsageError
 from stand.files import first_line
@@ -19,6 +19,12 @@ from stand.plant import Access, ResultServer
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "trust", nargs="?", choices=("trust",),
+        help="trust FILE: trust an OPC UA client application's certificate (or its CA) on "
+        "the encrypted endpoint (an administrator's change, journaled)",
+    )  # fmt: skip
+    p.add_argument("file", nargs="?", metavar="FILE", help="with trust: the certificate (PEM/DER)")
     p.add_argument("--port", type=int, default=4840, help="TCP port (default: 4840)")
     p.add_argument(
         "--host",
@@ -38,6 +44,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--user", help="the one user a client must log in as")
     p.add_argument("--password-file", metavar="FILE", help="the user's password (first line)")
     p.add_argument(
+        "--anonymous-read", action="store_true",
+        help="let anonymous clients on this machine read though the stand has accounts "
+        "(off by default: once accounts exist, clients log in)",
+    )  # fmt: skip
+    add_actor_arguments(p)
+    p.add_argument("--reason", help="with trust: why, for the audit trail")
+    p.add_argument(
         "--cert-dir", metavar="DIR",
         help="where the server's certificate and key are kept, made on first start (beyond "
         "this machine only; default: opcua/ in the user's data folder)",
@@ -53,8 +66,31 @@ def read_access(args: argparse.Namespace) -> Any:
     return Access(args.user, password)
 
 
-def run(args: argparse.Namespace) -> int:
+def _trust(args: argparse.Namespace) -> int:
+    """``stand opcua trust FILE``: the client trusted for the server's certificate folder."""
+    from stand.actions.keys import trust_opcua_client
+    from stand.plant.opcua.security import cert_folder
 
+    if not args.file:
+        raise UsageError("stand opcua trust FILE: name the client's certificate (PEM or DER)")
+    cfg = load_config(args.config)[0] if args.config else None
+    url = url_for(args.archive, cfg)
+    folder = cert_folder(Path(args.cert_dir) if args.cert_dir else None)
+    made, entry = trust_opcua_client(url, actor_of(args, url), folder, args.file,
+                                     reason=args.reason)  # fmt: skip
+    print(
+        f"trusted {made.name} in {made.parent} (audit entry {entry}); clients with it "
+        "connect from their next session"
+    )
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.trust:
+        return _trust(args)
+    if args.file:
+        raise UsageError(f"stand opcua: {args.file!r}: a file goes with trust (stand opcua "
+                         "trust FILE)")  # fmt: skip
     if not 0 < args.port < 65536:
         raise UsageError(f"--port must be 1 to 65535, got {args.port}")
     cfg = None
@@ -76,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         rotor_types=(lambda: rotor_types_in(Path(args.config_dir)))
         if args.config_dir
         else (lambda: one),
+        anonymous_read=args.anonymous_read,
     )
 
     async def main() -> None:

@@ -226,12 +226,16 @@ def _client_certificate(folder: Path) -> tuple[Path, Path]:
 
 
 def test_off_loopback_only_an_encrypted_client_with_user_and_password_gets_in(
-    tmp_path: Path,
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     """Served on every interface: an anonymous client over the plain endpoint is refused;
-    one with the password over Basic256Sha256 SignAndEncrypt gets in.  The server's
-    certificate is made on first start (its key readable by the owner only) and kept."""
+    over Basic256Sha256 SignAndEncrypt with the password, a client application the stand
+    does not trust is refused too (``BadCertificateUntrusted``: a fresh self-signed
+    certificate got in before) and its certificate kept in ``rejected/``; once ``stand
+    opcua trust`` trusts it (journaled) it gets in.  The server's certificate is made on
+    first start (its key readable by the owner only) and kept."""
     from stand.archive import Archive
+    from stand.archive.audit import entries
     from stand.plant import Access, ResultServer
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
@@ -244,14 +248,11 @@ def test_off_loopback_only_an_encrypted_client_with_user_and_password_gets_in(
     server.run_in_thread()
     cert, key = _client_certificate(tmp_path)
 
-    async def clients() -> None:
+    async def connect() -> None:
         from asyncua import Client
 
-        endpoint = f"opc.tcp://127.0.0.1:{port}/stand/"
-        with pytest.raises(Exception):  # noqa: B017 - asyncua raises its own kinds
-            async with Client(endpoint, timeout=5) as anonymous:
-                await anonymous.get_namespace_array()
-        client = Client(endpoint, timeout=10)
+        client = Client(f"opc.tcp://127.0.0.1:{port}/stand/", timeout=10)
+        client.application_uri = "urn:test:mes-client"  # as its certificate names it
         client.set_user("mes")
         client.set_password("a-long-password")
         await client.set_security_string(f"Basic256Sha256,SignAndEncrypt,{cert},{key}")
@@ -259,10 +260,26 @@ def test_off_loopback_only_an_encrypted_client_with_user_and_password_gets_in(
             _, machine = await _machine(client, "stand-9")
             assert await machine.get_children()
 
+    async def anonymous() -> None:
+        from asyncua import Client
+
+        with pytest.raises(Exception):  # noqa: B017 - asyncua raises its own kinds
+            async with Client(f"opc.tcp://127.0.0.1:{port}/stand/", timeout=5) as c:
+                await c.get_namespace_array()
+
     try:
-        asyncio.run(clients())
+        asyncio.run(anonymous())
+        with pytest.raises(Exception, match=r"Untrusted"):
+            asyncio.run(connect())
+        assert [p.suffix for p in (certs / "rejected").iterdir()] == [".der"]
+        assert main(["opcua", "trust", str(cert), "--cert-dir", str(certs), "--archive", url,
+                     "--reason", "the line's MES"]) == 0  # fmt: skip
+        assert "trusted" in capsys.readouterr().out
+        asyncio.run(connect())
     finally:
         server.stop()
+    (trust,) = entries(url, action="trust")
+    assert trust["subject"].startswith("OPC UA client") and trust["reason"] == "the line's MES"
     made = certs / "server-cert.der"
     assert made.is_file() and stat.S_IMODE(os.stat(certs / "server-key.pem").st_mode) == 0o600
     first = made.read_bytes()
@@ -636,3 +653,34 @@ def test_the_audit_trails_head_is_a_variable_the_plant_keeps(
     before, after = _with_server(url, client)
     assert before == "" and after == anchored_head(url) and after.startswith("1:")
     assert main(["audit", "verify", "--archive", url, "--head", after]) == 0
+
+
+@pytest.mark.parametrize("anonymous_read", [False, True])
+def test_anonymous_clients_only_on_a_lone_stand_or_when_allowed(
+    tmp_path: Path, anonymous_read: bool
+) -> None:
+    """Once the archive has accounts an anonymous client on this machine is refused (it
+    read every result before); ``--anonymous-read`` lets it read."""
+    from accounts import with_accounts
+
+    from stand.plant import ResultServer
+
+    url = with_accounts(f"sqlite:///{tmp_path / 'a.sqlite'}", ("kim", "operator", "a-long-pw1"))
+    port = _port()
+    server = ResultServer(url, "stand-9", "127.0.0.1", port, anonymous_read=anonymous_read)
+    server.run_in_thread()
+
+    async def read() -> None:
+        from asyncua import Client
+
+        async with Client(f"opc.tcp://127.0.0.1:{port}/stand/", timeout=5) as c:
+            await _machine(c, "stand-9")
+
+    try:
+        if anonymous_read:
+            asyncio.run(read())
+        else:
+            with pytest.raises(Exception):  # noqa: B017 - asyncua raises its own kinds
+                asyncio.run(read())
+    finally:
+        server.stop()

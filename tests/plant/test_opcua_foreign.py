@@ -166,7 +166,9 @@ def test_node_opcua_over_the_encrypted_endpoint_from_another_host(
     tmp_path: Path, runs: list[Path]
 ) -> None:
     """Beyond loopback only Basic256Sha256 with SignAndEncrypt and a user: node-opcua in
-    another network namespace logs in as the MES user and reads the machine and its latest
+    another network namespace, its application certificate not yet trusted, is refused
+    and its certificate kept in ``rejected/``; trusted from there (``stand opcua trust``,
+    as plant IT does), it logs in as the MES user and reads the machine and its latest
     result; without the password it is refused."""
     from stand.plant.opcua.security import Access
 
@@ -177,6 +179,16 @@ def test_node_opcua_over_the_encrypted_endpoint_from_another_host(
         with serving(url, "stand-7", host, Access("mes", "a-long-password"), certs) as endpoint:
             archive_in_another_process(url, runs[:1])
             prefix = ("ip", "netns", "exec", name)
+            untrusted = NodeUaClient(endpoint, "stand-7", 0, "mes", "a-long-password",
+                                     prefix=prefix)  # fmt: skip
+            try:
+                with pytest.raises(AssertionError):
+                    untrusted.next()
+            finally:
+                untrusted.close()
+            (seen,) = (certs / "rejected").iterdir()
+            assert main(["opcua", "trust", str(seen), "--cert-dir", str(certs),
+                         "--archive", url]) == 0  # fmt: skip
             client = NodeUaClient(endpoint, "stand-7", 0, "mes", "a-long-password", prefix=prefix)
             try:
                 ready = client.next()

@@ -156,8 +156,9 @@ def test_balance_refuses_a_job_it_cannot_run(tmp_path: Path, capsys: Any) -> Non
 
 
 def test_the_stands_accounts_decide_who_may_send_jobs(tmp_path: Path) -> None:
-    """With accounts in the archive: anonymous and an operator read but may not send a
-    job (BadUserAccessDenied); a setter may; a wrong password does not log in."""
+    """With accounts in the archive: anonymous is not let in at all (it read before); an
+    operator reads but may not send a job (BadUserAccessDenied); a setter may; a wrong
+    password does not log in."""
     from asyncua import Client, ua
     from asyncua.ua.uaerrors import BadUserAccessDenied
 
@@ -199,7 +200,7 @@ def test_the_stands_accounts_decide_who_may_send_jobs(tmp_path: Path) -> None:
         wrong = asyncio.run(store("ana", "not-her-password"))
     finally:
         server.stop()
-    assert got == {None: "denied at call", "kim": "denied at call", "ana": "stored 1"}, got
+    assert got == {None: "denied at log-in", "kim": "denied at call", "ana": "stored 1"}, got
     assert wrong == "denied at log-in"
     # journaled: who sent the job order (the OPC UA user), and each log-in, failed or not
     from stand.archive.audit import entries

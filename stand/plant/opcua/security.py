@@ -9,6 +9,15 @@
   the user's data folder) and kept: clients that trusted it keep trusting it.  The key
   file is readable by its owner only; both are written under a temporary name and then
   renamed, so a crash never leaves half a key.
+- On the encrypted endpoint the *client application* must be trusted too (OPC UA's
+  application authentication): asyncua's ``CertificateValidator`` with a ``TrustStore``
+  of ``trusted/`` beside the server's certificate (time range, application URI, trusted
+  directly or by its CA); an untrusted client is refused (``BadCertificateUntrusted``)
+  and its certificate kept in ``rejected/`` for the plant's IT to look at and, if it is
+  the MES's, to trust: ``stand opcua trust FILE``
+  (:func:`stand.actions.keys.trust_opcua_client`), journaled.
+- Anonymous clients on this machine only, and only on a lone stand: once the archive has
+  accounts, a client logs in unless the server was started with ``--anonymous-read``.
 """
 
 from __future__ import annotations
@@ -21,10 +30,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from stand.archive.keys import TRUSTED_CLIENTS, thumbprint
 from stand.config.paths import data_folder
 from stand.errors import StandError, UsageError
 from stand.plant.safety import is_local
 
+TRUSTED_DIR, REJECTED_DIR = TRUSTED_CLIENTS, "rejected"
+"""Beside the server's certificate: the client certificates (or their CAs) trusted, and
+those refused (kept for a look)."""
 CERT_FILE, KEY_FILE = "server-cert.der", "server-key.pem"
 """The server's certificate (DER) and private key (PEM) in the certificate folder."""
 CERT_DAYS = 3650
@@ -99,6 +112,39 @@ def server_certificate(folder: Path, app_uri: str) -> tuple[Path, Path]:
     return cert, key
 
 
+def client_validator(folder: Path) -> Any:
+    """asyncua's certificate validator for client applications: time range, application
+    URI and trust (``trusted/``, read again at each connection so a trust takes effect
+    without a restart); a refused certificate is kept in ``rejected/`` and refused
+    (``BadCertificateUntrusted``: nothing trusted yet refuses everyone)."""
+    from asyncua import ua
+    from asyncua.crypto.truststore import TrustStore
+    from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
+    from asyncua.ua.uaerrors import UaError
+    from cryptography.hazmat.primitives.serialization import Encoding
+
+    o = CertificateValidatorOptions
+    checks = o.TIME_RANGE | o.URI | o.TRUSTED | o.REVOKED | o.PEER_CLIENT
+
+    async def validate(cert: Any, app: Any) -> None:
+        trusted = folder / TRUSTED_DIR
+        try:
+            if not any(trusted.glob("*")):
+                raise ua.uaerrors.BadCertificateUntrusted()
+            store = TrustStore([trusted], [])
+            await store.load()
+            await CertificateValidator(checks, store).validate(cert, app)
+        except (UaError, ValueError) as exc:
+            rejected = folder / REJECTED_DIR
+            rejected.mkdir(parents=True, exist_ok=True)
+            _write(rejected / f"{thumbprint(cert)}.der", cert.public_bytes(Encoding.DER), 0o644)
+            if isinstance(exc, UaError):
+                raise
+            raise ua.uaerrors.BadCertificateUntrusted() from exc
+
+    return validate
+
+
 async def apply_security(server: Any, host: str, users: Users, cert_dir: Path | None,
                          app_uri: str) -> None:  # fmt: skip
     """Set the server's endpoints, identity tokens and rights by where it listens."""
@@ -120,6 +166,7 @@ async def apply_security(server: Any, host: str, users: Users, cert_dir: Path | 
     server.set_security_policy([ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt],
                                rights(users))  # fmt: skip
     server.set_identity_tokens([ua.UserNameIdentityToken])
+    server.set_certificate_validator(client_validator(cert.parent))
 
 
 JOB_METHODS = "/JobManagement/JobOrderControl/"
@@ -132,8 +179,12 @@ class Users:
     ``access`` user; or, where the archive ``accounts_url`` has accounts, any active
     account by its password, with its role (:mod:`stand.archive.accounts`)."""
 
-    def __init__(self, access: Access, accounts_url: str | None = None) -> None:
+    def __init__(
+        self, access: Access, accounts_url: str | None = None, anonymous_read: bool = False
+    ) -> None:
         self.access, self.accounts_url = access, accounts_url
+        self.anonymous_read = anonymous_read
+        """Let anonymous clients read on this machine though the stand has accounts."""
         self.roles: dict[str, str] = {}
         """The role of each account logged in (for :class:`Rights`)."""
 
@@ -156,9 +207,21 @@ class Users:
                 return None
             self.roles[found["name"]] = found["role"]
             return User(role=UserRole.User, name=found["name"])
-        if username is None and not self.access.user:  # anonymous, on this machine only
-            return User(role=UserRole.User)
+        if username is None and not self.access.user and self._anonymous():
+            return User(role=UserRole.User)  # anonymous, on this machine only
         return None
+
+    def _anonymous(self) -> bool:
+        """Anonymous clients: on a lone stand, or where ``--anonymous-read`` allows them
+        (an archive that does not answer lets nobody in anonymously)."""
+        from stand.archive.accounts import accounts_of
+
+        if self.anonymous_read or self.accounts_url is None:
+            return True
+        try:
+            return not accounts_of(self.accounts_url)
+        except StandError:
+            return False
 
     def may_send_jobs(self, name: str | None) -> bool:
         """Whether a client may call the job methods: the one ``access`` user, an account

@@ -101,9 +101,10 @@ class ResultServer:
                  port: int = 4840, access: Access | None = None,
                  state: Callable[[], str] | None = None,
                  cert_dir: Path | None = None,
-                 rotor_types: Callable[[], list[str]] | None = None) -> None:  # fmt: skip
+                 rotor_types: Callable[[], list[str]] | None = None,
+                 anonymous_read: bool = False) -> None:  # fmt: skip
         access = access or Access()
-        self.users = Users(access, archive_url)  # the stand's accounts log in too
+        self.users = Users(access, archive_url, anonymous_read)  # the accounts log in too
         check_bind(host, access, accounts=_has_accounts(archive_url))
         if cert_dir is not None:
             cert_folder(cert_dir)  # a folder that is not there: said now
