@@ -60,8 +60,10 @@ RELEASE_FORM = """<form method="post" action="/report/{run}/release" target="_bl
       style="display:flex;flex-direction:column;gap:14px;font-size:1.2rem;min-width:420px">
   <input type="hidden" name="lang" value="{lang}">
   <label>{password} <input name="password" type="password" autocomplete="current-password"
-         required style="width:100%;font-size:1.2rem;padding:6px"></label>
-  <label><input type="checkbox" name="meaning" value="released" required> {meaning}</label>
+         required style="width:100%;font-size:1.2rem;padding:6px;border:2px solid #78909c;
+         border-radius:4px"></label>
+  <label><input type="checkbox" name="meaning" value="released" required
+         style="width:1.2rem;height:1.2rem"> {meaning}</label>
   <button type="submit" style="font-size:1.2rem;padding:10px;background:#1976d2;color:#fff;
           border:0;border-radius:4px">{sign}</button>
 </form>"""
