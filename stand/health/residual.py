@@ -135,7 +135,8 @@ def check_plane(
     if why:
         return PlaneCheck(plane, tuple(readings), trial_kg_m, None, None, permissible_kg_m,
                           "not judged", why, fit)  # fmt: skip
-    cal = float(np.median([r.calibration_kg_m / abs(u) for r, u in zip(readings, z, strict=True)]))
+    shares = [r.calibration_kg_m / abs(u) for r, u in zip(readings, z, strict=True) if abs(u) > 0]
+    cal = float(np.median(shares)) if shares else 0.0  # a zero reading tells no share
     res = fit.residual_kg_m
     error = math.hypot(CENTRE_K95 * fit.sigma_kg_m, cal * abs(res))
     state = judge(abs(res), error, permissible_kg_m, "after_balancing")

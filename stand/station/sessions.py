@@ -72,8 +72,6 @@ class Session:
     """The account's language for the screens (None: the station's)."""
     expires_s: float
     """``time.monotonic()`` after which it has ended."""
-    checked_s: float = 0.0
-    """``time.monotonic()`` when its account was last read again."""
     ends_s: float = float("inf")
     """``time.monotonic()`` after which it has ended, used or not (its lifetime)."""
 
@@ -177,7 +175,7 @@ class Sessions:
     def _open(self, account: dict[str, Any]) -> Session:
         now = time.monotonic()
         s = Session(account["name"], account["role"], secrets.token_urlsafe(24),
-                    account.get("language"), now + self.idle_s, now,
+                    account.get("language"), now + self.idle_s,
                     now + self.lifetime_s)  # fmt: skip
         with self._lock:
             self._by_token[s.token] = s
@@ -202,9 +200,9 @@ class Sessions:
         if s.ends_s < now:
             self._ended(s, f"its lifetime of {self.lifetime_s / 3600:g} h passed")
             return None
-        return self._still(s, now)
+        return self._still(s)
 
-    def _still(self, s: Session, now: float) -> Session | None:
+    def _still(self, s: Session) -> Session | None:
         """``s`` if its account is still active in the same role (else it ends, journaled);
         an archive that does not answer keeps it until it does."""
         try:
@@ -212,9 +210,6 @@ class Sessions:
         except StandError:
             return s
         if found is not None and found["active"] and found["role"] == s.role:
-            with self._lock:
-                if s.token in self._by_token:
-                    s = self._by_token[s.token] = replace(s, checked_s=now)
             return s
         with self._lock:
             self._by_token.pop(s.token, None)
