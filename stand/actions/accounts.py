@@ -26,13 +26,17 @@ from stand.errors import RefusedError
 
 
 def add_account(url: str, actor: Actor, name: str, role: str, password: str, *,
-                badge: str | None = None, language: str | None = None, active: bool = True,
-                reason: str | None = None) -> tuple[dict[str, Any], int]:  # fmt: skip
+                badge: str | None = None, pin: str | None = None, language: str | None = None,
+                active: bool = True, reason: str | None = None
+                ) -> tuple[dict[str, Any], int]:  # fmt: skip
     """A new account, active or not (an administrator's right; the first of an archive:
     the operating system's user, and it must be an active administrator); the account
     and its audit entry."""
     checked_reason(reason)  # the bootstrap's words come before it: its own length counts
-    row = {**new_row(name, role, password, badge, language), "active": active}  # hashed now
+    row = {
+        **new_row(name, role, password, badge=badge, pin=pin, language=language),
+        "active": active,
+    }  # hashed now
     with door(url, actor, "accounts", "manage accounts") as p:
         first = not accounts_in(p.conn)
         if first and (role != "administrator" or not active):
@@ -51,11 +55,14 @@ def add_account(url: str, actor: Actor, name: str, role: str, password: str, *,
 def set_account(url: str, actor: Actor, name: str, *, role: str | None = None,
                 password: str | None = None, active: bool | None = None,
                 language: str | None = None, badge: str | None = None,
+                pin: str | None = None, no_badge: bool = False,
                 reason: str | None = None) -> tuple[dict[str, Any], int]:  # fmt: skip
-    """Change an account (an administrator's right); the account after and its audit
-    entry.  The last active administrator stays one."""
+    """Change an account (an administrator's right; ``no_badge``: its badge and PIN
+    withdrawn); the account after and its audit entry.  The last active administrator
+    stays one."""
     changes = changes_of(name, role=role, password=password, active=active,
-                         language=language, badge=badge)  # fmt: skip
+                         language=language, badge=badge, pin=pin,
+                         no_badge=no_badge)  # fmt: skip
     with door(url, actor, "accounts", "manage accounts") as p:
         _keep_an_administrator(p.conn, actor, name, changes)
         before, after = update_account(p.conn, name, changes)

@@ -45,13 +45,19 @@ def account_actor(url: str, name: str, password: str, source: str) -> Actor:
     return Actor(name, str(found["role"]), source)
 
 
-def log_in_badge(url: str, code: str, source: str) -> dict[str, Any] | None:
-    """The active account whose badge carries ``code`` (journaled as a ``login``); else
-    None (journaled as a ``login_failed`` by badge: the code is not kept)."""
-    found = check_badge(url, code)
+def log_in_badge(url: str, code: str, pin: str, source: str) -> dict[str, Any] | None:
+    """The active account whose badge carries ``code`` if ``pin`` is its PIN (journaled as
+    a ``login``); else None (journaled as a ``login_failed``: under the badge's account
+    when one carries it, else as ``(badge)``; neither code nor PIN is kept)."""
+    found, owner = check_badge(url, code, pin)
     if found is None:
-        journal(url, Change("login_failed", "(badge)", None, None, "a badge no active "
-                            "account carries"), who="(badge)", source=source)  # fmt: skip
+        why = (
+            "a badge no active account carries"
+            if owner is None
+            else "badge: wrong PIN, or a disabled account"
+        )
+        journal(url, Change("login_failed", owner or "(badge)", None, None, why),
+                who=owner or "(badge)", source=source)  # fmt: skip
         return None
     journal(url, Change("login", found["name"], None, None, "badge"), who=found["name"],
             source=source)  # fmt: skip

@@ -32,6 +32,9 @@ from stand.errors import KeyFileError, UsageError
 
 KEY_FILE = "stand-key.pem"
 PUBLIC_FILE = "stand-key.pub.pem"
+BADGE_KEY_FILE = "badge-key"
+BADGE_KEY_BYTES = 32
+"""The badges' HMAC key's length [bytes] (256 bits: the hash's own size)."""
 KEY_ID_HEX = 16
 """A key's id: the first 16 hex digits of the SHA-256 of its raw 32-byte public key."""
 
@@ -92,24 +95,10 @@ def stand_key(folder: Path | None = None) -> StandKey:
     from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 
     where = (folder or key_folder()) / KEY_FILE
+    data = _private_file(where, "the stand's key",
+                         lambda: _private_to_pem(Ed25519PrivateKey.generate()))  # fmt: skip
     try:
-        where.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-        if not where.exists():
-            _make(where, _private_to_pem(Ed25519PrivateKey.generate()))
-        mode = where.lstat().st_mode
-        if not stat.S_ISREG(mode):
-            raise KeyFileError("the stand's key is not a regular file", path=str(where))
-        if mode & 0o077:
-            raise KeyFileError(
-                f"the stand's key may be read by others (mode "
-                f"{stat.S_IMODE(mode):04o}): chmod 600 it",
-                path=str(where),
-            )
-        private = ser.load_pem_private_key(where.read_bytes(), password=None)
-    except KeyFileError:
-        raise
-    except OSError as exc:
-        raise KeyFileError(f"the stand's key: {exc.strerror}", path=str(where)) from exc
+        private = ser.load_pem_private_key(data, password=None)
     except (ValueError, TypeError) as exc:
         raise KeyFileError("the stand's key is not a private key", path=str(where)) from exc
     if not isinstance(private, Ed25519PrivateKey):
@@ -118,6 +107,48 @@ def stand_key(folder: Path | None = None) -> StandKey:
     pem = public_pem(public)
     _publish_public(where.parent / PUBLIC_FILE, pem)
     return StandKey(private, key_id(public), pem)
+
+
+def badge_key(folder: Path | None = None) -> bytes:
+    """The key the badges' codes are kept under (HMAC-SHA256:
+    :func:`stand.archive.accounts.badge_mac`): :data:`BADGE_KEY_BYTES` random bytes in
+    ``audit/badge-key`` beside the stand's key (mode 0600, made at its first use), never
+    in the archive, so that a copy of the archive gives no badge away, however short
+    the codes.  Stations that share an archive share this file (copy it, mode 0600).
+
+    Raises
+    ------
+    KeyFileError
+        As :func:`stand_key`; or the file does not hold :data:`BADGE_KEY_BYTES` bytes.
+    """
+    import secrets
+
+    where = (folder or key_folder()) / BADGE_KEY_FILE
+    data = _private_file(where, "the badges' key", lambda: secrets.token_bytes(BADGE_KEY_BYTES))
+    if len(data) != BADGE_KEY_BYTES:
+        raise KeyFileError(f"the badges' key is not {BADGE_KEY_BYTES} bytes long", path=str(where))
+    return data
+
+
+def _private_file(where: Path, what: str, make: Any) -> bytes:
+    """The bytes of the private file ``where`` (``what`` it is, for messages), made with
+    ``make()`` at its first use (:func:`_make`); KeyFileError if it cannot be made or
+    read, is not a regular file, or others than its owner may read it."""
+    try:
+        where.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+        if not where.exists():
+            _make(where, make())
+        mode = where.lstat().st_mode
+        if not stat.S_ISREG(mode):
+            raise KeyFileError(f"{what} is not a regular file", path=str(where))
+        if mode & 0o077:
+            raise KeyFileError(f"{what} may be read by others (mode {stat.S_IMODE(mode):04o}): "
+                               "chmod 600 it", path=str(where))  # fmt: skip
+        return where.read_bytes()
+    except KeyFileError:  # an OSError too: said already
+        raise
+    except OSError as exc:
+        raise KeyFileError(f"{what}: {exc.strerror}", path=str(where)) from exc
 
 
 def _make(path: Path, data: bytes) -> None:

@@ -214,9 +214,12 @@ accounts = Table(
     Column("name", String(64), primary_key=True),
     Column("role", String(16), nullable=False),  # operator, setter, engineer, administrator
     Column("password_hash", Text, nullable=False),  # argon2id
-    Column("badge_sha256", String(64)),  # a badge's bar code, hashed
+    Column("badge_sha256", String(64)),  # before 0011: a badge's plain SHA-256 (no log-in)
+    Column("badge_hmac", String(64)),  # HMAC-SHA256, its key outside the archive (0011)
+    Column("pin_hash", Text),  # argon2id of the badge's PIN (0011)
     Column("active", Boolean, nullable=False),
     Column("language", String(8)),  # the screens' language (None: the station's)
     Column("created_at", String(40), nullable=False),
     Column("changed_at", String(40), nullable=False),
-)  # revision 0009: the people who work the stand (stand.archive.accounts)
+    UniqueConstraint("badge_hmac", name="uq_accounts_badge_hmac"),  # one badge, one person
+)  # revision 0009: the people who work the stand (stand.archive.accounts); 0011: badges

@@ -302,8 +302,11 @@ def account_row(row: Any, url: str, roles: tuple[str, ...]) -> dict[str, Any]:
     r.choice("role", frozenset(roles))
     if not isinstance(r.get("password_hash"), str) or not r.get("password_hash"):
         raise r.fail("password_hash", "not a password hash")
-    if r.get("badge_sha256") is not None:
-        r.digest("badge_sha256")
+    for column in ("badge_sha256", "badge_hmac"):
+        if r.get(column) is not None:
+            r.digest(column)
+    if r.get("pin_hash") is not None:
+        r.text("pin_hash", 400)
     r.flag("active")
     r.text("language", 8)
     r.time("created_at")

@@ -62,6 +62,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--opcua-port", type=int, default=4840, help="(default: %(default)s)")
     p.add_argument(
+        "--anonymous-read", action="store_true",
+        help="with --opcua: let anonymous OPC UA clients on this machine read though the "
+        "stand has accounts (off by default: once accounts exist, clients log in)",
+    )  # fmt: skip
+    p.add_argument(
         "--lang",
         choices=tuple(LANGUAGES),
         default="en",
@@ -126,7 +131,8 @@ def run(args: argparse.Namespace) -> int:
             return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"
 
         ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state,
-                          rotor_types=station.rotor_types)  # fmt: skip
+                          rotor_types=station.rotor_types,
+                          anonymous_read=args.anonymous_read)  # fmt: skip
         ua.run_in_thread()
         print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
     scheme = "https" if args.certfile else "http"

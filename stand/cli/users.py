@@ -11,7 +11,7 @@ import sys
 
 from stand.actions import add_account, set_account
 from stand.archive import url_for
-from stand.archive.accounts import ROLES, accounts_of
+from stand.archive.accounts import ROLES, accounts_of, has_badge
 from stand.cli.common import (
     actor_of,
     add_actor_arguments,
@@ -47,8 +47,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--badge-file",
         metavar="FILE",
-        help="add, set: the code its badge's bar code carries (first line): logging in by "
-        "scanning it",
+        help="add, set: the code its badge's bar code carries (first line, at least 8 "
+        "characters, no other account's): logging in by scanning it and typing the PIN",
+    )
+    p.add_argument(
+        "--pin-file",
+        metavar="FILE",
+        help="add, set: the PIN (4 to 12 digits, first line) typed after the badge",
+    )
+    p.add_argument(
+        "--remove-badge",
+        action="store_true",
+        help="set: withdraw its badge and PIN (a badge lost)",
     )
     state = p.add_mutually_exclusive_group()
     state.add_argument("--disable", action="store_true",
@@ -75,38 +85,41 @@ def _password(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     url = url_for(args.archive, load_config(args.config)[0] if args.config else None)
     if args.action == "list":
-        found = [
-            {k: v for k, v in a.items() if k != "credentials_sha256"} for a in accounts_of(url)
-        ]
+        badges = has_badge(url)
+        found = [{**{k: v for k, v in a.items() if k != "credentials_sha256"},
+                  "badge": badges.get(a["name"], "none")} for a in accounts_of(url)]  # fmt: skip
         if args.json:
             dump_json({"accounts": found})
         for a in [] if args.json else found:
-            print(f"{a['name']:24} {a['role']:14} {'active' if a['active'] else 'disabled'}")
+            state = "active" if a["active"] else "disabled"
+            said = {"badge": "badge and PIN", "old": "old badge: issue it again"}
+            print(f"{a['name']:24} {a['role']:14} {state:9} {said.get(a['badge'], '')}".rstrip())
         return 0
     if not args.name:
         raise UsageError(f"stand users {args.action}: name the account")
     actor = actor_of(args, url)
     badge = first_line(args.badge_file, "a badge code") if args.badge_file else None
+    pin = first_line(args.pin_file, "a PIN") if args.pin_file else None
     if args.action == "add":
         if not args.role:
             raise UsageError("stand users add: --role is required")
-        if args.enable:
-            raise UsageError("stand users add: an account is made active (--enable is for set)")
+        if args.enable or args.remove_badge:
+            raise UsageError("stand users add: --enable and --remove-badge are for set")
         after, entry = add_account(url, actor, args.name, args.role, _password(args),
-                                   badge=badge, language=args.language, active=not args.disable,
-                                   reason=args.reason)  # fmt: skip
+                                   badge=badge, pin=pin, language=args.language,
+                                   active=not args.disable, reason=args.reason)  # fmt: skip
     else:
         password = _password(args) if args.password_file else None
         active = True if args.enable else False if args.disable else None
         if (args.role is None and password is None and active is None and not args.language
-                and badge is None):  # fmt: skip
+                and badge is None and pin is None and not args.remove_badge):  # fmt: skip
             raise UsageError(
                 "stand users set: nothing to change (--role, --password-file, --badge-file, "
-                "--language, --disable or --enable)"
+                "--pin-file, --remove-badge, --language, --disable or --enable)"
             )
         after, entry = set_account(url, actor, args.name, role=args.role, password=password,
-                                   active=active, language=args.language, badge=badge,
-                                   reason=args.reason)  # fmt: skip
+                                   active=active, language=args.language, badge=badge, pin=pin,
+                                   no_badge=args.remove_badge, reason=args.reason)  # fmt: skip
     state = "active" if after["active"] else "disabled"
     print(f"account {args.name}: {after['role']}, {state} (audit entry {entry})")
     return 0

@@ -1,6 +1,6 @@
 """The Check screen's certificate: its links once the run is filed (the certificate, the
 unsigned PDF, in the customer's language) and, for an account that may release, the
-release dialog: the password entered again and the meaning ticked, posted to
+release dialog: the password (or badge and PIN) entered again and the meaning ticked, posted to
 ``/report/<run>/release`` (:mod:`stand.station.routes`).  Never a link that signs.
 """
 
@@ -60,14 +60,20 @@ RELEASE_FORM = """<form method="post" action="/report/{run}/release" target="_bl
       style="display:flex;flex-direction:column;gap:14px;font-size:1.2rem;min-width:420px">
   <input type="hidden" name="lang" value="{lang}">
   <label>{password} <input name="password" type="password" autocomplete="current-password"
-         required style="width:100%;font-size:1.2rem;padding:6px;border:2px solid #78909c;
-         border-radius:4px"></label>
+         style="{field}"></label>
+  <label>{badge} <input name="badge" type="password" autocomplete="off" style="{field}"
+         onkeydown="if(event.key==='Enter'){{event.preventDefault();
+         this.form.elements.pin.focus();}}"></label>
+  <label>{pin} <input name="pin" type="password" inputmode="numeric" autocomplete="off"
+         style="{field}"></label>
   <label><input type="checkbox" name="meaning" value="released" required
          style="width:1.2rem;height:1.2rem"> {meaning}</label>
   <button type="submit" style="font-size:1.2rem;padding:10px;background:#1976d2;color:#fff;
           border:0;border-radius:4px">{sign}</button>
 </form>"""
-"""Releasing: the password entered again and the meaning confirmed, posted (never a link)."""
+"""Releasing: the password (or the badge and its PIN) entered again and the meaning
+confirmed, posted (never a link); a scanner's Enter after the badge moves to the PIN."""
+FIELD = "width:100%;font-size:1.2rem;padding:6px;border:2px solid #78909c;border-radius:4px"
 
 
 def _release_dialog(run_id: int, lang: str, _: Language) -> Any:
@@ -76,6 +82,8 @@ def _release_dialog(run_id: int, lang: str, _: Language) -> Any:
         ui.label(_("Release the certificate of run {run}").format(run=run_id)).classes("text-h6")
         ui.html(RELEASE_FORM.format(
             run=run_id, lang=html.escape(lang), password=html.escape(_("your password")),
+            badge=html.escape(_("or scan your badge")), pin=html.escape(_("and its PIN")),
+            field=FIELD,
             meaning=html.escape(_("released: the rotor was balanced and measured as this "
                                   "certificate states")),
             sign=html.escape(_("SIGN AND RELEASE"))),

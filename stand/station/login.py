@@ -1,5 +1,5 @@
 """Logging in at the station (:mod:`stand.station.sessions`): a plain form posted to
-``/login`` (account and password, or a badge a scanner types, then Enter), the session in
+``/login`` (account and password, or a badge a scanner types and its PIN), the session in
 an HttpOnly cookie that every screen and route reads, ``/logout``; and the checks of an
 account's rights before an action (a note on the screen, 403 on a route, saying why).
 """
@@ -20,7 +20,8 @@ from stand.station.service import Station
 from stand.station.sessions import Session
 
 FORM_WORDS = {"account": N_("account"), "password": N_("password"),
-              "badge": N_("or scan your badge"), "log_in": N_("LOG IN")}  # fmt: skip
+              "badge": N_("or scan your badge"), "pin": N_("and its PIN"),
+              "log_in": N_("LOG IN")}  # fmt: skip
 """The log-in form's words."""
 log = logging.getLogger(__name__)
 FORM = """
@@ -30,7 +31,10 @@ FORM = """
       gap:18px;max-width:520px;font-size:1.4rem">
   <label>{account} <input name="account" autocomplete="username" autofocus></label>
   <label>{password} <input name="password" type="password" autocomplete="current-password"></label>
-  <label>{badge} <input name="badge" type="password" autocomplete="off"></label>
+  <label>{badge} <input name="badge" type="password" autocomplete="off"
+         onkeydown="if(event.key==='Enter'){{event.preventDefault();
+         this.form.elements.pin.focus();}}"></label>
+  <label>{pin} <input name="pin" type="password" inputmode="numeric" autocomplete="off"></label>
   <button type="submit" style="font-size:1.4rem;padding:12px;background:#1976d2;color:#fff;
           border:0;border-radius:4px">{log_in}</button>
 </form>
@@ -64,7 +68,7 @@ def login_screen(_: Language, *, failed: str | None) -> None:
     after too many failures, or ``unavailable`` when the accounts did not read)."""
     ui.label(_("Log in")).classes("big")
     if failed:
-        wrong = _("wrong account, password or badge (or the account is disabled)")
+        wrong = _("wrong account, password, badge or PIN (or the account is disabled)")
         why = {
             "unavailable": _("the accounts cannot be read now (the station's log says why): "
                              "try again or ask the administrator"),
@@ -110,11 +114,11 @@ def add_login_routes(station: Station, *, secure: bool = False) -> None:
     async def login(request: Request) -> Any:
         form = await request.form()
         account, password = str(form.get("account", "")), str(form.get("password", ""))
-        badge = str(form.get("badge", ""))
+        badge, pin = str(form.get("badge", "")), str(form.get("pin", ""))
         source = request.client.host if request.client else ""
         try:
             s = await anyio.to_thread.run_sync(
-                lambda: station.sessions.log_in_badge(badge, source) if badge
+                lambda: station.sessions.log_in_badge(badge, pin, source) if badge
                 else station.sessions.log_in(account, password, source),
                 limiter=checking)  # fmt: skip
         except ThrottledError:  # not even checked: the page says to wait

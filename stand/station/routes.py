@@ -93,8 +93,8 @@ def _release_route(station: Station) -> None:
 
     @app.post("/report/{run_id}/release", dependencies=[needs(station, "release")])
     async def release(run_id: RunId, request: Request) -> Any:
-        """Sign the certificate: the session's account, its password entered again and the
-        meaning confirmed (21 CFR 11.200(a)(1)); the signed PDF."""
+        """Sign the certificate: the session's account, its password (or badge and PIN)
+        entered again and the meaning confirmed (21 CFR 11.200(a)(1)); the signed PDF."""
         from starlette.concurrency import run_in_threadpool
 
         form = await request.form()
@@ -104,10 +104,13 @@ def _release_route(station: Station) -> None:
         if form.get("meaning") != "released":
             return PlainTextResponse("confirm the meaning: released", status_code=400)
         session = session_of(station, request)
-        password = str(form.get("password", ""))
+        password, badge, pin = (str(form.get(k, "")) for k in ("password", "badge", "pin"))
+        source = request.client.host if request.client else ""
         try:  # argon2 off the event loop
-            who = await run_in_threadpool(station.sessions.signer, session, password)
-        except RefusedError as exc:
+            who = await run_in_threadpool(
+                lambda: station.sessions.signer(session, password, badge, pin, source)
+            )
+        except RefusedError as exc:  # ThrottledError too: the wait said
             return PlainTextResponse(plain(str(exc)), status_code=403)
         return await run_in_threadpool(_pdf, lambda: station.released_pdf(run_id, who, lang))
 

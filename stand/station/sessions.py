@@ -18,18 +18,10 @@ import time
 from dataclasses import dataclass, replace
 from typing import Any
 
-from stand.actions import (
-    Actor,
-    account_actor,
-    lock_account,
-    log_in,
-    log_in_badge,
-    log_out,
-    os_actor,
-    session_ended,
-)
+from stand.actions import Actor, log_out, os_actor, session_ended
+from stand.actions.logins import LogIns
 from stand.archive.accounts import account, accounts_of, may
-from stand.errors import RefusedError, StandError, ThrottledError
+from stand.errors import RefusedError, StandError
 
 log = logging.getLogger(__name__)
 IDLE_S = 15 * 60.0
@@ -39,26 +31,6 @@ LIFETIME_S = 8 * 3600.0
 --session-hours``)."""
 CHECK_ACCOUNTS_S = 5.0
 """How long the answer "are there accounts?" is kept before the archive is asked again [s]."""
-
-
-FREE_FAILURES = 5
-"""Failed log-ins (per account, and per source) before each further try waits."""
-LOCK_FAILURES = 20
-"""Failed log-ins of one account after which the stand disables it (an administrator
-enables it again: ``stand users set NAME --enable``)."""
-MAX_WAIT_S = 300.0
-"""The longest wait between tries [s]: 1 s after the sixth failure, doubling."""
-
-
-def wait_after(failures: int) -> float:
-    """The wait before the next try after ``failures`` failed ones [s].
-
-    >>> [wait_after(n) for n in (4, 5, 6, 8, 20)]
-    [0.0, 1.0, 2.0, 8.0, 300.0]
-    """
-    if failures < FREE_FAILURES:
-        return 0.0
-    return min(2.0 ** (failures - FREE_FAILURES), MAX_WAIT_S)
 
 
 @dataclass(frozen=True)
@@ -97,7 +69,7 @@ class Sessions:
         self._by_token: dict[str, Session] = {}
         self._lock = threading.Lock()
         self._required: tuple[float, bool] = (-1e9, False)
-        self._failures: dict[str, tuple[int, float]] = {}  # key -> (failures, next try at)
+        self.logins = LogIns(archive_url, "station")
 
     def required(self) -> bool:
         """Whether the archive has an account (then every screen needs a session).  An
@@ -116,61 +88,17 @@ class Sessions:
 
     def log_in(self, name: str, password: str, source: str = "") -> Session | None:
         """A new session for ``name`` if ``password`` is its password (else None); both
-        journaled (:func:`stand.actions.log_in`).  ``source``: where the try came from (the
-        client's address): after :data:`FREE_FAILURES` failures of the account or the
-        source each try waits longer (:class:`stand.errors.ThrottledError`), and after
-        :data:`LOCK_FAILURES` of the account it is disabled, journaled."""
-        keys = (f"account:{name.strip().lower()}", f"source:{source}")
-        self._may_try(keys)
-        found = log_in(self.archive_url, name, password, "station")
-        if found is None:
-            if self._failed(keys)[0] >= LOCK_FAILURES:
-                self._disable(name)
-            return None
-        self._forget(keys)
-        return self._open(found)
+        journaled.  ``source``: where the try came from (the client's address): failures
+        of the account or the source make the next try wait, and lock the account after
+        many (:class:`stand.actions.logins.LogIns`)."""
+        found = self.logins.password(name, password, source)
+        return None if found is None else self._open(found)
 
-    def log_in_badge(self, code: str, source: str = "") -> Session | None:
-        """A new session for the account whose badge carries ``code`` (else None); both
-        journaled; a source's failed badges wait like passwords."""
-        keys = (f"source:{source}",)
-        self._may_try(keys)
-        found = log_in_badge(self.archive_url, code.strip(), "station")
-        if found is None:
-            self._failed(keys)
-            return None
-        self._forget(keys)
-        return self._open(found)
-
-    def _may_try(self, keys: tuple[str, ...]) -> None:
-        now = time.monotonic()
-        with self._lock:
-            wait = max((self._failures.get(k, (0, 0.0))[1] - now for k in keys), default=0.0)
-        if wait > 0:
-            raise ThrottledError(f"too many failed log-ins: try again in {wait:.0f} s",
-                            who=keys[0].split(":", 1)[1], right="log in")  # fmt: skip
-
-    def _failed(self, keys: tuple[str, ...]) -> tuple[int, ...]:
-        now, counts = time.monotonic(), []
-        with self._lock:
-            for k in keys:
-                n = self._failures.get(k, (0, 0.0))[0] + 1
-                self._failures[k] = (n, now + wait_after(n))
-                counts.append(n)
-        return tuple(counts)
-
-    def _forget(self, keys: tuple[str, ...]) -> None:
-        with self._lock:
-            for k in keys:
-                self._failures.pop(k, None)
-
-    def _disable(self, name: str) -> None:
-        why = f"locked after {LOCK_FAILURES} failed log-ins"
-        try:
-            if lock_account(self.archive_url, os_actor("station"), name.strip(), why):
-                log.warning("account %s %s", name.strip()[:64], why)
-        except StandError as exc:
-            log.warning("account %s not locked: %s", name.strip()[:64], exc)
+    def log_in_badge(self, code: str, pin: str, source: str = "") -> Session | None:
+        """A new session for the account whose badge carries ``code`` if ``pin`` is its
+        PIN (else None); both journaled, failures braked like passwords."""
+        found = self.logins.badge(code.strip(), pin.strip(), source)
+        return None if found is None else self._open(found)
 
     def _open(self, account: dict[str, Any]) -> Session:
         now = time.monotonic()
@@ -228,15 +156,26 @@ class Sessions:
         except StandError as exc:
             log.warning("session of %s ended (%s), not journaled: %s", s.name, why, exc)
 
-    def signer(self, session: Session | None, password: str) -> Actor:
-        """Who signs: the session's account once its password, entered again, checks
-        (journaled either way; RefusedError when it does not); on a lone stand the
-        operating system's user."""
+    def signer(self, session: Session | None, password: str, badge: str = "", pin: str = "",
+               source: str = "") -> Actor:  # fmt: skip
+        """Who signs: the session's account once its password (or its badge and PIN),
+        entered again, checks: journaled and braked like a log-in, RefusedError when it
+        does not (a badge of another account included); on a lone stand the operating
+        system's user."""
         if not self.required():
             return os_actor("station")
         if session is None:
             raise RefusedError("log in to release a certificate", who="(none)", right="release")
-        return account_actor(self.archive_url, session.name, password, "station")
+        if badge:
+            found = self.logins.badge(badge.strip(), pin.strip(), source)
+            what = "badge or PIN"
+        else:
+            found = self.logins.password(session.name, password, source)
+            what = "password"
+        if found is None or found["name"] != session.name:
+            raise RefusedError(f"{session.name}: wrong {what} (the failed try is journaled)",
+                               who=session.name, right="release")  # fmt: skip
+        return Actor(found["name"], str(found["role"]), "station")
 
     def log_out(self, token: str | None) -> None:
         """End the session of ``token`` (journaled)."""

@@ -129,9 +129,11 @@ def test_the_last_entries_deleted_are_caught_by_a_plain_verify(
      "table accounts, account bo, field active: False"),
     ("UPDATE accounts SET password_hash = (SELECT password_hash FROM accounts WHERE "
      "name = 'admin') WHERE name = 'kim'", "account kim, field credentials_sha256"),
+    ("UPDATE accounts SET pin_hash = (SELECT password_hash FROM accounts WHERE "
+     "name = 'admin') WHERE name = 'kim'", "account kim, field credentials_sha256"),
     ("DELETE FROM accounts WHERE name = 'bo'", "account bo: gone"),
     ("INSERT INTO accounts SELECT 'eve', 'administrator', password_hash, NULL, 1, NULL, "
-     "created_at, changed_at FROM accounts WHERE name = 'kim'",
+     "created_at, changed_at, NULL, NULL FROM accounts WHERE name = 'kim'",
      "account eve: no journal entry made it"),
     ("UPDATE runs SET verdict = 'pass'", "table runs, run 1, field verdict: 'pass', but"),
     ("UPDATE runs SET file_sha256 = '" + "ab" * 32 + "'", "run 1, field file_sha256"),
@@ -221,14 +223,15 @@ def test_the_first_account_is_an_administrator(tmp_path: Path) -> None:
 def test_log_ins_failures_log_outs_and_ended_sessions_are_journaled(tmp_path: Path) -> None:
     from stand.station.sessions import Sessions
 
-    url = with_accounts(_url(tmp_path), ("kim", "setter", "a-long-password", "B-4711-x"))
+    url = with_accounts(_url(tmp_path),
+                        ("kim", "setter", "a-long-password", "B-4711-x", "93712"))  # fmt: skip
     s = Sessions(url)
     assert s.log_in("kim", "wrong") is None and s.log_in("k\x1bim\n", "x") is None
-    assert s.log_in_badge("nope") is None
+    assert s.log_in_badge("nope-nope", "93712") is None
     kim = s.log_in("kim", "a-long-password")
     assert kim is not None
     s.log_out(kim.token)
-    kim = s.log_in_badge("B-4711-x")
+    kim = s.log_in_badge("B-4711-x", "93712")
     set_account(url, ADMIN, "kim", active=False)
     assert kim is not None
     assert s.get(kim.token) is None
@@ -238,7 +241,7 @@ def test_log_ins_failures_log_outs_and_ended_sessions_are_journaled(tmp_path: Pa
                    ("logout", "kim", "station"), ("login", "kim", "station"),
                    ("account", "admin", "cli"), ("session_end", "kim", "station")], got  # fmt: skip
     assert "a-long-password" not in json.dumps(entries(url)) and "B-4711" not in json.dumps(
-        entries(url))  # fmt: skip
+        entries(url)) and "93712" not in json.dumps(entries(url))  # fmt: skip
 
 
 def test_a_disabled_account_cannot_change_anything_at_once(tmp_path: Path) -> None:

@@ -12,12 +12,13 @@ ADMIN_PASSWORD = "admin-password"
 
 
 def with_accounts(url: str, *people: tuple[str, ...]) -> str:
-    """Add ``(name, role, password[, badge])`` each to the archive ``url`` (and its
+    """Add ``(name, role, password[, badge, pin])`` each to the archive ``url`` (and its
     administrator first, where it has none); the URL."""
     if not accounts_of(url):
         add_account(url, os_actor(), "admin", "administrator", ADMIN_PASSWORD)
     for name, role, password, *badge in people:
-        add_account(url, ADMIN, name, role, password, badge=badge[0] if badge else None)
+        code, pin = badge if badge else (None, None)
+        add_account(url, ADMIN, name, role, password, badge=code, pin=pin)
     return url
 
 

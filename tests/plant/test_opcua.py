@@ -325,15 +325,20 @@ def test_a_port_in_use_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture
 
 def test_the_station_serves_opcua_beside_its_screens(tmp_path: Path) -> None:
     """One identity: the station's machine is the stand id its runs are archived under
-    (no [stand] id: the host name), and so is its SerialNumber; its state NotExecuting."""
+    (no [stand] id: the host name), and so is its SerialNumber; its state NotExecuting.
+    The stand has accounts and ``--anonymous-read``: an anonymous client on this machine
+    reads (without the flag it is refused: the test above)."""
+    from accounts import with_accounts
+
+    url = with_accounts(f"sqlite:///{tmp_path / 'a.sqlite'}", ("kim", "operator", "a-long-pw1"))
     port, ua_port = _port(), _port()
     host = socket.gethostname()[:64]
     env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
     env["XDG_DATA_HOME"] = str(tmp_path / "data")
     proc = subprocess.Popen(
         [sys.executable, "-m", "stand.cli", "station", "--no-browser", "--port", str(port),
-         "--opcua", "--opcua-port", str(ua_port), "--runs-dir", str(tmp_path / "runs"),
-         "--archive", f"sqlite:///{tmp_path / 'a.sqlite'}"],
+         "--opcua", "--opcua-port", str(ua_port), "--anonymous-read",
+         "--runs-dir", str(tmp_path / "runs"), "--archive", url],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env, text=True,
     )  # fmt: skip
 
@@ -684,3 +689,39 @@ def test_anonymous_clients_only_on_a_lone_stand_or_when_allowed(
                 asyncio.run(read())
     finally:
         server.stop()
+
+
+def test_opcua_log_ins_are_braked_like_the_stations(tmp_path: Path) -> None:
+    """A real OPC UA server with accounts: after 5 wrong passwords of an account the next
+    try waits, unchecked, even with the right password (BadUserAccessDenied), and is not
+    journaled; the 5 failures are, from ``opcua``."""
+    from accounts import with_accounts
+
+    from stand.archive.audit import entries
+    from stand.plant import ResultServer
+
+    url = with_accounts(f"sqlite:///{tmp_path / 'a.sqlite'}", ("kim", "operator", "a-long-pw1"))
+    port = _port()
+    server = ResultServer(url, "stand-9", "127.0.0.1", port)
+    server.run_in_thread()
+
+    async def log_in(password: str) -> bool:
+        from asyncua import Client
+
+        c = Client(f"opc.tcp://127.0.0.1:{port}/stand/", timeout=5)
+        c.set_user("kim")
+        c.set_password(password)
+        try:
+            async with c:
+                return True
+        except Exception:
+            return False
+
+    try:
+        assert asyncio.run(log_in("a-long-pw1"))
+        assert [asyncio.run(log_in("wrong-pw-1")) for _ in range(5)] == [False] * 5
+        assert not asyncio.run(log_in("a-long-pw1"))  # the account waits
+    finally:
+        server.stop()
+    failed = [(e["who"], e["source"]) for e in entries(url, action="login_failed")]
+    assert failed == [("kim", "opcua")] * 5, failed

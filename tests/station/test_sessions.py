@@ -18,7 +18,9 @@ from stand.station.sessions import Sessions
 def url(tmp_path: Path) -> str:
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     return with_accounts(
-        url, ("kim", "operator", "a-long-password", "B-17"), ("ana", "engineer", "another-password")
+        url,
+        ("kim", "operator", "a-long-password", "BADGE-0017", "2468"),
+        ("ana", "engineer", "another-password"),
     )
 
 
@@ -30,9 +32,11 @@ def test_password_badge_and_the_idle_end(url: str) -> None:
     s = Sessions(url, idle_s=0.3)
     assert s.required()
     assert s.log_in("kim", "wrong") is None and s.log_in("nobody", "a-long-password") is None
+    assert s.log_in_badge("BADGE-0017", "2468").name == "kim"
+    assert s.log_in_badge("BADGE-0018", "2468") is None  # no account carries it
+    assert s.log_in_badge("BADGE-0017", "2469") is None  # the wrong PIN
     kim = s.log_in("kim", "a-long-password")
     assert kim is not None and (kim.name, kim.role) == ("kim", "operator")
-    assert s.log_in_badge("B-17").name == "kim" and s.log_in_badge("B-18") is None
     assert s.get(kim.token) is not None
     time.sleep(0.5)  # idle past its end (0.3 s): gone
     assert s.get(kim.token) is None
@@ -40,7 +44,9 @@ def test_password_badge_and_the_idle_end(url: str) -> None:
     s.log_out(ana.token)
     assert s.get(ana.token) is None
     change(url, "kim", active=False)
-    assert s.log_in("kim", "a-long-password") is None and s.log_in_badge("B-17") is None
+    assert (
+        s.log_in("kim", "a-long-password") is None and s.log_in_badge("BADGE-0017", "2468") is None
+    )
 
 
 def test_a_refusal_says_who_may(url: str) -> None:
@@ -123,9 +129,9 @@ def test_failures_make_the_next_try_wait_and_twenty_lock_the_account(
     next try waits, unchecked: even the right password is refused until the wait is over;
     after 20 failures the account is disabled, journaled, and an administrator's enable
     lets it in again."""
+    from stand.actions import logins as logins_module
     from stand.archive.audit import entries
     from stand.errors import ThrottledError
-    from stand.station import sessions as sessions_module
 
     s = Sessions(url)
     for k in range(5):
@@ -138,7 +144,7 @@ def test_failures_make_the_next_try_wait_and_twenty_lock_the_account(
         s.log_in("ana", "another-password", "10.0.0.20")  # the source waits
     assert s.log_in("ana", "another-password", "10.0.0.21") is not None
 
-    monkeypatch.setattr(sessions_module, "wait_after", lambda n: 0.0)  # no waits: count
+    monkeypatch.setattr(logins_module, "wait_after", lambda n: 0.0)  # no waits: count
     for _ in range(20 - 5):
         assert s.log_in("kim", "wrong", "10.0.0.30") is None
     assert s.log_in("kim", "a-long-password", "10.0.0.31") is None  # locked

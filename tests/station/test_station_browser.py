@@ -481,8 +481,9 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
 ) -> None:
     """With accounts the station asks who works it; the operator is the account; an
     operator may measure but not release a certificate (403, saying why); a setter logs in
-    with a badge and releases it, bound to the run, signed and journaled (the station and
-    this test's commands share the stand's data folder, so its key: one stand)."""
+    with a badge and its PIN and releases it (badge and PIN again), bound to the run,
+    signed and journaled (the station and this test's commands share the stand's data
+    folder, so its keys: one stand)."""
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))  # the station's (served)
     from selenium.webdriver.common.by import By
 
@@ -492,18 +493,17 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
 
     url = f"sqlite:///{tmp_path / 'a.sqlite'}"
     (tmp_path / "pw").write_text("a-long-password\n")
-    (tmp_path / "badge").write_text("BADGE-0042\n")
     with_accounts(
         url,
         ("kim", "operator", "a-long-password"),
-        ("ana", "setter", "a-long-password", "BADGE-0042"),
+        ("ana", "setter", "a-long-password", "BADGE-0042", "8642"),
     )
     with served(tmp_path) as base:
         browser.get(base + "/")
         _see(browser, "Log in")
         _shot(browser, tmp_path, "login")
         _log_in(browser, "kim", "wrong-password")
-        _see(browser, "wrong account, password or badge")
+        _see(browser, "wrong account, password, badge or PIN")
         _log_in(browser, "kim", "a-long-password")
         _see(browser, "kim (operator)")
         fixed = browser.execute_script(  # the operator is the account, not to be typed over
@@ -529,6 +529,7 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
         _see(browser, "Log in")
         time.sleep(0.5)  # the log-in page mounted (a scanner types into the field it finds)
         browser.find_element(By.NAME, "badge").send_keys("BADGE-0042\n")  # code, then Enter
+        browser.switch_to.active_element.send_keys("8642\n")  # Enter moved on to the PIN
         _see(browser, "ana (setter)")
         _shot(browser, tmp_path, "who")
         status, body = _fetch(base, release, browser.get_cookies())
@@ -536,8 +537,11 @@ def test_accounts_log_in_their_rights_and_a_released_certificate(
         status, body = _post(base, release, browser.get_cookies(), {"password": "a-long-password"})
         assert status == 400 and b"confirm the meaning" in body, body
         status, body = _post(base, release, browser.get_cookies(), {**form, "password": "guess"})
-        assert status == 403 and b"wrong account or password" in body, body
-        status, pdf = _post(base, release, browser.get_cookies(), form)
+        assert status == 403 and b"ana: wrong password" in body, body
+        by_badge = {"badge": "BADGE-0042", "pin": "8641", "meaning": "released"}
+        status, body = _post(base, release, browser.get_cookies(), by_badge)
+        assert status == 403 and b"ana: wrong badge or PIN" in body, body
+        status, pdf = _post(base, release, browser.get_cookies(), {**by_badge, "pin": "8642"})
         assert status == 200 and pdf.startswith(b"%PDF"), pdf[:100]
     kept = tmp_path / "released.pdf"
     kept.write_bytes(pdf)

@@ -187,6 +187,9 @@ class Users:
         """Let anonymous clients read on this machine though the stand has accounts."""
         self.roles: dict[str, str] = {}
         """The role of each account logged in (for :class:`Rights`)."""
+        self.logins: Any = None
+        """The accounts' log-ins, braked like the station's
+        (:class:`stand.actions.logins.LogIns`; made at the first)."""
 
     def get_user(self, iserver: Any, username: Any = None, password: Any = None,
                  certificate: Any = None) -> Any:  # fmt: skip
@@ -197,11 +200,13 @@ class Users:
                                      str(self.access.password).encode())  # fmt: skip
             return User(role=UserRole.User, name=username) if ok else None
         if username is not None and self.accounts_url is not None:
-            from stand.actions import log_in  # journaled: a log-in, or a failed one
+            from stand.actions.logins import LogIns  # journaled: a log-in, or a failed one
 
+            self.logins = self.logins or LogIns(self.accounts_url, "opcua")
             try:
-                found = log_in(self.accounts_url, str(username), str(password or ""), "opcua")
-            except StandError:  # the archive does not answer: nobody is let in
+                found = self.logins.password(str(username), str(password or ""),
+                                             client_source(certificate))  # fmt: skip
+            except StandError:  # waiting after failures, or the archive does not answer
                 return None
             if found is None:
                 return None
@@ -234,6 +239,21 @@ class Users:
             return self.accounts_url is None or not accounts_of(self.accounts_url)
         except StandError:
             return False
+
+
+def client_source(certificate: Any) -> str:
+    """Where an OPC UA log-in comes from, for the brake on guessing: the client's
+    application certificate (its SHA-1 thumbprint, what the trust store names) on the
+    encrypted endpoint; ``local`` on this machine's plain one."""
+    import hashlib
+
+    if isinstance(certificate, (bytes, bytearray)) and certificate:
+        return "cert:" + hashlib.sha1(bytes(certificate)).hexdigest()
+    if certificate is not None and hasattr(certificate, "fingerprint"):
+        from cryptography.hazmat.primitives import hashes
+
+        return "cert:" + str(certificate.fingerprint(hashes.SHA1()).hex())
+    return "local"
 
 
 def rights(users: Users) -> Any:
