@@ -7,12 +7,13 @@ from __future__ import annotations
 import urllib.error
 import urllib.request
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from stand.station.guard import PUBLIC, plain, right_of
 from tests.helpers.accounts import with_accounts
-from tests.station.test_station_browser import _post, served
+from tests.station.test_station_browser import _button, _log_in, _post, _see, _type, served
 
 ROUTES = {
     ("GET", "/export/qdas/{rotor_type}"): "read",
@@ -191,9 +192,11 @@ def _self_signed(tmp_path: Path) -> tuple[Path, Path]:
 
 
 @pytest.mark.realtime
-def test_the_station_serves_https_with_secure_cookies(tmp_path: Path) -> None:
+def test_the_station_serves_https_with_secure_cookies(tmp_path: Path, browser: Any) -> None:
     """``--certfile/--keyfile``: HTTPS a client verifies against the station's certificate,
-    ``Strict-Transport-Security``, the session cookie ``Secure``."""
+    ``Strict-Transport-Security``, the session cookie ``Secure``; and Chromium works the
+    screens over it as over HTTP: the operator logs in, measures (the live screens over a
+    secure websocket) and reaches the correction, the cookie ``Secure``."""
     import ssl
 
     cert, key = _self_signed(tmp_path)
@@ -208,6 +211,17 @@ def test_the_station_serves_https_with_secure_cookies(tmp_path: Path) -> None:
         status, headers, _ = _ask(tls, "/login", {**FORM, "Host": own}, "POST",
                                   b"account=kim&password=a-long-password", context)  # fmt: skip
         assert status == 303 and "secure" in headers["set-cookie"].lower()
+        browser.execute_cdp_cmd("Security.setIgnoreCertificateErrors", {"ignore": True})
+        browser.get(tls + "/")  # the test's own certificate: no CA the browser knows
+        _see(browser, "Log in")
+        _log_in(browser, "kim", "a-long-password")
+        _see(browser, "kim (operator)")
+        _type(browser, "serial number", "TLS-1")
+        _button(browser, "Start measuring").click()
+        _button(browser, "Go to the correction", 60).click()
+        _see(browser, "plane 1")
+        (cookie,) = [c for c in browser.get_cookies() if c["name"] == "stand_session"]
+        assert cookie["secure"] and cookie["httpOnly"], cookie
 
 
 @pytest.mark.parametrize(

@@ -75,25 +75,6 @@ def served(tmp_path: Path, *extra: str) -> Iterator[str]:
         log.close()
 
 
-@pytest.fixture
-def browser() -> Iterator[Any]:
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-                "--window-size=1400,950", "--disable-gpu"):  # fmt: skip
-        options.add_argument(arg)
-    options.binary_location = str(CHROMIUM)
-    options.set_capability("goog:loggingPrefs", {"performance": "ALL"})
-    driver = webdriver.Chrome(service=Service(str(DRIVER)), options=options)
-    driver.implicitly_wait(0)
-    try:
-        yield driver
-    finally:
-        driver.quit()
-
-
 def _button(driver: Any, text: str, timeout_s: float = 30.0) -> Any:
     """The visible button whose text is ``text``, once it is there."""
     from selenium.webdriver.common.by import By
