@@ -166,6 +166,9 @@ class BusReader(FrameSource):
         An open ``can.BusABC`` (closed by its owner, not here).
     silence_timeout_s
         No frame for this long raises :class:`BusTimeoutError` [s].
+    first_frame_s
+        Before the first frame, the silence allowed instead [s] (None: the same): time for
+        a person to start the rotor, or the simulator in another terminal.
     max_pending
         Bound on frames waiting for :meth:`read_block`.
     """
@@ -176,6 +179,7 @@ class BusReader(FrameSource):
         *,
         channel_info: str | None = None,
         silence_timeout_s: float = SILENCE_TIMEOUT_S,
+        first_frame_s: float | None = None,
         max_pending: int = MAX_PENDING,
         quiet_ids: tuple[int, ...] = (),
     ):
@@ -185,6 +189,7 @@ class BusReader(FrameSource):
         the nodes live, so frames of these ids alone do not hold off the silence timeout."""
         self.channel_info = channel_info or str(getattr(bus, "channel_info", "bus"))
         self.silence_timeout_s = silence_timeout_s
+        self.first_frame_s = silence_timeout_s if first_frame_s is None else first_frame_s
         self.max_pending = max_pending
         self.frames_received = 0
         self.overruns = 0
@@ -194,6 +199,7 @@ class BusReader(FrameSource):
         self._error: BaseException | None = None
         self._silent: BusTimeoutError | None = None
         self._last_frame = time.monotonic()
+        self._heard = False  # a frame of the nodes (not only the host's own) came
         self._t: list[float] = []
         self._id: list[int] = []
         self._dlc: list[int] = []
@@ -246,8 +252,8 @@ class BusReader(FrameSource):
             self.frames_received += n
             frames = Frames.from_lists(t, ids, dlc, flags, data)
             if not len(self.quiet_ids) or not np.isin(frames.can_id, self.quiet_ids).all():
-                self._last_frame = now
-            elif now - self._last_frame > self.silence_timeout_s:
+                self._last_frame, self._heard = now, True
+            elif now - self._last_frame > self._allowed():
                 self._silent = self._silence(own=True)  # raised once these frames are taken
             if ((frames.flags & FLAG_ERROR) != 0).any():
                 err = frames.can_id[(frames.flags & FLAG_ERROR) != 0]
@@ -268,23 +274,27 @@ class BusReader(FrameSource):
                 channel=self.channel_info,
                 frames_received=self.frames_received,
             )
-        if now - self._last_frame > self.silence_timeout_s:
+        if now - self._last_frame > self._allowed():
             raise self._silence()
         return Frames.empty()
+
+    def _allowed(self) -> float:
+        """The silence allowed now [s]: before the first frame, :attr:`first_frame_s`."""
+        return self.silence_timeout_s if self._heard else self.first_frame_s
 
     def _silence(self, *, own: bool = False) -> BusTimeoutError:
         """The error of a bus silent (``own``: but for the host's own frames) too long."""
         if own:
-            what = (f"no frame but the host's own SYNC for {self.silence_timeout_s:g} s "
+            what = (f"no frame but the host's own SYNC for {self._allowed():g} s "
                     f"(after {self.frames_received}): the modules stopped answering")  # fmt: skip
         elif self.frames_received == 0:
             what = (
-                f"no frames at all for {self.silence_timeout_s:g} s: is the bus "
+                f"no frames at all for {self.first_frame_s:g} s: is the bus "
                 "connected, the bitrate right, are the nodes powered?"
             )
             if self.channel_info.startswith("virtual"):
                 what = (
-                    f"no frames at all for {self.silence_timeout_s:g} s: python-can's "
+                    f"no frames at all for {self.first_frame_s:g} s: python-can's "
                     "virtual interface joins buses inside one process only; from another "
                     "process (stand simulate --bus) use stand_loopback, e.g. "
                     "-i stand_loopback -c 47001"
@@ -294,7 +304,7 @@ class BusReader(FrameSource):
         return BusTimeoutError(
             what,
             channel=self.channel_info,
-            timeout_s=self.silence_timeout_s,
+            timeout_s=self._allowed(),
             frames_received=self.frames_received,
         )
 

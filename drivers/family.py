@@ -24,6 +24,7 @@ from pydantic import ConfigDict
 from stand.drivers.frames import Frames
 from stand.drivers.streams import RunStreams
 from stand.errors import ConfigError
+from stand.files import not_regular
 
 FAMILIES: dict[str, str] = {
     "v1": "stand.drivers.v1",
@@ -218,6 +219,8 @@ def read_description(path: Path, key: str, source: str, stored: Kept | None
 
 
 def _text(path: Path, key: str, source: str) -> str:
+    if (kind := not_regular(path)) is not None:  # a FIFO would wait for a writer forever
+        raise ConfigError(f"[{key}]: {path} is {kind}, not a description file", source=source)
     try:
         size = path.stat().st_size
         if size > MAX_DESCRIPTION_BYTES:

@@ -119,11 +119,51 @@ def check_input(path: str | Path) -> Path:
     return p
 
 
+def not_regular(path: str | Path) -> str | None:
+    """What ``path`` is when it is there but no regular file ("a FIFO", "a directory",
+    ...: reading a FIFO would wait for a writer forever); None for a regular file or one
+    that cannot be looked at (the read that follows says why)."""
+    try:
+        mode = Path(path).stat().st_mode
+    except OSError:
+        return None
+    return None if stat.S_ISREG(mode) else _kind(mode)
+
+
+def check_folder(path: str | Path, what: str) -> Path:
+    """A folder to keep files in (``what`` it is, for the message): refused in one line
+    (UsageError) when it, or the nearest part of its path that exists, is no directory
+    (a folder under a file cannot be made)."""
+    p = Path(path)
+    for part in (p, *p.parents):
+        if part.exists() or part.is_symlink():
+            if not part.is_dir():
+                under = "" if part == p else f": its part {part}"
+                raise UsageError(f"{what} {p}{under} is a file, not a folder")
+            break
+    return p
+
+
+MAX_SECRET_BYTES = 4096
+"""The most of a password, badge or PIN file read [bytes] (its first line is wanted)."""
+
+
 def first_line(path: str | Path, what: str) -> str:
     """The first line of a small text file (a password, a badge's code), stripped
-    (UsageError naming ``what`` and the file when there is none to read)."""
+    (UsageError naming ``what`` and the file when there is none to read, or the file is
+    a FIFO, a directory or a device: refused before it is opened)."""
+    if (kind := not_regular(path)) is not None:
+        raise UsageError(f"{path}: is {kind}, not a file holding {what}")
     try:
-        return Path(path).read_text(encoding="utf-8").splitlines()[0].strip()
+        with Path(path).open("rb") as f:
+            head = f.read(MAX_SECRET_BYTES + 1)
+        if len(head) > MAX_SECRET_BYTES and b"\n" not in head[:MAX_SECRET_BYTES]:
+            raise UsageError(f"{path}: its first line is longer than {MAX_SECRET_BYTES} "
+                             f"bytes: not {what}")  # fmt: skip
+        line = head.split(b"\n", 1)[0].decode("utf-8", "strict")
+        if not line.strip() and b"\n" not in head:
+            raise IndexError  # an empty file
+        return line.strip()
     except (OSError, IndexError, UnicodeDecodeError):
         raise UsageError(f"{path}: cannot read {what} from it (its first line)") from None
 

@@ -34,6 +34,10 @@ and the OPC UA server's, a test's) migrating at once mix their options ("KeyErro
 'script'", seen in the test suite).  One at a time."""
 
 
+BACKENDS = ("sqlite", "postgresql")
+"""The databases an archive is kept in (the migrations and the tests know these two)."""
+
+
 def default_url() -> str:
     """``sqlite:///`` the file ``archive.sqlite`` in the user's data directory."""
     return f"sqlite:///{data_folder() / 'archive.sqlite'}"
@@ -68,8 +72,14 @@ class Archive:
         self.shown = _safe(self.url)
         try:
             u = sa.engine.make_url(self.url)
+            if u.get_backend_name() not in BACKENDS:
+                raise ArchiveError(f"a {u.get_backend_name()} database is not one the stand "
+                                   f"keeps its archive in: {' or '.join(BACKENDS)} "
+                                   "(sqlite:///FILE, postgresql+psycopg://user@host/db)",
+                                   url=self.shown)  # fmt: skip
             self.sqlite = u.get_backend_name() == "sqlite"
             if self.sqlite and u.database and u.database != ":memory:":
+                _sqlite_file_or_none(Path(u.database), self.shown)
                 Path(u.database).parent.mkdir(parents=True, exist_ok=True)
                 share = network_filesystem(Path(u.database).parent)
                 if share is not None:
@@ -84,7 +94,9 @@ class Archive:
             if u.get_driver_name() in ("psycopg", "psycopg2") and "connect_timeout" not in u.query:
                 connect["connect_timeout"] = CONNECT_TIMEOUT_S
             self.engine = sa.create_engine(self.url, future=True, connect_args=connect)
-        except (ArgumentError, NoSuchModuleError, ValueError, OSError) as exc:
+        except ArchiveError:
+            raise
+        except (ArgumentError, NoSuchModuleError, ImportError, ValueError, OSError) as exc:
             raise ArchiveError(f"not a usable database URL ({exc})", url=self.shown) from exc
         if self.sqlite:
             _sqlite_pragmas(self.engine)
@@ -242,6 +254,27 @@ NETWORK_FILESYSTEMS = frozenset({
 })  # fmt: skip
 """File systems whose locks SQLite cannot trust (its documentation: not over a network)."""
 MOUNTS = Path("/proc/self/mounts")
+
+
+SQLITE_MAGIC = b"SQLite format 3\x00"
+"""The first 16 bytes of every SQLite database file."""
+
+
+def _sqlite_file_or_none(path: Path, shown: str) -> None:
+    """Refuse (ArchiveError) a file there that is no SQLite database: SQLite would take a
+    file shorter than its header for an empty database and write over it."""
+    if not path.exists():
+        return
+    if not path.is_file():
+        raise ArchiveError("is not a file (a folder or a device): no archive", url=shown)
+    try:
+        with path.open("rb") as f:
+            head = f.read(len(SQLITE_MAGIC))
+    except OSError as exc:
+        raise ArchiveError(f"cannot be read ({exc.strerror or exc})", url=shown) from exc
+    if head and head != SQLITE_MAGIC:
+        raise ArchiveError("file is not a database (not SQLite's): not opened, never written "
+                           "over", url=shown)  # fmt: skip
 
 
 def network_filesystem(folder: Path) -> str | None:

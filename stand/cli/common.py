@@ -156,6 +156,10 @@ def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> 
     return kwargs
 
 
+FIRST_FRAME_S = 30.0
+"""How long a live command waits for the first frame by default [s]."""
+
+
 def add_live_arguments(p: argparse.ArgumentParser) -> None:
     """Options of every command that reads a live bus."""
     p.add_argument(
@@ -164,6 +168,14 @@ def add_live_arguments(p: argparse.ArgumentParser) -> None:
         default=2.0,
         metavar="S",
         help="end after S seconds without any frame (default 2)",
+    )
+    p.add_argument(
+        "--wait",
+        type=float,
+        default=FIRST_FRAME_S,
+        metavar="S",
+        help=f"wait up to S seconds for the first frame (default {FIRST_FRAME_S:g}: time to "
+        "start the rotor, or the simulator in another terminal)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
 

@@ -32,6 +32,7 @@ from stand.live import live_source, measure_live
 from stand.sim import Mass
 from stand.solve import Job
 from stand.solve.recordings import correction_masses
+from stand.solve.result import job_field_problem
 from stand.solve.verdict import tolerance_of
 
 ANGLE_HELP = N_("angles from the reference mark, against the direction of rotation")
@@ -203,6 +204,8 @@ def mes_job(args: argparse.Namespace, cfg: Config) -> Job:
     from stand.actions import start_job  # SQLAlchemy: only when a job is named
     from stand.archive import url_for
 
+    if problem := job_field_problem("job_id", args.job):  # "" is no job order: refused
+        raise UsageError(f"--job: {problem.partition(': ')[2]}")
     given = [f"--{name}" for name in ("serial", "order", "operator") if getattr(args, name, None)]
     if given:
         raise UsageError(f"--job takes the serial, order and operator from the job order: "
@@ -236,7 +239,7 @@ def measure_live_from_args(
     if kwargs is None:
         kwargs = bus_kwargs(args, source.bus_table)
     path = run_path(args)
-    job = mes_job(args, source.cfg) if getattr(args, "job", None) else job_from(args)
+    job = mes_job(args, source.cfg) if getattr(args, "job", None) is not None else job_from(args)
     show = LiveDisplay(source, path, quiet=args.quiet, words=language(getattr(args, "lang", None)))
     with show:
         result, session = measure_live(
@@ -247,6 +250,7 @@ def measure_live_from_args(
             targets,
             max_seconds=args.max_seconds,
             silence_timeout_s=args.timeout,
+            first_frame_s=args.wait,
             on_start=show.start,
             on_progress=show.progress,
             on_wait=show.wait,

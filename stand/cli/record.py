@@ -97,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
     kwargs = bus_kwargs(args, table)
     with LiveSession(
         kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout,
+        first_frame_s=args.wait,
         acquisition=acq,
     ) as session:  # fmt: skip
         _record(args, session, acq)
@@ -125,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
             )
         return 0
     if failure is not None:
-        if frames == 0:
-            session.writer.discard()
         raise _reraise_with_path(failure, args.out, frames)
+    if session.reader.frames_received == 0:  # stopped (--seconds, Ctrl-C) before any frame
+        raise BusError(f"nothing received in {session.elapsed_s:.1f} s: no run file written",
+                       channel=session.where, frames_received=0)  # fmt: skip
     return 0

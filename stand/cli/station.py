@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from stand.archive import url_for
+from stand.archive import Archive, url_for
 from stand.cli.common import DEFAULT_TARGET_PCT, TOLERANCE_SHARE
 from stand.config import data_folder
 from stand.config.paths import SHIPPED_ROTORS
@@ -98,6 +98,21 @@ def _check_tls(certfile: str | None, keyfile: str | None) -> None:
             raise UsageError(f"{opt} {path}: not a PEM file")
 
 
+def _check_port(host: str, port: int, what: str) -> None:
+    """Refuse in one line a port another program holds (uvicorn would say it in its own
+    words, after the station had started); the port is free again when this returns."""
+    import os
+    import socket
+
+    try:
+        socket.create_server((host, port)).close()  # SO_REUSEADDR, as uvicorn binds
+    except OSError as exc:
+        why = os.strerror(exc.errno) if exc.errno else str(exc)
+        raise UsageError(f"stand station: {what} {port} on {host} cannot be had ({why}): "
+                         "another station or program holds it, or choose another"
+                         ) from exc  # fmt: skip
+
+
 def run(args: argparse.Namespace) -> int:
 
     token = read_token(args.token, args.token_file)
@@ -114,6 +129,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--config-dir {config_dir}: not a folder")
 
     url = args.archive or Station.rotor_types_archive(config_dir) or url_for(None)
+    Archive(url).close()  # not a database, or none to reach: one line before serving
+    _check_port(args.host, args.port, "--port")
+    if args.opcua:
+        _check_port("127.0.0.1", args.opcua_port, "--opcua-port")
     runs = Path(args.runs_dir) if args.runs_dir else data_folder() / "runs"
 
     def targets(cfg: object, params: object, U: object) -> tuple[float, float]:

@@ -19,6 +19,7 @@ from stand.config import Config, load_config
 from stand.core import unbalance_to_polar
 from stand.core.dsp import radius95
 from stand.errors import UsageError
+from stand.files import check_folder
 from stand.solve.index_runs import measure_tooling
 from stand.solve.tooling import folder, stored_toolings
 
@@ -62,9 +63,7 @@ def _planes(U: Any, cov: Any) -> list[dict[str, Any]]:
 def _where(args: argparse.Namespace, cfg: Config | None) -> Path:
     """The folder of the toolings: ``--folder``, else the config's, else the data folder's."""
     where = Path(args.folder) if args.folder else folder(None if cfg is None else cfg.tooling)
-    if where.exists() and not where.is_dir():
-        raise UsageError(f"the tooling folder {where} is a file: toolings are kept in a folder")
-    return where
+    return check_folder(where, "the tooling folder")
 
 
 def _measure(args: argparse.Namespace) -> int:

@@ -53,6 +53,7 @@ from stand.core.model import STAND_KEYS, StandParameters
 from stand.core.shaft import shaft_rotor
 from stand.drivers.family import FAMILIES
 from stand.errors import ConfigError, ModelError, ParameterError
+from stand.files import not_regular
 
 
 def default_stand_id() -> str:
@@ -313,8 +314,8 @@ def read_toml(path: str | Path) -> tuple[str, dict[str, Any]]:
     """The text of a TOML file and its parsed content (:class:`ConfigError` if unreadable)."""
     path = Path(path)
     try:
-        if path.is_dir():
-            raise ConfigError("is a directory, not a configuration file", source=str(path))
+        if (kind := not_regular(path)) is not None:  # a FIFO would wait forever
+            raise ConfigError(f"is {kind}, not a configuration file", source=str(path))
         raw = path.read_bytes()
     except OSError as exc:
         raise ConfigError(

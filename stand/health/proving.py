@@ -36,6 +36,7 @@ from stand.core import StandParameters, unbalance_from_polar, unbalance_to_polar
 from stand.core.machine_tests import UMAR_POSITIONS, UMAR_TEST_FACTOR
 from stand.drivers.runs.recording import Recording, write_recording
 from stand.errors import ConfigError
+from stand.files import not_regular
 from stand.measuring import Measurement
 from stand.sim import Scene, simulate
 from stand.sim.tables import PlaneUnbalance, UnbalanceTable
@@ -227,6 +228,8 @@ class ProvingFile(BaseModel):
 
 def read_spec(path: str) -> ProvingFile:
     """A ``RUNS.toml`` of proving or trial runs, validated (ConfigError naming the key)."""
+    if (kind := not_regular(path)) is not None:  # a FIFO would wait forever
+        raise ConfigError(f"is {kind}, not a TOML file", source=path)
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:

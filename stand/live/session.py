@@ -47,6 +47,9 @@ class LiveSession:
         Frames of a simulated run to play in real time on the bus, or None.
     silence_timeout_s
         No frame for this long ends the session (:class:`BusTimeoutError`) [s].
+    first_frame_s
+        Before the first frame, the silence allowed instead [s] (None: the same).  A
+        session that received nothing leaves no run file.
     run_attrs
         More text attributes stored in the run file (the influence matrix used).
     """
@@ -59,6 +62,7 @@ class LiveSession:
         config_toml: str = "",
         scene_frames: Any = None,
         silence_timeout_s: float = 2.0,
+        first_frame_s: float | None = None,
         run_attrs: dict[str, str] | None = None,
         acquisition: Acquired | None = None,
         modules: Any = None,
@@ -80,7 +84,7 @@ class LiveSession:
         self.failure: BusError | None = None
         self.stop_signal: int | None = None
         self._scene_frames = scene_frames
-        self._timeout = silence_timeout_s
+        self._timeout, self._first_frame_s = silence_timeout_s, first_frame_s
         self._stop_player = threading.Event()
         self._player: threading.Thread | None = None
         self._saved: dict[int, Any] = {}
@@ -118,7 +122,7 @@ class LiveSession:
             )
         quiet = () if self._setup is None else self._setup.clock_ids
         self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,
-                                quiet_ids=quiet)  # fmt: skip
+                                first_frame_s=self._first_frame_s, quiet_ids=quiet)  # fmt: skip
         if self._setup is not None:
             try:
                 self._setup.start(produce=self._scene_frames is None, channel=self.where)
@@ -238,7 +242,10 @@ class LiveSession:
                 notes.append(Diagnostic("bus_error", str(self.failure)))
             self.writer.warn(notes)
             self._streams = self.streams() if self.builder.frames else None
-            self.writer.close(self._streams)
+            if self.reader.frames_received == 0:
+                self.writer.discard()  # nothing came: no empty run left to block a retry
+            else:
+                self.writer.close(self._streams)
         finally:
             self._restore_signals()
         return self._streams

@@ -13,11 +13,11 @@ import hmac
 import ipaddress
 import re
 from collections.abc import Awaitable, Callable, MutableMapping
-from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qs
 
 from stand.errors import UsageError
+from stand.files import first_line
 
 COOKIE = "stand_token"
 """The cookie that carries the token after the first request."""
@@ -47,10 +47,7 @@ def read_token(token: str | None, token_file: str | None) -> str | None:
     if token and token_file:
         raise UsageError("stand station: give --token or --token-file, not both")
     if token_file:
-        try:
-            token = Path(token_file).read_text(encoding="utf-8").splitlines()[0].strip()
-        except (OSError, UnicodeDecodeError, IndexError) as exc:
-            raise UsageError(f"--token-file {token_file}: cannot read a token ({exc})") from exc
+        token = first_line(token_file, "a token (--token-file)")
     if token is not None and not re.fullmatch(TOKEN_CHARS, token):
         raise UsageError(
             f"stand station: the token must be at least {MIN_TOKEN_CHARS} characters, letters, "

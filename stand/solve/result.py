@@ -35,13 +35,14 @@ JOB_LIMITS = {"serial": 64, "order": 64, "operator": 64, "note": 1000, "job_id":
 
 def job_field_problem(name: str, value: object) -> str | None:
     """Why ``value`` is no usable ``name`` of a job (None: it is): 1 to the field's
-    :data:`JOB_LIMITS` printable characters, not only blanks.  The one rule of the CLI's
-    options, the station's form and the MES's job orders."""
+    :data:`JOB_LIMITS` printable characters (``str.isprintable``: no control, no format
+    character such as a right-to-left override or a zero-width space), not only blanks.
+    The one rule of the CLI's options, the station's form and the MES's job orders."""
     limit = JOB_LIMITS[name]
     if not isinstance(value, str):
         return f"{name}: a text of 1 to {limit} characters, got {type(value).__name__}"
-    if not value.strip() or len(value) > limit or any(ord(c) < 32 or c == "\x7f" for c in value):
-        return f"{name}: 1 to {limit} printable characters, got {value[:80]!r}"
+    if not value.strip() or len(value) > limit or not value.isprintable():  # C0, C1, bidi,
+        return f"{name}: 1 to {limit} printable characters, got {value[:80]!r}"  # zero-width
     return None
 
 

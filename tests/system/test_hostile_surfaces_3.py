@@ -12,12 +12,11 @@ a second idle).
 
 from __future__ import annotations
 
-import time
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from hostile import refused_in_one_line
 
 from stand.cli import main
 
@@ -169,17 +168,4 @@ def test_a_hostile_input_is_one_line(
     name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     build, says = CASES[name]
-    argv = build(tmp_path)
-    capsys.readouterr()
-    t0 = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        code = main(argv)
-    took = time.perf_counter() - t0
-    _, err = capsys.readouterr()
-    lines = err.strip().splitlines()
-    assert not caught, [str(w.message) for w in caught]
-    assert "internal error" not in err and "Traceback" not in err, err
-    assert took < LIMIT_S, f"{took:.1f} s"
-    assert code == 2 and len(lines) == 1 and lines[0].startswith("stand: error: "), (code, err)
-    assert says in lines[0], err
+    assert len(refused_in_one_line(build(tmp_path), says, capsys, LIMIT_S)) == 1
