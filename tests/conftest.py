@@ -15,6 +15,43 @@ RUN_FILES_BEFORE = pytest.StashKey[set[Path]]()
 """The run files in the folder the suite runs in, when it started."""
 
 
+JS = Path(__file__).resolve().parent / "js"
+NODE_CLIENTS_SAID = "STAND_TESTS_NODE_CLIENTS"
+"""Where the controlling process tells its workers why the Node.js clients are missing."""
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Install the Node.js clients of other implementations (``tests/js``) exactly as
+    its ``package-lock.json`` pins them (``npm ci``), once, by the controlling process
+    before any worker starts, where npm is there and they are not installed yet; why not,
+    otherwise, for the skips to say."""
+    if hasattr(config, "workerinput"):
+        return
+    os.environ[NODE_CLIENTS_SAID] = _install_node_clients() or ""
+
+
+def _install_node_clients() -> str | None:
+    """None once ``tests/js``'s packages are installed as the lock pins them; else why not."""
+    import shutil
+    import subprocess
+
+    lock, done = JS / "package-lock.json", JS / "node_modules" / ".package-lock.json"
+    if done.is_file() and done.stat().st_mtime >= lock.stat().st_mtime:
+        return None
+    if shutil.which("node") is None or shutil.which("npm") is None:
+        return "Node.js and npm are not installed (apt-get install nodejs npm)"
+    try:
+        out = subprocess.run(["npm", "ci", "--prefix", str(JS), "--no-audit", "--no-fund",
+                              "--loglevel=error"], capture_output=True, text=True,
+                             timeout=600)  # fmt: skip
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"npm ci --prefix tests/js did not run ({exc})"
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or ["no message"])[-1]
+        return f"npm ci --prefix tests/js failed (exit {out.returncode}: {last[:200]})"
+    return None
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     session.config.stash[RUN_FILES_BEFORE] = set(Path.cwd().glob("run-*.h5"))
 

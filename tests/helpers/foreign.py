@@ -1,7 +1,7 @@
 """Clients of other implementations, run by the tests: the Node.js programs in
-``tests/js`` (Ajv; their npm packages installed by ``npm ci --prefix tests/js``, as
-``.ci/run`` does).  Where Node.js or the package is missing, the test is skipped with the
-reason naming what to install (the run's end lists it)."""
+``tests/js`` (Ajv, node-opcua; their npm packages installed by the suite itself with
+``npm ci --prefix tests/js`` where npm is there: ``tests/conftest.py``).  Where Node.js or
+a package is missing, the test is skipped with the reason (the run's end lists it)."""
 
 from __future__ import annotations
 
@@ -19,10 +19,15 @@ JS = Path(__file__).resolve().parents[1] / "js"
 def node_with(package: str) -> str:
     """The ``node`` program, where it and ``tests/js``'s ``package`` are installed; else
     the test is skipped naming them."""
+    import os
+
     node = shutil.which("node")
-    if node is None or not (JS / "node_modules" / package).is_dir():
-        pytest.skip(f"Node.js and the npm package {package} are not installed (apt-get install "
-                    "nodejs npm; npm ci --prefix tests/js)")  # fmt: skip
+    if node is None:
+        pytest.skip("Node.js is not installed (apt-get install nodejs npm): the suite then "
+                    "installs its clients itself (npm ci --prefix tests/js)")  # fmt: skip
+    if not (JS / "node_modules" / package).is_dir():
+        why = os.environ.get("STAND_TESTS_NODE_CLIENTS") or "npm ci --prefix tests/js not run"
+        pytest.skip(f"the npm package {package} is not installed: {why}")
     return node
 
 

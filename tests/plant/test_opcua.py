@@ -20,6 +20,8 @@ import pytest
 from stand.cli import main
 
 MACHINERY = "http://opcfoundation.org/UA/Machinery/"
+STAND = "urn:rotor-stand:balancing-stand"
+"""The stand's own namespace (docs/plant.md)."""
 DI = "http://opcfoundation.org/UA/DI/"
 RESULT = "http://opcfoundation.org/UA/Machinery/Result/"
 NAMESPACE = "urn:rotor-stand:balancing-stand"
@@ -60,7 +62,8 @@ async def _machine(client: Any, serial: str) -> tuple[dict[str, int], Any]:
     from asyncua import ua
 
     uris = await client.get_namespace_array()
-    ns = {"di": uris.index(DI), "m": uris.index(MACHINERY), "r": uris.index(RESULT)}
+    ns = {"di": uris.index(DI), "m": uris.index(MACHINERY), "r": uris.index(RESULT),
+          "own": uris.index(STAND)}  # fmt: skip
     machines = client.get_node(ua.NodeId(MACHINES, ns["m"]))
     for machine in await machines.get_children(refs=ORGANIZES):
         ident = await machine.get_child([f"{ns['di']}:Identification"])
@@ -169,6 +172,10 @@ async def _calls(ns: dict[str, int], rm: Any, run_id: str, event: Any, url: str)
     assert meta.IsSimulated is True and meta.ResultState == 1
     assert meta.CreationTime is not None and meta.ProcessingTimes.EndTime > meta.CreationTime
     assert meta == event.ResultMetaData
+    # the browse path docs/plant.md gives: the folder Result:Results, the variable in the
+    # stand's own namespace (Result:Results/Result:LatestResult was BadNoMatch)
+    latest = await rm.get_child([f"{ns['r']}:Results", f"{ns['own']}:LatestResult"])
+    assert (await latest.read_value()).ResultMetaData.ResultId == run_id
     (variant,) = result.ResultContent
     content = variant.Value  # BaseDataType: a Variant holding the stand's structure
     (row,) = [r for r in history(url, Filters()) if str(r["id"]) == run_id]
