@@ -256,23 +256,24 @@ NETWORK_FILESYSTEMS = frozenset({
 MOUNTS = Path("/proc/self/mounts")
 
 
-SQLITE_MAGIC = b"SQLite format 3\x00"
-"""The first 16 bytes of every SQLite database file."""
+SQLITE_SMALLEST = 512
+"""The smallest SQLite database file [bytes]: one page of the smallest size."""
 
 
 def _sqlite_file_or_none(path: Path, shown: str) -> None:
-    """Refuse (ArchiveError) a file there that is no SQLite database: SQLite would take a
-    file shorter than its header for an empty database and write over it."""
+    """Refuse (ArchiveError) a file there that cannot be an SQLite database, being shorter
+    than its smallest page but not empty: SQLite would take it for an empty database and
+    write over it.  (A longer file that is no database SQLite refuses itself; one that
+    another process is creating grows a whole page at a time, from empty.)"""
     if not path.exists():
         return
     if not path.is_file():
         raise ArchiveError("is not a file (a folder or a device): no archive", url=shown)
     try:
-        with path.open("rb") as f:
-            head = f.read(len(SQLITE_MAGIC))
+        size = path.stat().st_size
     except OSError as exc:
         raise ArchiveError(f"cannot be read ({exc.strerror or exc})", url=shown) from exc
-    if head and head != SQLITE_MAGIC:
+    if 0 < size < SQLITE_SMALLEST:
         raise ArchiveError("file is not a database (not SQLite's): not opened, never written "
                            "over", url=shown)  # fmt: skip
 

@@ -36,8 +36,8 @@ def print_measurement(out: dict[str, Any], _: Language = ENGLISH) -> None:
     u = Display.of(out, _)
     print(_("speed {rpm} rpm").format(rpm=u.decimals(f"{out['rpm']:.1f}")))
     print(_("plane  unbalance [{unit}]    95 % +-   angle [deg]   mass [{mass}] at radius "
-            "[{length}]").format(unit=u.unbalance_unit, mass=u.mass_unit,
-                                 length=u.length_unit))  # fmt: skip
+            "[{length}]").format(unit=u.unbalance_unit, mass=u.symbol(u.mass_unit),
+                                 length=u.symbol(u.length_unit)))  # fmt: skip
     for p in out["planes"]:
         angle = f"{'-':>13}" if p.get("within_noise") else f"{p['angle_deg']:13.2f}"
         figures = f"{angle} {u.mass_value(p['mass_g']):10.3f}"

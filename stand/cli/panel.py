@@ -52,7 +52,8 @@ def progress_line(p: Any, units: Display | None = None, _: Language = ENGLISH) -
     rpm = float(rad_s_to_rpm(m.omega_rad_s))
     more = "".join(f"  ({w})" for w in _waits(p, "", _))
     speed = _("{rpm} rpm").format(rpm=f"{rpm:7.1f}")
-    return u.decimals(f"  {p.elapsed_s:5.1f} s  {speed}") + f"  1x {amps} m/s2  {planes}{more}"
+    took = _("{seconds} s").format(seconds=f"{p.elapsed_s:5.1f}")
+    return u.decimals(f"  {took}  {speed}") + f"  1x {amps} m/s2  {planes}{more}"
 
 
 def panel(
@@ -77,14 +78,15 @@ def panel(
     head = Text("")
     if progress is not None:
         rpm = float(rad_s_to_rpm(progress.measurement.omega_rad_s))
-        head.append(u.decimals(f"{rpm:.1f}") + " rpm   ", style="bold cyan")
-    head.append(u.decimals(f"{t:.1f}") + " s   ")
+        head.append(_("{rpm} rpm").format(rpm=u.decimals(f"{rpm:.1f}")) + "   ",
+                    style="bold cyan")  # fmt: skip
+    head.append(_("{seconds} s").format(seconds=u.decimals(f"{t:.1f}")) + "   ")
     head.append(_("measuring on {where}").format(where=_(where)), style="dim")
     table = Table(box=None, expand=False, pad_edge=False, header_style="bold")
     for name, justify, width in (
         (_("plane"), "center", 5),
         (_("unbalance") + f"\n[{u.unbalance_unit}]", "right", 9),
-        (_("angle") + "\n[deg]", "right", 5),
+        (_("angle") + f"\n[{_('deg')}]", "right", 5),
         (_("95 %\ninterval"), "right", 8),
         (_("precision\ngoal"), "right", 9),
         (_("tolerance") + f"\n[{u.unbalance_unit}]", "right", 9),
@@ -144,7 +146,7 @@ class LiveDisplay:
 
         tol = tolerance_of(source.cfg, source.params)
         self.tolerance = None if tol is None else tol.per_plane_kg_m
-        self.units = Display(source.cfg.display.mass, source.cfg.display.length, words.decimal)
+        self.units = Display.speaking(words, source.cfg.display.mass, source.cfg.display.length)
         self._ = words
         self.path, self.quiet = path, quiet
         self.where, self.last, self.waiting, self.elapsed = "", None, "", 0.0

@@ -13,32 +13,46 @@ Only the text, the live panel and the report convert, through
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-from stand.i18n.language import ENGLISH, Language
+from stand.i18n.language import ENGLISH, N_, Language
 
 G_PER_OZ = 28.349523125
 """Grams in an avoirdupois ounce (exact by definition)."""
 MM_PER_IN = 25.4
 """Millimetres in an inch (exact by definition)."""
+SYMBOLS = (N_("g"), N_("mm"), N_("g mm"), N_("oz"), N_("in"), N_("oz in"))
+"""The units' symbols, as each language writes them (Ukrainian in Cyrillic: г, мм)."""
 
 
 @dataclass(frozen=True)
 class Display:
-    """How masses [g], lengths [mm] and unbalances [g mm] are shown: the units, and the
-    decimal sign of the reader's language (``1.5`` or ``1,5``)."""
+    """How masses [g], lengths [mm] and unbalances [g mm] are shown: the units, the
+    decimal sign of the reader's language (``1.5`` or ``1,5``) and its symbols for the
+    units (``words``)."""
 
     mass_unit: str = "g"
     length_unit: str = "mm"
     decimal: str = "."
+    words: Language = field(default=ENGLISH, compare=False)
 
     @classmethod
     def of(cls, out: dict[str, Any], _: Language = ENGLISH) -> Display:
         """The units a result's JSON form asks for (``display``; g and mm without), in the
         language ``_``."""
         d = out.get("display") or {}
-        return cls(d.get("mass", "g"), d.get("length", "mm"), _.decimal)
+        return cls(d.get("mass", "g"), d.get("length", "mm"), _.decimal, _)
+
+    @classmethod
+    def speaking(cls, _: Language, mass: str = "g", length: str = "mm") -> Display:
+        """The units ``mass`` and ``length`` in the language ``_``."""
+        return cls(mass, length, _.decimal, _)
+
+    def symbol(self, unit: str) -> str:
+        """A unit's symbol (``g``, ``mm``, ``g mm``, ...) as this display's language
+        writes it."""
+        return self.words(unit)
 
     def decimals(self, text: str) -> str:
         """Figures written with this display's decimal sign (``30.0`` -> ``30,0``)."""
@@ -46,7 +60,8 @@ class Display:
 
     @property
     def unbalance_unit(self) -> str:
-        return f"{self.mass_unit} {self.length_unit}"
+        """The unbalance's unit as shown (``g mm``; Ukrainian ``г·мм``)."""
+        return self.symbol(f"{self.mass_unit} {self.length_unit}")
 
     def mass_value(self, g: float) -> float:
         return g / G_PER_OZ if self.mass_unit == "oz" else g
@@ -60,19 +75,19 @@ class Display:
     def mass(self, g: float) -> str:
         """``55.55 g`` or ``1.959 oz``."""
         digits = 3 if self.mass_unit == "oz" else 2
-        return self.decimals(f"{self.mass_value(g):.{digits}f}") + f" {self.mass_unit}"
+        return self.decimals(f"{self.mass_value(g):.{digits}f}") + f" {self.symbol(self.mass_unit)}"
 
     def length(self, mm: float) -> str:
         """``90 mm`` or ``3.543 in``."""
         if self.length_unit == "in":
-            return self.decimals(f"{self.length_value(mm):.3f}") + " in"
-        return self.decimals(f"{mm:g}") + " mm"
+            return self.decimals(f"{self.length_value(mm):.3f}") + f" {self.symbol('in')}"
+        return self.decimals(f"{mm:g}") + f" {self.symbol('mm')}"
 
     def depth(self, mm: float) -> str:
         """A depth to machine: ``16.5 mm`` (to 0.01 mm) or ``0.6496 in``."""
         if self.length_unit == "in":
-            return self.decimals(f"{self.length_value(mm):.4f}") + " in"
-        return self.decimals(f"{round(mm, 2):g}") + " mm"
+            return self.decimals(f"{self.length_value(mm):.4f}") + f" {self.symbol('in')}"
+        return self.decimals(f"{round(mm, 2):g}") + f" {self.symbol('mm')}"
 
     def hole(self, h: dict[str, Any], _: Language = ENGLISH) -> str:
         """One drilled hole of a result's JSON form, in the machinist's words."""
@@ -124,7 +139,7 @@ class Display:
         """An unbalance without its unit (for tables whose heading names it): 0.1 g mm, or
         about 4 significant digits in other units (0.0001 at least)."""
         value = self.unbalance_value(g_mm)
-        if self.unbalance_unit == "g mm":
+        if (self.mass_unit, self.length_unit) == ("g", "mm"):
             return self.decimals(f"{value:.1f}")
         size = abs(value)
         digits = 1 if size >= 1000 else 2 if size >= 10 else 3 if size >= 1 else 4

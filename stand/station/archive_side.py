@@ -157,6 +157,24 @@ class ArchiveSide:
                     tmp.write_bytes(data)
         return other
 
+    def _other_languages(self, result: Any) -> None:
+        """The report in each other language the station speaks, beside the run
+        (``<run>.de.html``), so that a certificate in the customer's language, and
+        History's links in the screen's, stay there after the next rotor."""
+        run = Path(result.provenance.run_file)
+        for code in LANGUAGES:
+            other = run.with_suffix(f".{code}.html")
+            if code == self.default_language:
+                continue
+            try:
+                data = render(result, self.language(code)).encode("utf-8")
+                with self._printing:  # the Check screen's link may write it at once too
+                    if not other.exists():
+                        with output(other, need_bytes=len(data)) as tmp:
+                            tmp.write_bytes(data)
+            except StandError as exc:
+                log.warning("no report in %s: %s", code, exc)
+
     def _report(self, run_id: int) -> Path:
         found = run_file(self.archive_url, run_id)
         if found is None:

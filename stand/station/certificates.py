@@ -28,7 +28,7 @@ def certificate_links(station: Station, result: Any, _: Language) -> None:
         if s.result is result and s.run_id is None and s.waiting:
             with box:
                 box.clear()
-                ui.label(s.waiting).classes("text-h6 text-grey-8")
+                ui.label(_(s.waiting)).classes("text-h6 text-grey-8")
             return
         timer.deactivate()
         box.clear()
@@ -50,7 +50,7 @@ def certificate_links(station: Station, result: Any, _: Language) -> None:
                 fill()
 
             ui.select(dict(LANGUAGES), value=chosen["lang"], label=_("certificate language"),
-                      on_change=choose).classes("w-48").mark("certificate-language")  # fmt: skip
+                      on_change=choose).classes("w-64").mark("certificate-language")  # fmt: skip
 
     timer = ui.timer(REFRESH_S, fill)
     fill()

@@ -18,7 +18,12 @@ from stand.i18n.language import ENGLISH, N_, Language
 SEEN_FROM = N_("seen from the end where the rotor turns counter-clockwise")
 """The stated end the face is drawn from (the arrow shows the rotation)."""
 R_FACE = 150.0
-"""The face's radius in the drawing's units (the view box is 2 x 200 wide)."""
+"""The face's radius in the drawing's units (the view box is 480 wide)."""
+LABEL = 38
+"""The words' size in the drawing's units: drawn 13 rem wide on the Correct screen
+(beside the instruction, so that both planes fit 1024 x 768), at least 16 px.  The
+masses are the instruction's, in large type beside it: the face marks where (a dot at
+each, its mass in the dot's tooltip), and numbers the holes."""
 
 
 def _xy(angle_deg: float, r: float) -> tuple[float, float]:
@@ -42,7 +47,7 @@ def _rotation_arrow(_: Language) -> str:
         f'stroke="#222" stroke-width="3"/>'
         f'<polygon points="{tip[0]:.1f},{tip[1]:.1f} {wing1[0]:.1f},{wing1[1]:.1f} '
         f'{wing2[0]:.1f},{wing2[1]:.1f}" fill="#222"/>'
-        f'<text x="{lx - 34:.1f}" y="{ly + 24:.1f}" font-size="20" text-anchor="middle">'
+        f'<text x="{lx + 10:.1f}" y="{ly + 44:.1f}" font-size="{LABEL}" text-anchor="middle">'
         f"{word}</text>"
     )
 
@@ -75,14 +80,14 @@ def face_svg(
     _ = words
     mark = escape(_("reference mark"))
     parts = [
-        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="-215 -200 430 400" '
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="-240 -228 480 456" '
         'role="img" font-family="sans-serif">',
         f"<title>{escape(title)} ({escape(_(SEEN_FROM))})</title>",
         f'<circle r="{R_FACE}" fill="#e8e8e8" stroke="#555" stroke-width="3"/>',
         '<circle r="28" fill="#bbb" stroke="#555" stroke-width="2"/>',
         # the reference mark: a triangle pointing at the face from outside, at the top
         f'<polygon points="0,{-R_FACE - 2} -11,{-R_FACE - 22} 11,{-R_FACE - 22}" fill="#c00"/>',
-        f'<text x="-16" y="{-R_FACE - 8}" font-size="20" text-anchor="end" fill="#c00">'
+        f'<text x="0" y="{-R_FACE - 30}" font-size="{LABEL}" text-anchor="middle" fill="#c00">'
         f"{mark}</text>",
         _rotation_arrow(_),
     ]
@@ -92,21 +97,17 @@ def face_svg(
             lx, ly = _xy(position1_deg + 360.0 * k / positions, R_FACE * 0.91)
             parts.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="9" fill="#fff" stroke="#333"/>')
             parts.append(
-                f'<text x="{lx:.1f}" y="{ly + 6:.1f}" font-size="20" text-anchor="middle" '
+                f'<text x="{lx:.1f}" y="{ly + 10:.1f}" font-size="{LABEL}" text-anchor="middle" '
                 f'font-weight="bold">{k + 1}</text>'
             )
     colour = "#0a5" if action == "add" else "#c60"
     for angle, label in weights:
         x, y = _xy(angle, R_FACE * 0.74)
-        tx, ty = _xy(angle, R_FACE * 0.45)
         parts.append(
             f'<line x1="0" y1="0" x2="{x:.1f}" y2="{y:.1f}" stroke="{colour}" '
             f'stroke-width="3" stroke-dasharray="6 4"/>'
-            f'<circle cx="{x:.1f}" cy="{y:.1f}" r="13" fill="{colour}" stroke="#111" '
-            'stroke-width="2"/>'
-            f'<text x="{tx:.1f}" y="{ty + 7:.1f}" font-size="24" font-weight="bold" '
-            f'fill="{colour}" stroke="#fff" stroke-width="4" paint-order="stroke" '
-            f'text-anchor="middle">{escape(label)}</text>'
+            f'<circle cx="{x:.1f}" cy="{y:.1f}" r="15" fill="{colour}" stroke="#111" '
+            f'stroke-width="2"><title>{escape(label)}</title></circle>'
         )
     parts.append("</svg>")  # which end it is seen from: the title, and the screen's line
     return "".join(parts)

@@ -41,14 +41,16 @@ def notify(text: str, kind: Kind, *, multi_line: bool = False, timeout: int = 50
               classes="below-header")  # fmt: skip
 
 
-def guard(action: Callable[[], Any], then: str | None = None) -> Callable[[], None]:
-    """Run ``action``; an error the station raises on purpose is said in a notification."""
+def guard(action: Callable[[], Any], then: str | None = None, words: Language = ENGLISH
+          ) -> Callable[[], None]:  # fmt: skip
+    """Run ``action``; an error the station raises on purpose is said in a notification,
+    in the screen's language ``words`` where the catalogues know its sentence."""
 
     def run() -> None:
         try:
             action()
         except StandError as exc:
-            notify(str(exc), "negative", multi_line=True, timeout=8000)
+            notify(words(str(exc)), "negative", multi_line=True, timeout=8000)
             return
         if then:
             ui.navigate.to(then)
@@ -140,21 +142,25 @@ def history_screen(station: Station) -> None:
             notify(str(exc), "negative")
             return
         units = {
-            t: Display(*station.display_units(t), _.decimal)
+            t: Display.speaking(_, *station.display_units(t))
             for t in {r["rotor_type"] for r in rows}
         }
-        table.rows = [_history_row(r, units[r["rotor_type"]], _) for r in rows]
+        lang = None if _.code == station.default_language else _.code  # the screen's
+        table.rows = [_history_row(r, units[r["rotor_type"]], _, lang) for r in rows]
         table.update()
 
     found.on_click(search)
     search()
 
 
-def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH) -> dict[str, Any]:
-    """One archived run as a row, its unbalances in its rotor type's units."""
+def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH,
+                 lang: str | None = None) -> dict[str, Any]:  # fmt: skip
+    """One archived run as a row, its unbalances in its rotor type's units, its report in
+    the language ``lang`` (None: the station's)."""
 
     def plane(p: dict[str, Any]) -> str:
-        urr = "" if p["urr"] is None else f", URR {100 * p['urr']:.1f} %"
+        share = None if p["urr"] is None else units.decimals(f"{100 * p['urr']:.1f}")
+        urr = "" if share is None else f", URR {share} %"
         return (
             _("{unbalance} at {angle}°").format(
                 unbalance=units.unbalance(p["unbalance_g_mm"]), angle=f"{p['angle_deg']:.0f}"
@@ -173,5 +179,5 @@ def _history_row(r: dict[str, Any], units: Display, _: Language = ENGLISH) -> di
         "plane 1": planes.get(1, ""),
         "plane 2": planes.get(2, ""),
         "note": r.get("note") or "",  # a balancer test's verdict, the operator's note
-        "report": f"/report/{r['id']}",
+        "report": f"/report/{r['id']}" + ("" if lang is None else f"?lang={lang}"),
     }

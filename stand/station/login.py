@@ -84,7 +84,7 @@ LOGIN_THREADS = 2
 """Log-ins checked at once (argon2 and the journal's write, off the event loop); more wait
 their turn, so that a flood of log-ins never takes the processor from the screens."""
 LOGOUT = """<form method="post" action="/logout" style="margin:0">
-<button type="submit" class="logout" style="font-size:1rem;padding:6px 14px;background:none;
+<button type="submit" class="logout" style="font-size:0.9rem;padding:2px 10px;background:none;
         color:#fff;border:1px solid #fff;border-radius:4px;cursor:pointer">{log_out}</button>
 </form>"""
 """Log out: a POST (a link or a prefetcher never ends a session)."""
@@ -94,11 +94,11 @@ def who_line(station: Station, session: Session | None, _: Language) -> None:
     """The header's part that says who works the station, with Log out."""
     if not station.sessions.required():
         ui.label(_("lone stand: no accounts (stand users add makes the first)")).classes(
-            "text-body1"
+            "text-body2"
         ).mark("who")
         return
     assert session is not None
-    ui.label(f"{session.name} ({_(ROLES[session.role])})").classes("text-h6").mark("who")
+    ui.label(f"{session.name} ({_(ROLES[session.role])})").classes("text-subtitle1").mark("who")
     ui.html(LOGOUT.format(log_out=html.escape(_("Log out"))), sanitize=False).mark("logout")
 
 

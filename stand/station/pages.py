@@ -60,7 +60,13 @@ STYLE = """
   .q-btn { font-size: 1.2rem; }
   .q-table th, .q-table td { font-size: 1.2rem !important; }
   .q-table a { color: #1565c0; text-decoration: underline; }
-  .below-header { margin-top: 6rem; }
+  .below-header { margin-top: 136px !important; }
+  .instruction { font-size: 1.7rem; font-weight: 800; line-height: 1.2; }
+  .actions .q-btn .block { white-space: normal; }
+  .actions { position: sticky; bottom: 0; background: #fff; z-index: 5; width: 100%; }
+  .station-header .nav { font-size: 1.05rem; padding: 4px 12px; }
+  .station-header .logout { font-size: 0.9rem !important; padding: 2px 10px !important; }
+  @media (max-width: 1279px) { .station-title { display: none; } }
 </style>
 """
 
@@ -90,14 +96,17 @@ def frame(station: Station) -> None:
             login_screen(_, failed=request.query_params.get("login"))
         return
     app.storage.client["session"] = None if session is None else session.token
-    with ui.header().classes("items-center bg-blue-grey-9 q-px-md"):
-        ui.label(_("Balancing station")).classes("text-h5 q-mr-lg")
-        for path, name in SCREENS:
-            ui.button(_(name), on_click=lambda p=path: ui.navigate.to(p)).props(
-                "flat color=white size=lg"
-            ).mark(f"nav-{name.lower()}")
-        ui.space()
-        status = ui.label().classes("text-h6").mark("status")
+    with ui.header().classes("column bg-blue-grey-9 q-px-md q-py-xs station-header"):
+        with ui.row().classes("w-full items-center no-wrap"):  # the screens, one row
+            ui.label(_("Balancing station")).classes("text-h6 q-mr-md station-title")
+            for path, name in SCREENS:
+                ui.button(_(name), on_click=lambda p=path: ui.navigate.to(p)).props(
+                    "flat dense color=white"
+                ).classes("nav").mark(f"nav-{name.lower()}")
+        with ui.row().classes("w-full items-center no-wrap"):  # what it does, and who
+            status = ui.label().classes("text-subtitle1 ellipsis").mark("status")
+            ui.space()
+            who_line(station, session, _)
 
         def show_status() -> None:
             s = station.snapshot()
@@ -110,7 +119,6 @@ def frame(station: Station) -> None:
             }[s.phase].format(who=who, kind=kind)
 
         ui.timer(REFRESH_S, show_status)
-        who_line(station, session, _)
     ui.sub_pages({
         "/": lambda: start_screen(station),
         "/measure": lambda: measure_screen(station),
@@ -131,7 +139,7 @@ def _waiting(s: Any, head: str, sub: str, _: Language) -> tuple[str, str]:
         who = _("{kind} run of {rotor}: starting").format(
             kind=_(RUN_KINDS.get(s.kind, s.kind)), rotor=s.job.serial or _("the rotor")
         )
-        return who, (_("waiting: {why}").format(why=s.waiting) if s.waiting
+        return who, (_("waiting: {why}").format(why=_(s.waiting)) if s.waiting
                      else _("waiting for the stand"))  # fmt: skip
     return head, sub
 
@@ -158,7 +166,7 @@ class _PlaneView:
     def __init__(self, plane: int, _: Language) -> None:
         self.plane, self._ = plane, _
         with ui.column().classes("w-1/2 items-center"):
-            self.chart = ui.echart(polar_chart(plane, None, Display(decimal=_.decimal), _)).classes(
+            self.chart = ui.echart(polar_chart(plane, None, Display.speaking(_), _)).classes(
                 "w-full h-96"
             )
             self.text = ui.label().classes("text-h6").mark(f"plane{plane}-live")
@@ -192,7 +200,9 @@ def measure_screen(station: Station) -> None:
             require(station, "measure", _("stop a run"))
             station.stop()
 
-        stop = ui.button(_("Stop"), on_click=guard(stop_run)).props("size=xl color=negative")
+        stop = ui.button(_("Stop"), on_click=guard(stop_run, None, _)).props(
+            "size=xl color=negative"
+        )
         stop.mark("stop")
         onward = ui.button(
             _("Go on"),
@@ -231,7 +241,7 @@ def measure_screen(station: Station) -> None:
             _("{kind} run of {rotor}; vibration at the supports {a1} and {a2} m/s²").format(
                 kind=_(RUN_KINDS.get(s.kind, s.kind)), rotor=s.job.serial or _("the rotor"),
                 a1=_.number(n["support1_m_s2"], 3), a2=_.number(n["support2_m_s2"], 3))
-            + (f"; {s.waiting}" if s.waiting else "")
+            + (f"; {_(s.waiting)}" if s.waiting else "")
             + (_(". Still measuring: waiting for {what}").format(what=_(" and ").join(map(_, why)))
                if why and s.phase == "measuring" else "")
         )  # fmt: skip
@@ -254,14 +264,17 @@ def correct_screen(station: Station) -> None:
     out = to_json(latest)
     pos = out.get("correction_positions") or {}
     ui.label(_("Correction of {rotor}").format(rotor=s.job.serial or _("the rotor"))).classes("big")
-    ui.label(_("{angles}; the faces are drawn {seen}").format(angles=_(ANGLE_NOTE),
-                                                             seen=_(SEEN_FROM))).classes(
-        "text-body1")  # fmt: skip
     with ui.row().classes("w-full no-wrap gap-6"):
         for ins in instructions(out, _):
-            with ui.card().classes("w-1/2").mark(f"correct-plane{ins.plane}"):
-                ui.label(ins.headline).classes("text-h5")
-                with ui.column().classes("w-full items-center"):  # the face at the card's width
+            with ui.card().classes("w-1/2").style("min-width: 0").mark(f"correct-plane{ins.plane}"):
+                ui.label(ins.headline).classes("text-h6")
+                with ui.row().classes("w-full no-wrap items-start gap-2"):  # words, then face
+                    with ui.column().classes("gap-0").style("flex: 1 1 auto; min-width: 0"):
+                        for what, where, stock in ins.lines:
+                            ui.label(what).classes("instruction")
+                            ui.label(where).classes("text-h6")
+                            if stock:
+                                ui.label(stock).classes("text-body1 text-grey-8 q-mb-xs")
                     svg = face_svg(
                         ins.marks,
                         positions=int(pos.get("count") or 0),
@@ -270,14 +283,11 @@ def correct_screen(station: Station) -> None:
                         title=_("plane {i}").format(i=ins.plane),
                         words=_,
                     )
-                    ui.html(svg, sanitize=False).classes("w-full").style("max-width: 30rem")
-                    with ui.column().classes("w-full gap-1"):
-                        for what, where, stock in ins.lines:
-                            ui.label(what).classes("big")
-                            ui.label(where).classes("text-h5")
-                            if stock:
-                                ui.label(stock).classes("text-body1 text-grey-8 q-mb-md")
-    with ui.row().classes("gap-4 q-mt-md"):
+                    ui.html(svg, sanitize=False).style("flex: 0 0 13rem; max-width: 13rem")
+    ui.label(_("{angles}; the faces are drawn {seen}").format(angles=_(ANGLE_NOTE),
+                                                             seen=_(SEEN_FROM))).classes(
+        "text-body1")  # fmt: skip
+    with ui.row().classes("no-wrap gap-4 q-py-sm actions"):  # kept in view (STYLE: sticky)
         if s.simulated and s.phase == "done":
 
             def apply() -> None:
@@ -285,9 +295,9 @@ def correct_screen(station: Station) -> None:
                 masses = station.apply_correction()
                 notify(_("{n} masses put on the simulated rotor").format(n=len(masses)), "positive")
 
-            ui.button(_("Apply the correction (simulated stand)"), on_click=guard(apply)).props(
-                "size=xl color=secondary"
-            ).mark("apply")
+            ui.button(
+                _("Apply the correction (simulated stand)"), on_click=guard(apply, None, _)
+            ).props("size=lg color=secondary").mark("apply")
         elif s.phase == "done":
 
             def confirm() -> None:
@@ -295,16 +305,16 @@ def correct_screen(station: Station) -> None:
                 station.confirm_applied()
                 notify(_("confirmed: the check will calibrate the stand too"), "positive")
 
-            ui.button(_("Applied as shown"), on_click=guard(confirm)).props(
-                "size=xl color=secondary"
+            ui.button(_("Applied as shown"), on_click=guard(confirm, None, _)).props(
+                "size=lg color=secondary"
             ).mark("applied")
 
         def check() -> None:
             require(station, "check", _("measure a check run"))
             station.check()
 
-        ui.button(_("Start the check run"), on_click=guard(check, "/measure")).props(
-            "size=xl color=primary"
+        ui.button(_("Start the check run"), on_click=guard(check, "/measure", _)).props(
+            "size=lg color=primary"
         ).mark("check-run")
 
 
@@ -359,7 +369,7 @@ def check_screen(station: Station) -> None:
             require(station, "measure", _("start the next rotor"))
             station.next_rotor()
 
-        ui.button(_("Next rotor"), on_click=guard(next_rotor, "/")).props("size=xl").mark("next")
+        ui.button(_("Next rotor"), on_click=guard(next_rotor, "/", _)).props("size=xl").mark("next")
 
 
 def serve(station: Station, *, host: str, port: int, token: str | None, show: bool,

@@ -32,7 +32,7 @@ from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
 from stand.files import output
 from stand.health import with_drift
-from stand.i18n.language import Language, language
+from stand.i18n.language import N_, Language, language
 from stand.i18n.words import said
 from stand.live import live_source, measure_live
 from stand.plant import publish_archived
@@ -214,11 +214,10 @@ class Station(ArchiveSide):
         after those archived; UsageError where the rotor type has no rule."""
         rule = load_config(str(config))[0].rotor.serial_rule
         if rule is None:
-            raise UsageError(
+            raise UsageError(N_(
                 "enter the rotor's serial number first (type it or scan it): without one "
                 "the rotor is anonymous in the archive, Q-DAS and OPC UA (or give the rotor "
-                "type a [rotor] serial_rule)"
-            )
+                "type a [rotor] serial_rule)"))  # fmt: skip
         day = dt.datetime.now().astimezone().date()
         return next_serial(rule, day, serials_starting(self.archive_url, rule_prefix(rule, day)))
 
@@ -326,7 +325,7 @@ class Station(ArchiveSide):
             self._set(phase="failed", error=f"{type(exc).__name__}: {exc}", progress=None)
             return
         self._set(phase="done", result=result, run_id=None, notes=(),
-                  waiting="writing the report and archiving the run")  # fmt: skip
+                  waiting=FILING)  # fmt: skip
         run_id, notes = self._file(result, config)
         if kind == "check" and run_id is not None:
             notes = (*notes, self._datum(before, result))
@@ -336,6 +335,7 @@ class Station(ArchiveSide):
                 log.info("run filed after the screen moved on: %s", "; ".join(notes) or "ok")
                 return
             self._state = replace(s, seq=s.seq + 1, waiting="", run_id=run_id, notes=notes)
+        self._other_languages(result)
 
     def _run(self, kind: str, config: Path, before: Any) -> Any:
 
@@ -400,6 +400,9 @@ class Station(ArchiveSide):
         if told and told.startswith("not"):
             notes.append(told)
         return run_id, tuple(notes)
+
+
+FILING = N_("writing the report and archiving the run")  # the Check screen, meanwhile
 
 
 def _bus(table: dict[str, Any] | None) -> dict[str, Any]:

@@ -80,9 +80,10 @@ def start_screen(station: Station) -> None:
     """Start: the rotor type, the job, the source."""
     _ = words(station)
     ui.label(_("New rotor")).classes("big")
-    with ui.column().classes("w-full max-w-xl gap-4"):
-        form = _Form(station, _)
-        start = guard(form.go, "/measure")
+    with ui.column().classes("w-full max-w-4xl gap-2"):
+        with ui.grid(columns=2).classes("w-full gap-x-6 gap-y-1"):  # 1024 x 768: all in view
+            form = _Form(station, _)
+        start = guard(form.go, "/measure", _)
         form.serial.on("keydown.enter", start)  # a bar-code scanner types, then Enter
         ui.button(_("Start measuring"), on_click=start).props("size=xl color=primary").mark("start")
 

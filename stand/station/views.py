@@ -118,7 +118,9 @@ def polar_chart(plane: int, p: PlaneLive | None, units: Display,
         "angleAxis": {"type": "value", "min": 0, "max": 360, "startAngle": 90,
                       "clockwise": True, "interval": 45,
                       "axisLabel": {"formatter": "{value}°", "fontSize": 14}},
-        "radiusAxis": {"min": 0, "max": _nice_max(top * 1.05), "axisLabel": {"fontSize": 12}},
+        "radiusAxis": {"min": 0, "max": _nice_max(top * 1.05), "axisLabel": {
+            "fontSize": 12,  # the screen's decimal sign, no thousands' grouping (10000)
+            ":formatter": f"v => v.toLocaleString('{_.code}', {{useGrouping: false}})"}},
         "series": series,
     }  # fmt: skip
 
@@ -257,7 +259,7 @@ def check_rows(out: dict[str, Any], _: Language = ENGLISH) -> list[dict[str, Any
             "plane": p["plane"],
             "before": u.unbalance(p["before_g_mm"]),
             "after": u.unbalance(p["after_g_mm"]),
-            "urr": f"{100 * p['urr']:.1f} %" if p.get("urr") is not None else "-",
+            "urr": u.decimals(f"{100 * p['urr']:.1f}") + " %" if p.get("urr") is not None else "-",
             "permissible": "-" if t is None else u.unbalance(t["permissible_g_mm"]),
             "verdict": "-" if t is None else verdict_word(t["verdict"], _),
         })  # fmt: skip

@@ -304,7 +304,7 @@ def test_off_loopback_only_an_encrypted_client_with_user_and_password_gets_in(
         (["--host", "0.0.0.0", "--user", "u", "--password-file", "{tmp}/missing"],
          "{tmp}/missing: cannot read a password"),
         (["--host", "0.0.0.0", "--user", "u", "--password-file", "{tmp}"],
-         "{tmp}: cannot read a password"),
+         "{tmp}: is a directory, not a file holding a password"),
         (["--host", "0.0.0.0"], "--password-file"),
     ],
 )  # fmt: skip
@@ -732,3 +732,50 @@ def test_opcua_log_ins_are_braked_like_the_stations(tmp_path: Path) -> None:
         server.stop()
     failed = [(e["who"], e["source"]) for e in entries(url, action="login_failed")]
     assert failed == [("kim", "opcua")] * 5, failed
+
+
+def test_runs_archived_between_two_polls_are_each_heard(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Three runs archived while the server waits between two polls (a slow poll, as on a
+    busy machine): three ResultReady events, oldest first, and LatestResult the newest
+    (one event for the latest alone lost the other two)."""
+    import dataclasses
+
+    from stand.actions import archive_run, os_actor
+    from stand.plant.opcua import server as server_module
+    from stand.solve import solve_recording
+
+    monkeypatch.setattr(server_module, "POLL_S", 3.0)
+    url = f"sqlite:///{tmp_path / 'a.sqlite'}"
+    results = []
+    for k in range(3):  # three rotors
+        run = tmp_path / f"r{k}.h5"
+        assert main(["simulate", "demo", "--out", str(run), "--serial", f"UA-{k}"]) == 0
+        r = solve_recording(str(run))
+        prov = dataclasses.replace(r.provenance, stand_id="stand-7")
+        results.append(dataclasses.replace(r, provenance=prov))
+
+    async def client(endpoint: str) -> list[str]:
+        from asyncua import Client, ua
+
+        async with Client(endpoint) as c:
+            ns, _ = await _machine(c, "stand-7")
+            heard: list[Any] = []
+
+            class Handler:
+                def event_notification(self, event: Any) -> None:
+                    heard.append(event)
+
+            sub = await c.create_subscription(50, Handler())
+            etype = c.get_node(ua.NodeId(RESULT_READY_EVENT_TYPE, ns["r"]))
+            await sub.subscribe_events(c.get_node(ua.NodeId(SERVER_OBJECT)), etype)
+            await asyncio.sleep(3.5)  # a poll has passed: the next one is 3 s away
+            ids = [str(archive_run(r, url, os_actor())) for r in results]
+            end = time.monotonic() + 30
+            while len(heard) < 3 and time.monotonic() < end:
+                await asyncio.sleep(0.1)
+            assert [e.Result.ResultMetaData.ResultId for e in heard] == ids, ids
+            return ids
+
+    assert len(_with_server(url, client)) == 3

@@ -393,9 +393,15 @@ def test_the_rotor_face_numbers_the_holes_and_marks_the_masses() -> None:
     from stand.station.face import face_svg
 
     svg = face_svg([(180.0, "20.00 g"), (225.0, "39.00 g")], positions=8, title="plane 1")
-    texts = [t.text for t in ET.fromstring(svg).iter("{http://www.w3.org/2000/svg}text")]
+    root = ET.fromstring(svg)
+    texts = [t.text for t in root.iter("{http://www.w3.org/2000/svg}text")]
     assert [str(k) for k in range(1, 9)] == [t for t in texts if t and t.isdigit()]
-    assert {"20.00 g", "39.00 g", "reference mark", "rotation"} <= set(texts)
+    assert {"reference mark", "rotation"} <= set(texts)
+    # each mass a dot, its mass its tooltip (the instruction beside says it in large type)
+    dots = [c for c in root.iter("{http://www.w3.org/2000/svg}circle")
+            if c.find("{http://www.w3.org/2000/svg}title") is not None]  # fmt: skip
+    assert [d.find("{http://www.w3.org/2000/svg}title").text for d in dots] == [  # type: ignore[union-attr]
+        "20.00 g", "39.00 g"]  # fmt: skip
     bare = face_svg([], positions=0)
     assert not any(t and t.isdigit() for t in ET.fromstring(bare).itertext())
 

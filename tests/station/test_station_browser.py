@@ -396,6 +396,29 @@ def test_the_mes_job_fills_start_and_a_started_one_starts(browser: Any, tmp_path
     assert states["MES-7"]["state"] == "AllowedToStart"  # shown, never started
 
 
+def _in_view(browser: Any, css: str) -> None:
+    """Every element ``css`` names wholly inside the window at 1024 x 768 and 1280 x 800."""
+    for width, height in ((1024, 768), (1280, 800)):
+        browser.set_window_size(width, height)
+        time.sleep(0.3)  # laid out again
+        found = browser.execute_script(
+            "return [...document.querySelectorAll(arguments[0])].map(e => "
+            "[e.getBoundingClientRect().bottom, innerHeight, e.innerText]);", css)  # fmt: skip
+        assert found and all(b <= h for b, h, _ in found), (css, width, found)
+    browser.set_window_size(1400, 950)
+
+
+def _apart(browser: Any, one: str, other: str) -> None:
+    """The first elements ``one`` and ``other`` name do not overlap on the screen (once a
+    note has slid in: Quasar animates it)."""
+    time.sleep(0.8)
+    a, b = browser.execute_script(
+        "return [arguments[0], arguments[1]].map(c => { const r = document.querySelector(c)"
+        ".getBoundingClientRect(); return [r.left, r.top, r.right, r.bottom]; });",
+        one, other)  # fmt: skip
+    assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (a, b)
+
+
 def _stop_on_screen(browser: Any, word: str) -> None:
     """The Stop button (its text ``word`` as shown) wholly inside the window at 1024 x 768
     and at 1280 x 800; the window back to its size after."""
@@ -552,6 +575,10 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         _see(browser, "Log in")
         _log_in(browser, "olena", "a-long-password")
         _see(browser, "Новий ротор")
+        _stop_on_screen(browser, "ПОЧАТИ ВИМІРЮВАННЯ")  # the header leaves Start in view
+        _button(browser, "Почати вимірювання").click()  # no serial: a note, in Ukrainian
+        _see(browser, "спершу введіть серійний номер ротора")
+        _apart(browser, ".q-notification", ".logout")  # the note leaves Log out free
         _type(browser, "серійний номер", "U-1")
         _button(browser, "Почати вимірювання").click()
         _see(browser, "вібрація опор")  # the first estimate, in Ukrainian
@@ -562,6 +589,10 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         _see(browser, "Корекція U-1")
         _see(browser, "опорна мітка")
         _shot(browser, tmp_path, "correct-uk")
+        _stop_on_screen(browser, "ПОЧАТИ КОНТРОЛЬНИЙ ПУСК")  # kept in view, at its foot
+        _in_view(browser, ".instruction")  # every plane's instruction, without scrolling
+        shown = browser.execute_script("return document.querySelector('.q-page').innerText")
+        assert "г" in shown and not re.search(r"\d g\b|\bmm\b", shown), shown  # Cyrillic units
         end = time.monotonic() + 60  # filed after the answer is shown: a hang guard
         while not (found := history(url, Filters(serial="U-1"))) and time.monotonic() < end:
             time.sleep(0.2)
@@ -570,6 +601,14 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         assert status == 200 and b'<html lang="de">' in page and b"Wuchtprotokoll" in page
         status, page = _fetch(base, f"/report/{run['id']}?lang=xx", browser.get_cookies())
         assert status == 400 and b"lang" in page, page
+        browser.get(base + "/")  # the next rotor: the first one's certificates stay there
+        _type(browser, "серійний номер", "U-2")
+        _button(browser, "Почати вимірювання").click()
+        _see(browser, "вимірювання U-2")
+        for lang in ("de", "en"):
+            status, page = _fetch(base, f"/report/{run['id']}?lang={lang}", browser.get_cookies())
+            assert status == 200 and f'<html lang="{lang}">'.encode() in page, (lang, status)
+        _button(browser, "Стоп").click()
     german = tmp_path / "de"
     german.mkdir()
     with served(german, "--lang", "de", "--config-dir", str(strict)) as base:

@@ -50,6 +50,9 @@ from stand.plant.opcua.where import install as install_where_clause
 
 POLL_S = 0.25
 """How often the archive is asked for a new run [s] (an event within about this)."""
+MAX_EVENTS_PER_POLL = 100
+"""The most ResultReady events one poll fires (the newest runs: an import of thousands
+is not replayed as events; the results are there by their ids)."""
 NO_RESULT, FILTER_NOT_SUPPORTED, ARCHIVE_UNAVAILABLE = -1, -2, -3
 """The methods' application-specific ``Error`` outputs (OPC 40001-101: 0 OK, < 0 the
 application's own): no such result; a Filter with elements, or one that is no
@@ -272,8 +275,7 @@ class ResultServer:
             try:
                 now = latest_id(self._open(), self.stand_id)
                 if now != seen:
-                    run = latest(self._open(), self.stand_id)
-                    await self._publish(machine, events, run, fire=seen != -1 and run is not None)
+                    await self._publish_new(machine, events, seen, now)
                     seen = now
                 evaluated = await self._new_evaluations(machine, events, evaluated)
                 jobs_seen = await self._write_jobs(machine, jobs_seen)
@@ -330,6 +332,22 @@ class ResultServer:
             events.event.emitting_node = notifier
             await events.isession.subscription_service.trigger_event(events.event)
         events.event.emitting_node = machine.notifiers[0]
+
+    async def _publish_new(self, machine: Machine, events: Any, seen: int | None,
+                           now: int | None) -> None:  # fmt: skip
+        """LatestResult the newest run, and a ResultReady event for each run archived since
+        the poll that saw ``seen`` (-1: none before: the server just started), oldest first:
+        several runs archived between two polls are each heard, at most
+        :data:`MAX_EVENTS_PER_POLL` (the newest; the rest are there by their ids)."""
+        if seen == -1 or now is None:
+            run = latest(self._open(), self.stand_id)
+            await self._publish(machine, events, run, fire=False)
+            return
+        new = [i for i in newest_ids(self._open(), self.stand_id, MAX_EVENTS_PER_POLL)
+               if seen is None or i > seen]  # fmt: skip
+        for run_id in reversed(new):
+            run = latest(self._open(), self.stand_id, run_id=run_id)
+            await self._publish(machine, events, run, fire=run is not None)
 
     async def _publish(self, machine: Machine, events: Any, run: Any, fire: bool) -> None:
         from asyncua import ua
