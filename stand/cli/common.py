@@ -11,6 +11,7 @@ from collections.abc import Iterable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from stand.calib import Tolerances
+from stand.cli.live_options import add_live_arguments
 from stand.config import Config, read_matrix
 from stand.config.typed import parse_angle, parse_date, parse_mass, parse_rpm, positive_float
 from stand.drivers.bus import ALLOW_URL
@@ -154,30 +155,6 @@ def bus_kwargs(args: argparse.Namespace, table: Mapping[str, object] | None) -> 
     if given.get("allow_url_channel"):
         kwargs[ALLOW_URL] = True
     return kwargs
-
-
-FIRST_FRAME_S = 30.0
-"""How long a live command waits for the first frame by default [s]."""
-
-
-def add_live_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of every command that reads a live bus."""
-    p.add_argument(
-        "--timeout",
-        type=float,
-        default=2.0,
-        metavar="S",
-        help="end after S seconds without any frame (default 2)",
-    )
-    p.add_argument(
-        "--wait",
-        type=float,
-        default=FIRST_FRAME_S,
-        metavar="S",
-        help=f"wait up to S seconds for the first frame (default {FIRST_FRAME_S:g}: time to "
-        "start the rotor, or the simulator in another terminal)",
-    )
-    p.add_argument("--quiet", action="store_true", help="no progress lines")
 
 
 def add_measure_arguments(p: argparse.ArgumentParser) -> None:
@@ -396,15 +373,6 @@ def job_from(args: argparse.Namespace) -> Any:
             raise UsageError(f"--{problem}")
         values[name] = value
     return Job(**values)
-
-
-def check_live_arguments(args: argparse.Namespace, command: str) -> None:
-    """Refuse targets and limits that are not positive."""
-    for name in ("target_pct", "target_g_mm", "max_seconds", "timeout"):
-        value = getattr(args, name)
-        if value is not None and not value > 0:
-            flag = "--" + name.replace("_", "-")
-            raise UsageError(f"stand {command}: {flag} must be > 0, got {value}")
 
 
 def targets_from(args: argparse.Namespace, tolerance_share: float | None = None) -> Any:

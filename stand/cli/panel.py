@@ -21,7 +21,8 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from stand.cli.common import actor_of, bus_kwargs, check_live_arguments, job_from, run_path
+from stand.cli.common import actor_of, bus_kwargs, job_from, run_path
+from stand.cli.live_options import check_live_arguments, silences
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError, UsageError
@@ -243,6 +244,7 @@ def measure_live_from_args(
     path = run_path(args)
     job = mes_job(args, source.cfg) if getattr(args, "job", None) is not None else job_from(args)
     show = LiveDisplay(source, path, quiet=args.quiet, words=language(getattr(args, "lang", None)))
+    silence, first = silences(args)
     with show:
         result, session = measure_live(
             source,
@@ -251,8 +253,8 @@ def measure_live_from_args(
             options,
             targets,
             max_seconds=args.max_seconds,
-            silence_timeout_s=args.timeout,
-            first_frame_s=args.wait,
+            silence_timeout_s=silence,
+            first_frame_s=first,
             on_start=show.start,
             on_progress=show.progress,
             on_wait=show.wait,

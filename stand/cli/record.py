@@ -10,8 +10,9 @@ import sys
 import time
 from typing import Any
 
-from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs
+from stand.cli.common import add_bus_arguments, bus_kwargs
 from stand.cli.format import print_recording
+from stand.cli.live_options import add_live_arguments, silences
 from stand.drivers import Frames, Recording
 from stand.errors import BusError, BusTimeoutError, UsageError
 from stand.live import LiveSession
@@ -96,8 +97,8 @@ def run(args: argparse.Namespace) -> int:
         table, acq = cfg.bus, acquisition_of(cfg, args.config)
     kwargs = bus_kwargs(args, table)
     with LiveSession(
-        kwargs, args.out, config_toml=config_text, silence_timeout_s=args.timeout,
-        first_frame_s=args.wait,
+        kwargs, args.out, config_toml=config_text, silence_timeout_s=silences(args)[0],
+        first_frame_s=silences(args)[1],
         acquisition=acq,
     ) as session:  # fmt: skip
         _record(args, session, acq)
