@@ -122,8 +122,10 @@ def test_a_silent_module_is_named_not_waited_for(buses: tuple[Any, Any]) -> None
 def test_the_hosts_sync_is_answered_and_decoded_in_order(buses: tuple[Any, Any]) -> None:
     """The real path end to end at 200 Hz (a thread follows it, but for a few answers past
     the next SYNC under load): set-up, NMT start, the host's cyclic SYNC, each module
-    answering each SYNC with its next payload; decoded, the samples are the payloads in
-    order, one per SYNC, none lost or moved."""
+    answering each SYNC with its next payload; decoded, every sample kept is its SYNC's
+    payload, in order, none moved.  On a busy machine the answering thread may fall three
+    behind: such a backlog is left out and said, never placed by guess (all 120 kept when
+    idle)."""
     host, bus = buses
     layout = _layout(200.0)
     n = 120
@@ -153,14 +155,14 @@ def test_the_hosts_sync_is_answered_and_decoded_in_order(buses: tuple[Any, Any])
     assert sim.answered == {1: n, 2: n}
     frames = Frames.concat(blocks)
     streams = pdo_streams(frames, layout)
+    late = " ".join(w.message for w in streams.warnings if w.code == "tpdo_late")
     for node in (1, 2):
         s = streams.nodes[node]
-        assert len(s.index) == n and s.lost_frames == 0
-        assert np.array_equal(s.counts.astype(np.int64), np.arange(n) * 3 + node)
-        assert np.all(np.diff(np.asarray(s.index)) == 1)  # one sample per SYNC, in order
-    # a thread under load answers a few past the next SYNC: put back, none misplaced above
-    late = [w for w in streams.warnings if w.code == "tpdo_late"]
-    assert not late or "0 in a backlog on one SYNC" in late[0].message
+        index = np.asarray(s.index, dtype=np.int64)
+        assert np.array_equal(s.counts.astype(np.int64), index * 3 + node)  # none moved
+        assert np.all(np.diff(index) >= 1) and index[0] >= 0 and index[-1] < n
+        if len(index) < n:  # a backlog on a busy machine: left out, and said
+            assert f"node {node}:" in late and "in a backlog on one SYNC" in late, late
 
 
 def test_the_hosts_own_sync_does_not_keep_a_dead_bus_alive(buses: tuple[Any, Any]) -> None:
