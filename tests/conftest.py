@@ -20,14 +20,6 @@ NODE_CLIENTS_SAID = "STAND_TESTS_NODE_CLIENTS"
 """Where the controlling process tells its workers why the Node.js clients are missing."""
 
 
-def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
-    """Workers for ``-n auto``: one and a half per processor (at least 2).  A third of the
-    suite waits on real time (scenes played at their own pace, servers, a browser) and
-    leaves a processor idle meanwhile: on 2 processors, 2 workers kept them busy 79 % of
-    the suite's 13.4 minutes."""
-    return max(2, (3 * (os.cpu_count() or 1)) // 2)
-
-
 def pytest_configure(config: pytest.Config) -> None:
     """Install the Node.js clients of other implementations (``tests/js``) exactly as
     its ``package-lock.json`` pins them (``npm ci``), once, by the controlling process
