@@ -120,11 +120,11 @@ class Archive:
         from alembic.util.exc import CommandError
         from sqlalchemy.exc import SQLAlchemyError
 
-        try:
-            with self.engine.connect() as conn:
+        with self.engine.connect() as conn:  # a server that does not answer: raised here, once
+            try:
                 now = conn.exec_driver_sql("SELECT version_num FROM alembic_version").scalar()
-        except SQLAlchemyError:  # a new archive: no version table yet
-            now = None
+            except SQLAlchemyError:  # a new archive: no version table yet
+                now = None
         if now == SCHEMA_HEAD:
             return
 
