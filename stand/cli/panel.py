@@ -21,8 +21,14 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-from stand.cli.common import actor_of, bus_kwargs, job_from, run_path
-from stand.cli.live_options import check_live_arguments, silences
+from stand.cli.common import (
+    actor_of,
+    bus_kwargs,
+    check_live_arguments,
+    job_from,
+    run_path,
+    silences,
+)
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
 from stand.errors import ArchiveError, UsageError

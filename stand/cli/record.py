@@ -10,9 +10,8 @@ import sys
 import time
 from typing import Any
 
-from stand.cli.common import add_bus_arguments, bus_kwargs
+from stand.cli.common import add_bus_arguments, add_live_arguments, bus_kwargs, silences
 from stand.cli.format import print_recording
-from stand.cli.live_options import add_live_arguments, silences
 from stand.drivers import Frames, Recording
 from stand.errors import BusError, BusTimeoutError, UsageError
 from stand.live import LiveSession

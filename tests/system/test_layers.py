@@ -245,7 +245,7 @@ def test_a_front_end_writing_the_journal_is_caught(tmp_path: Path) -> None:
     ]
 
 
-CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.live_options", "stand.cli.panel"}
+CLI_SHARED = {"stand.cli.common", "stand.cli.format", "stand.cli.panel"}
 """What a subcommand may import of the CLI: argument handling and formatting, nothing that
 measures (that is the application layer's)."""
 
@@ -259,7 +259,7 @@ def test_no_subcommand_imports_another_cli_module() -> None:
         others = {m for m in mods if m.startswith("stand.cli") and m not in CLI_SHARED}
         assert not others, f"stand/cli/{name}.py imports {sorted(others)}"
     helpers = {p.stem for p in (ROOT / "stand" / "cli").glob("*.py")} - set(SUBCOMMANDS)
-    assert helpers == {"__init__", "__main__", "common", "format", "live_options", "panel"}, helpers
+    assert helpers == {"__init__", "__main__", "common", "format", "panel"}, helpers
 
 
 def imported_modules(path: Path) -> set[str]:
