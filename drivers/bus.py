@@ -120,6 +120,18 @@ def open_bus(kwargs: dict[str, Any]) -> Any:
         ) from None
 
 
+KEEPS_STAMPS = ("virtual", "stand_loopback")
+"""Interfaces that can keep a sender's timestamp (``preserve_timestamps``): on them a
+simulated node's frames carry their wire time (:func:`play`'s ``wire_stamps``)."""
+
+
+def open_player_bus(kwargs: dict[str, Any]) -> tuple[Any, bool]:
+    """The simulated nodes' side of the bus ``kwargs`` names (:func:`open_bus`), and
+    whether it keeps the stamps :func:`play` gives (on :data:`KEEPS_STAMPS` interfaces)."""
+    keeps = kwargs.get("interface") in KEEPS_STAMPS
+    return open_bus({**kwargs, "preserve_timestamps": True} if keeps else kwargs), keeps
+
+
 class FrameSource(abc.ABC):
     """Blocks of frames from somewhere (a bus, a replay).
 
@@ -320,6 +332,7 @@ def play(
     realtime: bool = True,
     stop: threading.Event | None = None,
     tick_s: float = 0.005,
+    wire_stamps: bool = False,
 ) -> int:
     """Send frames on a bus, paced by their host timestamps (the simulated nodes' side).
 
@@ -334,6 +347,12 @@ def play(
         if False, send as fast as the bus takes them.
     stop
         Set it to stop early.
+    wire_stamps
+        Stamp each frame with the time it is due on the wire (the start's ``time.time()``
+        plus its offset), as an adapter that stamps in hardware or in the kernel would,
+        for a bus that keeps a sender's stamp (``preserve_timestamps``): a player late on
+        a loaded machine then delivers late frames, not a slower clock.  If False, the
+        receiving interface stamps each frame when it is sent.
 
     Returns
     -------
@@ -346,7 +365,7 @@ def play(
     if len(frames) == 0:
         return 0
     t_rel = frames.t_s - frames.t_s[0]
-    start = time.monotonic()
+    start, wall = time.monotonic(), time.time()
     sent = 0
     for m, due in zip(messages_from_frames(frames), t_rel.tolist(), strict=True):
         if stop is not None and stop.is_set():
@@ -355,7 +374,7 @@ def play(
             late = due - (time.monotonic() - start)
             if late > tick_s:
                 time.sleep(late)
-        m.timestamp = 0.0  # the receiving interface stamps it
+        m.timestamp = wall + due if wire_stamps else 0.0  # 0: the receiving side stamps it
         try:
             bus.send(m)
         except can.CanError as exc:  # bus-off, unplugged, the other side of a loopback gone

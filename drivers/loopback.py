@@ -102,12 +102,16 @@ class LoopbackBus(can.BusABC):
     """python-can's bus over a hub on 127.0.0.1 (see the module's docstring)."""
 
     def __init__(self, channel: Any, can_filters: Any = None, *,
-                 receive_own_messages: bool = False, **kwargs: Any) -> None:  # fmt: skip
+                 receive_own_messages: bool = False, preserve_timestamps: bool = False,
+                 **kwargs: Any) -> None:  # fmt: skip
         port = _port(channel)
         self._hub: _Hub | None = None
         self.sock = self._connect(port)
         self.channel_info = f"stand_loopback {HOST}:{port}"
         self.receive_own_messages = receive_own_messages
+        self.preserve_timestamps = preserve_timestamps
+        """Send a message's own timestamp (a simulated adapter's wire time), not the time
+        of sending (as python-can's virtual interface does)."""
         self._buf = b""
         self._lock = threading.Lock()
         super().__init__(channel=channel, can_filters=can_filters, **kwargs)
@@ -139,7 +143,8 @@ class LoopbackBus(can.BusABC):
         flags = (msg.is_extended_id * 1 | msg.is_remote_frame * 2 | msg.is_error_frame * 4
                  | msg.is_fd * 8 | msg.bitrate_switch * 16
                  | ECHO * self.receive_own_messages)  # fmt: skip
-        record = RECORD.pack(time.time(), msg.arbitration_id, flags, msg.dlc,
+        stamp = msg.timestamp if self.preserve_timestamps else time.time()
+        record = RECORD.pack(stamp, msg.arbitration_id, flags, msg.dlc,
                              bytes(msg.data).ljust(64, b"\0"))  # fmt: skip
         try:
             with self._lock:

@@ -25,7 +25,7 @@ from stand.cli.common import (
 from stand.cli.panel import ProgressLine, scene_masses
 from stand.config import config_toml
 from stand.core import unbalance_from_polar
-from stand.drivers.bus import describe_bus, open_bus, play
+from stand.drivers.bus import describe_bus, open_bus, open_player_bus, play
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
@@ -176,13 +176,14 @@ def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
 
     table = scene.bus or {"interface": "virtual", "channel": "stand-demo"}
     kwargs = bus_kwargs(args, table)
-    bus = open_bus(kwargs)
+    modules = scene_modules(scene)
+    # modules answering SYNC send when they answer: the receiving side stamps those
+    bus, stamps = open_player_bus(kwargs) if modules is None else (open_bus(kwargs), False)
     try:
-        modules = scene_modules(scene)
         if modules is None:
             print(f"playing on {describe_bus(kwargs)} in real time (Ctrl-C stops)",
                   file=sys.stderr)  # fmt: skip
-            sent = play(bus, sim.frames)
+            sent = play(bus, sim.frames, wire_stamps=stamps)
         else:
             print(f"the scene's modules answer on {describe_bus(kwargs)}: set them up and "
                   "send SYNC (stand record --config CFG with the same bus options); Ctrl-C "

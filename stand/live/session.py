@@ -23,7 +23,7 @@ from types import FrameType
 from typing import Any
 
 from stand.core import Diagnostic
-from stand.drivers.bus import BusReader, describe_bus, open_bus, play
+from stand.drivers.bus import BusReader, describe_bus, open_bus, open_player_bus, play
 from stand.drivers.family import FrameBuilder
 from stand.drivers.runs.run_writer import RunWriter
 from stand.errors import BusError
@@ -115,10 +115,11 @@ class LiveSession:
             self.writer.discard()
             raise
         if self._scene_frames is not None:
-            tx = open_bus(self.bus_kwargs)
+            tx, stamps = open_player_bus(self.bus_kwargs)
             frames, stop = self._scene_frames, self._stop_player
             self._player = threading.Thread(
-                target=lambda: (play(tx, frames, stop=stop), tx.shutdown()), daemon=True
+                target=lambda: (play(tx, frames, stop=stop, wire_stamps=stamps), tx.shutdown()),
+                daemon=True,
             )
         quiet = () if self._setup is None else self._setup.clock_ids
         self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 import threading
 import time
 import uuid
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 from synth import sine_run
 
-from stand.drivers.bus import BusReader, open_bus, play
+from stand.drivers.bus import BusReader, open_bus, open_player_bus, play
 from stand.drivers.frames import FLAG_ERROR, Frames
 from stand.errors import BusError, BusTimeoutError
 
@@ -126,3 +127,45 @@ def test_open_bus_failures_are_bus_errors() -> None:
     # this machine has no CAN in its kernel: socketcan cannot open
     with pytest.raises(BusError, match="socketcan:can-does-not-exist: cannot open the bus"):
         open_bus({"interface": "socketcan", "channel": "can-does-not-exist"})
+
+
+class _Slow:
+    """A bus whose ``send`` takes 0.5 ms: a player that falls behind its frames, as on a
+    loaded machine (the frames are due every 0.25 ms)."""
+
+    def __init__(self, bus: Any):
+        self.bus = bus
+
+    def send(self, msg: can.Message) -> None:
+        time.sleep(0.0005)
+        self.bus.send(msg)
+
+
+@pytest.mark.realtime
+@pytest.mark.parametrize("interface", ["virtual", "stand_loopback"])
+def test_a_late_player_still_stamps_its_frames_with_their_wire_time(interface: str) -> None:
+    channel: object = f"test-{uuid.uuid4().hex}"
+    if interface == "stand_loopback":
+        with socket.socket() as s:  # a port nobody holds now
+            s.bind(("127.0.0.1", 0))
+            channel = s.getsockname()[1]
+    kwargs = {"interface": interface, "channel": channel}
+    f = sine_run(seconds=0.15)  # 4000 frames/s, 600 frames
+    tx, stamps = open_player_bus(kwargs)
+    rx = open_bus(kwargs)
+    try:
+        with BusReader(rx, silence_timeout_s=0.5) as reader:
+            start = time.time()
+            play(_Slow(tx), f, wire_stamps=stamps)
+            late_s = time.time() - start - float(f.t_s[-1] - f.t_s[0])
+            got, _ = _drain(reader)
+    finally:
+        tx.shutdown()
+        rx.shutdown()
+    assert stamps and late_s > 0.1  # 600 sends of 0.5 ms each: 0.3 s at least, for 0.15 s
+    assert len(got) == len(f)
+    # each stamp is the start's time.time() plus the frame's offset: exact but for the
+    # resolution of a double at 1.8e9 s (2.4e-7 s) and the microseconds between the two
+    # clocks' reads at the start
+    offset = got.t_s - f.t_s
+    assert float(np.ptp(offset)) < 1e-5, float(np.ptp(offset))
