@@ -107,6 +107,12 @@ class _System:
         self.N = np.array([1.0 - z / p.L, z / p.L])
         self.lever = np.array([[p.b + p.c + p.d, p.d], [p.a, p.a + p.b + p.c]]) / p.L
         self.zs = plane_positions(p)
+        # what accel takes per call, made once: (2, 1) columns and M - S2 N N^T's parts
+        LU = self.lever @ U_kg_m.real, self.lever @ U_kg_m.imag
+        self._HK = {1: (self.H, self.K), 2: (self.H[:, None], self.K[:, None])}
+        self._LU = {1: LU, 2: (LU[0][:, None], LU[1][:, None])}
+        NN = np.outer(self.N, self.N)
+        self._MN = (self.M[0, 0], NN[0, 0]), (self.M[0, 1], NN[0, 1]), (self.M[1, 1], NN[1, 1])
 
     def modes(self, held: NDArray[np.bool_] | None, slip: FloatArray | None
               ) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
@@ -116,37 +122,49 @@ class _System:
         h = np.full(n, self.locked) if held is None else held
         return h, np.zeros(n) if slip is None else slip
 
-    def accel(self, t: FloatArray, y: FloatArray, held: NDArray[np.bool_] | None = None,
+    def accel(self, t: FloatArray | float, y: FloatArray, held: NDArray[np.bool_] | None = None,
               slip: FloatArray | None = None) -> tuple[FloatArray, FloatArray]:  # fmt: skip
         """``x''`` (2, k) and ``phi''`` (n, k) at times ``t`` (k,) and states ``y`` (., k),
         the balls ``held`` on the race (all when locked) and the others rolling in the
-        directions ``slip``."""
+        directions ``slip``; or, for one instant, ``x''`` (2,) and ``phi''`` (n,) at a time
+        ``t`` (float) and a state ``y`` (.,): the integrator's call, on scalars, where
+        (2, 1) arrays cost it twice as much."""
         n, m, R, beta, g = self.b.n, self.b.mass_kg, self.b.radius_m, self.b.drag_n_s_m, \
             self.b.gravity_m_s2  # fmt: skip
         h, sl = self.modes(held, slip)
+        anyheld = bool(h.any())
         x, v = y[:2], y[2:4]
         phi, dphi = y[4 : 4 + n], y[4 + n :]
         theta, w, al = self.speed.theta(t), self.speed.omega(t), self.speed.alpha(t)
         psi = theta + phi
         s, c = np.sin(psi), np.cos(psi)
         dpsi = w + dphi
-        e = self.U[:, None] * np.exp(1j * theta)
-        rhs = self.lever @ (w**2 * e.real + al * e.imag) - self.H[:, None] * v - self.K[:, None] * x
+        # lever (w^2 Re e + alpha Im e), e = U exp(i theta), by U's real and imaginary parts
+        ct, st, w2 = np.cos(theta), np.sin(theta), w * w
+        (H, K), (LUr, LUi) = self._HK[y.ndim], self._LU[y.ndim]
+        rhs = LUr * (w2 * ct + al * st) + LUi * (al * ct - w2 * st) - H * v - K * x
         # psi'' less its share of x_P'': held, alpha; else drag, gravity, rolling resistance
-        free = -(beta / m) * dphi - (g / R) * c - self.b.rolling * dpsi**2 * sl[:, None]
-        r = np.where(h[:, None], al, free)
-        S2 = m * np.sum(np.where(h[:, None], 0.0, s * s), axis=0)
-        G = m * R * np.sum(r * s + dpsi**2 * c, axis=0)
-        rhs = rhs + self.N[:, None] * G
+        r = -(beta / m) * dphi - (g / R) * c
+        if y.ndim == 2:
+            h, sl = h[:, None], sl[:, None]
+        if self.b.rolling:
+            r = r - self.b.rolling * dpsi**2 * sl
+        ss = s * s
+        if anyheld:
+            r, ss = np.where(h, al, r), np.where(h, 0.0, ss)
+        S2 = m * ss.sum(axis=0)
+        G = m * R * (r * s + dpsi**2 * c).sum(axis=0)
+        N0, N1 = self.N
+        rhs0, rhs1 = rhs[0] + N0 * G, rhs[1] + N1 * G
         # (M - S2 N N^T) x'' = rhs, 2 x 2 for every instant
-        NN = np.outer(self.N, self.N)
-        a11 = self.M[0, 0] - S2 * NN[0, 0]
-        a12 = self.M[0, 1] - S2 * NN[0, 1]
-        a22 = self.M[1, 1] - S2 * NN[1, 1]
+        (m11, n11), (m12, n12), (m22, n22) = self._MN
+        a11, a12, a22 = m11 - S2 * n11, m12 - S2 * n12, m22 - S2 * n22
         det = a11 * a22 - a12 * a12
-        xdd = np.array([(a22 * rhs[0] - a12 * rhs[1]) / det, (a11 * rhs[1] - a12 * rhs[0]) / det])
-        aP = self.N @ xdd
-        phidd = np.where(h[:, None], 0.0, aP * s / R + r - al)
+        x0, x1 = (a22 * rhs0 - a12 * rhs1) / det, (a11 * rhs1 - a12 * rhs0) / det
+        xdd = np.array((x0, x1))
+        phidd = (N0 * x0 + N1 * x1) * s / R + r - al
+        if anyheld:
+            phidd = np.where(h, 0.0, phidd)
         return xdd, phidd
 
     def holding(self, t: FloatArray, y: FloatArray, held: NDArray[np.bool_]
@@ -283,7 +301,7 @@ def integrate_balls(
 
 MAX_EVALUATIONS = 2_000_000
 """No run of the balls takes more evaluations of their equations (the 60 s demo-balls
-takes about 105 000, 8 s): beyond, the integration is refused, never left running."""
+takes about 101 000, 7 s): beyond, the integration is refused, never left running."""
 EVALUATIONS_PER_STEP = 12
 """DOP853's evaluations per step."""
 
@@ -334,8 +352,8 @@ def _segments(
                                  f"evaluations by t = {t:.3g} s: too stiff")  # fmt: skip
             if progress is not None and count[0] % PROGRESS_EVERY == 0:
                 progress(t)
-            xdd, phidd = sys.accel(np.array([t]), z[:, None], h, sl)
-            return np.concatenate((z[2:4], xdd[:, 0], z[4 + n :], phidd[:, 0]))
+            xdd, phidd = sys.accel(t, z, h, sl)  # t a float, z 1-D: scalars are quicker
+            return np.concatenate((z[2:4], xdd, z[4 + n :], phidd))
 
         events = _events(sys, h, sl)
         sol = solve_ivp(rhs, (t0, t_end), y, t_eval=t_eval[done:], events=events or None,

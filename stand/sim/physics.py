@@ -66,9 +66,11 @@ class SceneSpeed:
     def omega(self, t: ArrayLike) -> FloatArray:
         t = np.asarray(t, dtype=float)
         tau = np.maximum(t - self._t1, 0.0)
-        steady = self.omega0_rad_s * (
-            1 + self.ripple * np.sin(2 * math.pi * self.ripple_hz * tau) + self.drift_per_s * tau
-        )
+        steady = self.omega0_rad_s * (1 + self.drift_per_s * tau)
+        if self.ripple:  # (a term left out where it is zero: the integrators call these often)
+            steady = steady + self.omega0_rad_s * self.ripple * np.sin(
+                2 * math.pi * self.ripple_hz * tau
+            )
         if self.ramp_s > 0:
             ramp = self.omega0_rad_s * np.clip(t, 0.0, None) / self.ramp_s
             steady = np.where(t < self.ramp_s, ramp, steady)
@@ -79,7 +81,9 @@ class SceneSpeed:
         t = np.asarray(t, dtype=float)
         tau = t - self._t1
         f = 2 * math.pi * self.ripple_hz
-        steady = self.omega0_rad_s * (self.ripple * f * np.cos(f * tau) + self.drift_per_s)
+        steady: FloatArray | float = self.omega0_rad_s * self.drift_per_s
+        if self.ripple:
+            steady = steady + self.omega0_rad_s * self.ripple * f * np.cos(f * tau)
         result: FloatArray = np.where(tau >= 0, steady, 0.0)
         if self.ramp_s > 0:
             result = np.where(t < self.ramp_s, self.omega0_rad_s / self.ramp_s, result)
@@ -91,9 +95,9 @@ class SceneSpeed:
         f = 2 * math.pi * self.ripple_hz
         tau = np.maximum(t - self._t1, 0.0)
         at_t1 = self.theta0_rad + w0 * (0.5 * self.ramp_s + self.hold_s)
-        steady = at_t1 + w0 * (
-            tau + self.ripple * (1 - np.cos(f * tau)) / f + 0.5 * self.drift_per_s * tau**2
-        )
+        steady = at_t1 + w0 * (tau + 0.5 * self.drift_per_s * tau * tau)
+        if self.ripple:
+            steady = steady + w0 * self.ripple * (1 - np.cos(f * tau)) / f
         hold = self.theta0_rad + w0 * (0.5 * self.ramp_s + (t - self.ramp_s))
         result: FloatArray = np.where(t < self._t1, hold, steady)
         if self.ramp_s > 0:

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from stand.core.autobalance import balanced, receptance, with_balls
 from stand.core.balls import G_M_S2, Balls, integrate_balls
@@ -182,3 +184,29 @@ def test_a_little_rolling_resistance_leaves_the_balls_short_of_their_place() -> 
     work, lost = simpson(run.drive_w, x=t), simpson(run.dissipated_w, x=t)
     gained = run.energy_j[-1] - run.energy_j[0]
     assert abs(work - lost - gained) < 2e-3 * max(abs(work), abs(lost), abs(gained))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    t=st.floats(0.0, 5.0),
+    y=st.lists(st.floats(-1.0, 1.0), min_size=8, max_size=8),
+    held=st.lists(st.booleans(), min_size=2, max_size=2),
+    slip=st.lists(st.sampled_from([-1.0, 0.0, 1.0]), min_size=2, max_size=2),
+)
+def test_one_instant_on_scalars_is_the_same_as_a_column_of_instants(
+    t: float, y: list[float], held: list[bool], slip: list[float]
+) -> None:
+    """The integrator's call (a float time, a 1-D state) and the vectorised one (times
+    (1,), states (8, 1)) are one formula: equal to the last bits (rtol 1e-12: the same
+    operations in the same order on scalars and on one-element arrays)."""
+    from stand.core.balls import _System
+
+    speed = SceneSpeed(_w(900), 5.0, ramp_s=1.0, ripple=0.01, ripple_hz=2.0, drift_per_s=0.001)
+    sys = _System(DEMO, dataclasses.replace(BALLS, rolling=0.01, gravity_m_s2=G_M_S2), U, speed)
+    z = np.array(y) * np.array([1e-4, 1e-4, 1e-2, 1e-2, 3.0, 3.0, 10.0, 10.0])
+    h, sl = np.array(held), np.array(slip)
+    one = sys.accel(t, z, h, sl)
+    col = sys.accel(np.array([t]), z[:, None], h, sl)
+    for a, b in zip(one, col, strict=True):
+        assert a.shape == b[:, 0].shape
+        np.testing.assert_allclose(a, b[:, 0], rtol=1e-12, atol=1e-300)
