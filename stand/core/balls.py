@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from stand.core.autobalance import plane_positions, with_balls
 from stand.core.model import FloatArray, StandParameters, mass_matrix, natural_frequencies
+from stand.core.stickslip import MAX_SWITCHES, events_of, modes_at, switch
 from stand.core.transient import PROGRESS_EVERY, Progress, Speed
 from stand.errors import ModelError
 
@@ -322,11 +323,6 @@ def _not_too_stiff(balls: Balls, t_end_s: float, max_step_s: float) -> None:
         )
 
 
-MAX_SWITCHES = 20_000
-"""More stick-slip switches than this in one run are refused: balls chattering on their
-race (a rolling resistance at the edge of what holds them) cost a step each."""
-
-
 def _segments(
     sys: _System, y: FloatArray, t_eval: FloatArray, options: dict[str, Any],
     progress: Progress | None,
@@ -336,7 +332,7 @@ def _segments(
     from scipy.integrate import solve_ivp
 
     n, t0, t_end, done, nfev = sys.b.n, 0.0, float(t_eval[-1]), 0, 0
-    held, slip = _modes_at(sys, 0.0, y, np.full(n, sys.locked), np.zeros(n))
+    held, slip = modes_at(sys, 0.0, y, np.full(n, sys.locked), np.zeros(n))
     ys, xdds, powers = [], [], []
     for _ in range(MAX_SWITCHES):
         h, sl = held.copy(), slip.copy()
@@ -355,7 +351,7 @@ def _segments(
             xdd, phidd = sys.accel(t, z, h, sl)  # t a float, z 1-D: scalars are quicker
             return np.concatenate((z[2:4], xdd, z[4 + n :], phidd))
 
-        events = _events(sys, h, sl)
+        events = events_of(sys, h, sl)
         sol = solve_ivp(rhs, (t0, t_end), y, t_eval=t_eval[done:], events=events or None,
                         **options)  # fmt: skip
         if not sol.success:
@@ -371,64 +367,6 @@ def _segments(
         k = min((j for j in range(len(events)) if len(sol.t_events[j])),
                 key=lambda j: sol.t_events[j][0])  # fmt: skip
         t0, y = float(sol.t_events[k][0]), sol.y_events[k][0].copy()
-        held, slip = _switch(sys, t0, y, h, sl, k)
+        held, slip = switch(sys, t0, y, h, sl, k)
     raise ModelError(f"the balls switch between sticking and rolling more than {MAX_SWITCHES} "
                      "times: a rolling resistance at the edge of what holds them")  # fmt: skip
-
-
-def _modes_at(sys: _System, t: float, y: FloatArray, held: NDArray[np.bool_],
-              slip: FloatArray) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
-    """At rest on the race, each ball is held if its rolling resistance holds it, else
-    rolls the way the rest of its forces push it (only with rolling resistance)."""
-    if sys.b.rolling <= 0 or sys.locked:
-        return held, slip
-    need, most = sys.holding(np.array([t]), y[:, None], np.ones(sys.b.n, bool))
-    at_rest = np.abs(y[4 + sys.b.n :]) == 0
-    keep = at_rest & (np.abs(need[:, 0]) <= most[:, 0])
-    rolls = np.where(at_rest, -np.sign(need[:, 0]), np.sign(y[4 + sys.b.n :]))
-    return keep, np.where(keep, 0.0, rolls)
-
-
-def _events(sys: _System, held: NDArray[np.bool_], slip: FloatArray) -> list[Any]:
-    """Per ball: a held one lets go when the force that holds it reaches its rolling
-    resistance; a rolling one stops when its speed on the race comes to 0."""
-    if sys.b.rolling <= 0 or sys.locked:
-        return []
-    n, out = sys.b.n, []
-    for j in range(n):
-        if held[j]:
-
-            def let_go(t: float, z: FloatArray, j: int = j) -> float:
-                need, most = sys.holding(np.array([t]), z[:, None], held)
-                return float(most[j, 0] - abs(need[j, 0]))
-
-            let_go.terminal, let_go.direction = True, -1  # type: ignore[attr-defined]
-            out.append(let_go)
-        else:
-
-            def stop(t: float, z: FloatArray, j: int = j) -> float:
-                return float(z[4 + n + j])
-
-            stop.terminal, stop.direction = True, -slip[j]  # type: ignore[attr-defined]
-            out.append(stop)
-    return out
-
-
-def _switch(sys: _System, t: float, y: FloatArray, held: NDArray[np.bool_], slip: FloatArray,
-            k: int) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
-    """The modes after ball ``k``'s event: a held ball rolls off, a stopped one is held if
-    its resistance holds it, else rolls on the way its forces push it."""
-    n = sys.b.n
-    held, slip = held.copy(), slip.copy()
-    if held[k]:
-        need, _ = sys.holding(np.array([t]), y[:, None], held)
-        held[k], slip[k] = False, -np.sign(need[k, 0]) or 1.0
-        return held, slip
-    y[4 + n + k] = 0.0
-    trial = held.copy()
-    trial[k] = True
-    need, most = sys.holding(np.array([t]), y[:, None], trial)
-    if abs(need[k, 0]) <= most[k, 0]:
-        return trial, np.where(trial, 0.0, slip)
-    slip[k] = -np.sign(need[k, 0]) or 1.0
-    return held, slip
