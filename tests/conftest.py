@@ -28,6 +28,20 @@ def pytest_configure(config: pytest.Config) -> None:
     if hasattr(config, "workerinput"):
         return
     os.environ[NODE_CLIENTS_SAID] = _install_node_clients() or ""
+    _compile_sources()
+
+
+def _compile_sources() -> None:
+    """Byte-compile the project's own modules once, before the workers start.  Where the
+    environment forbids Python to write them at import (``PYTHONDONTWRITEBYTECODE``, as on
+    the machines CI runs on), every process the tests start (the workers, CLI
+    subprocesses, station servers, the time-limited child reads of unsealed run files)
+    compiled the same modules again: 0.5 to 0.7 s a process (``import stand.station``:
+    1.4 s against 2.1 s)."""
+    import compileall
+
+    for folder in ("stand", "drivers", "calib"):
+        compileall.compile_dir(str(JS.parents[1] / folder), quiet=1, workers=0)
 
 
 def _install_node_clients() -> str | None:

@@ -169,7 +169,7 @@ def test_canopen_modules_in_another_process_answer_the_set_up_and_the_sync(
         rec = subprocess.run(
             [sys.executable, "-m", "stand.cli", "record", "--config",
              str(ROOT / "examples" / "canopen-stand.toml"), *bus, "--out", str(out),
-             "--seconds", "20", "--quiet", "--timeout", "30"],
+             "--seconds", "20", "--quiet", "--timeout", "5", "--wait", "30"],
             capture_output=True, text=True, timeout=60, check=False,
         )  # fmt: skip
         assert rec.returncode == 0, rec.stderr
