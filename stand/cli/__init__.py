@@ -55,6 +55,8 @@ SUBCOMMANDS: dict[str, str] = {
     "residual": "a rotor's residual-unbalance check (API): a trial mass at 6 or 12 positions, "
     "the circle through the readings",
     "forward": "support accelerations for given unbalances, and the natural frequencies",
+    "runup": "a recorded run-up read as the stand's response: resonances, damping, "
+    "separation margins, Bode and polar plots",
     "archive": "the archive of runs: import runs recorded before, verify the run files",
     "history": "find archived runs by serial, rotor type, order, operator, date, verdict",
     "export": "export archived results for the plant's quality system (Q-DAS .dfq)",

@@ -1,0 +1,80 @@
+"""A run-up's pictures: the Bode plot (each support's 1x amplitude and phase against speed,
+the resonances found, the model's modes, the balancing speed) and the polar plot (each
+support's response shape ``-A / w^4`` in the complex plane, the speeds marked)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from stand.core.resonance import response_shape
+from stand.files import output
+
+RPM = 30 / math.pi
+"""rad/s to rpm."""
+
+
+def _bode(plt: Any, a: Any) -> Any:
+    fig, (amp, ph) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    for c, colour in zip(a.curves, ("tab:blue", "tab:orange"), strict=True):
+        rpm = c.omega_rad_s * RPM
+        amp.semilogy(rpm, np.abs(c.accel_m_s2), color=colour, label=f"support {c.support}")
+        ph.plot(rpm, np.degrees(np.unwrap(np.angle(c.accel_m_s2))), color=colour)
+        for r in c.resonances:
+            amp.axvline(r.omega_rad_s * RPM, color=colour, ls=":", lw=1)
+    for w in a.model_omega_rad_s:
+        amp.axvline(w * RPM, color="0.5", ls="--", lw=1)
+    amp.axvline(a.balancing_omega_rad_s * RPM, color="tab:green", lw=1.5,
+                label=f"balancing speed {a.balancing_omega_rad_s * RPM:.0f} rpm")  # fmt: skip
+    amp.plot([], [], color="0.5", ls="--", label="the model's modes")
+    amp.set_ylabel("1x acceleration [m/s^2]")
+    amp.set_title(f"Bode plot of the {a.direction} ({a.revs_per_block} revolutions a point)")
+    amp.legend(fontsize=8)
+    ph.set_ylabel("1x phase [deg]")
+    ph.set_xlabel("speed [rpm]")
+    fig.tight_layout()
+    return fig
+
+
+def _polar(plt: Any, a: Any) -> Any:
+    fig, axes = plt.subplots(1, 2, figsize=(10, 5))
+    for ax, c in zip(axes, a.curves, strict=True):
+        G = response_shape(c.omega_rad_s, c.accel_m_s2)
+        scale = float(np.abs(G).max()) or 1.0
+        z = G / scale
+        ax.plot(z.real, z.imag, color="0.3", lw=1)
+        for r in c.resonances:
+            k = int(np.argmin(np.abs(c.omega_rad_s - r.omega_rad_s)))
+            ax.scatter([z[k].real], [z[k].imag], color="tab:red", zorder=3,
+                       label=f"{r.omega_rad_s * RPM:.0f} rpm, zeta {r.zeta:.3f}")  # fmt: skip
+        ax.set_aspect("equal")
+        ax.set_title(f"support {c.support}: -A / w^4 (scaled)")
+        ax.set_xlabel("Re")
+        ax.set_ylabel("Im")
+        if c.resonances:
+            ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def runup_plots(analysis: Any, folder: str, force: bool) -> list[str]:
+    """Write ``bode.png`` and ``polar.png`` into ``folder`` (made if missing; each file
+    safely: a temporary name, then the file; never over one without ``force``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    written = []
+    for name, draw in (("bode.png", _bode), ("polar.png", _polar)):
+        fig = draw(plt, analysis)
+        path = str(Path(folder) / name)
+        with output(path, force=force) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+        plt.close(fig)
+        written.append(path)
+    return written

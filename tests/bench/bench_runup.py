@@ -1,0 +1,82 @@
+"""What a run-up tells and what reading it costs (not a test: run it by hand).
+
+    .venv/bin/python tests/bench/bench_runup.py
+
+1. The shipped ``demo-runup`` (the demo stand, supports damped 200 N s/m) run up to 600
+   rpm at 5, 20 and 60 rpm/s: each mode ``stand runup`` fits against the model's
+   eigenvalue, its error, the sweep bias bound it states, and the damping.
+2. Reading a 60 s run-up at 4 kHz (two nodes): the order tracking and the fit, best of 3
+   (the run already decoded), and the peak memory of ``stand runup`` against the run
+   file's size.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from stand.field.runup import analyse_runup
+from stand.sim import shipped_scenes
+from stand.solve.recordings import read_run
+
+RPM = 30 / math.pi
+
+
+def _scene(folder: Path, rate_rpm_s: float, top_rpm: float = 600.0) -> Path:
+    ramp = top_rpm / rate_rpm_s
+    text = Path(str(shipped_scenes()["demo-runup"])).read_text()
+    text = text.replace("ramp_s = 30.0", f"ramp_s = {ramp}").replace(
+        "seconds = 31.0", f"seconds = {ramp + 1.0}").replace("rpm = 600.0", f"rpm = {top_rpm}")
+    path = folder / f"r{rate_rpm_s:g}.toml"
+    path.write_text(text)
+    return path
+
+
+def _run(args: list[str]) -> str:
+    out = subprocess.run([sys.executable, "-m", "stand.cli", *args], capture_output=True,
+                         text=True, check=True)  # fmt: skip
+    return out.stdout
+
+
+def main() -> None:
+    with tempfile.TemporaryDirectory() as d:
+        folder = Path(d)
+        print("| rpm/s | mode | found [rpm] | model [rpm] | error | bound stated | zeta found "
+              "| zeta model | zeta error |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for rate in (5.0, 20.0, 60.0):
+            run = folder / f"r{rate:g}.h5"
+            _run(["simulate", str(_scene(folder, rate)), "--out", str(run)])
+            out = json.loads(_run(["runup", str(run), "--json"]))
+            for k, m in enumerate(out["modes"], 1):
+                err = m["rpm"] / m["model_rpm"] - 1
+                zerr = m["zeta"] / m["model_zeta"] - 1
+                print(f"| {rate:g} | {k} | {m['rpm']:.1f} | {m['model_rpm']:.1f} | {err:+.2%} "
+                      f"| {m['sweep_bias_bound_pct']:.2f} % | {m['zeta']:.4f} "
+                      f"| {m['model_zeta']:.4f} | {zerr:+.1%} |")  # fmt: skip
+        run = folder / "r60s.h5"
+        _run(["simulate", str(_scene(folder, 600 / 59.0)), "--out", str(run)])
+        got = read_run(str(run), None)
+        best = math.inf
+        for _ in range(3):
+            t0 = time.perf_counter()
+            analyse_runup(got.streams, got.cfg, got.params)
+            best = min(best, time.perf_counter() - t0)
+        size = run.stat().st_size
+        probe = ("import resource, sys; from stand.cli import main; main(['runup', sys.argv[1]]);"
+                 " print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)")
+        child = subprocess.run([sys.executable, "-c", probe, str(run)], capture_output=True,
+                               text=True, check=True)  # fmt: skip
+        peak_kib = int(child.stderr.strip().splitlines()[-1])
+        print(f"\n60 s run-up at 4 kHz ({size / 2**20:.1f} MiB run file): order tracking and "
+              f"fit {best:.3f} s (best of 3); stand runup's peak memory {peak_kib / 1024:.0f} "
+              f"MiB ({peak_kib * 1024 / size:.1f} x the file)")
+
+
+if __name__ == "__main__":
+    main()
