@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from stand.core.resonance import response_shape
+from stand.field.runup import EDGE
 from stand.files import output
 
 RPM = 30 / math.pi
@@ -23,15 +24,17 @@ def _bode(plt: Any, a: Any) -> Any:
         rpm = c.omega_rad_s * RPM
         amp.semilogy(rpm, np.abs(c.accel_m_s2), color=colour, label=f"support {c.support}")
         ph.plot(rpm, np.degrees(np.unwrap(np.angle(c.accel_m_s2))), color=colour)
-        for r in c.resonances:
-            amp.axvline(r.omega_rad_s * RPM, color=colour, ls=":", lw=1)
     for w in a.model_omega_rad_s:
         amp.axvline(w * RPM, color="0.5", ls="--", lw=1)
+    for w in a.modes.omega_rad_s if a.modes else ():
+        amp.axvline(w * RPM, color="black", ls=":", lw=1.2)
     amp.axvline(a.balancing_omega_rad_s * RPM, color="tab:green", lw=1.5,
                 label=f"balancing speed {a.balancing_omega_rad_s * RPM:.0f} rpm")  # fmt: skip
     amp.plot([], [], color="0.5", ls="--", label="the model's modes")
+    amp.plot([], [], color="black", ls=":", label="the modes fitted")
     amp.set_ylabel("1x acceleration [m/s^2]")
-    amp.set_title(f"Bode plot of the {a.direction} ({a.revs_per_block} revolutions a point)")
+    amp.set_title(f"Bode plot of the {a.direction} (a point every {a.revs_per_block} "
+                  "revolution(s))")  # fmt: skip
     amp.legend(fontsize=8)
     ph.set_ylabel("1x phase [deg]")
     ph.set_xlabel("speed [rpm]")
@@ -41,21 +44,22 @@ def _bode(plt: Any, a: Any) -> Any:
 
 def _polar(plt: Any, a: Any) -> Any:
     fig, axes = plt.subplots(1, 2, figsize=(10, 5))
+    hi = a.omega_range_rad_s[1]
+    fitted = a.modes.omega_rad_s if a.modes else ()
     for ax, c in zip(axes, a.curves, strict=True):
-        G = response_shape(c.omega_rad_s, c.accel_m_s2)
-        scale = float(np.abs(G).max()) or 1.0
-        z = G / scale
-        ax.plot(z.real, z.imag, color="0.3", lw=1)
-        for r in c.resonances:
-            k = int(np.argmin(np.abs(c.omega_rad_s - r.omega_rad_s)))
-            ax.scatter([z[k].real], [z[k].imag], color="tab:red", zorder=3,
-                       label=f"{r.omega_rad_s * RPM:.0f} rpm, zeta {r.zeta:.3f}")  # fmt: skip
-        ax.set_aspect("equal")
-        ax.set_title(f"support {c.support}: -A / w^4 (scaled)")
+        band = (c.omega_rad_s >= EDGE * hi) & (c.omega_rad_s <= 0.97 * hi)
+        w, G = c.omega_rad_s[band], response_shape(c.omega_rad_s[band], c.accel_m_s2[band])
+        z = G / (float(np.abs(G).max()) or 1.0)
+        ax.plot(z.real, z.imag, color="0.3", lw=1, marker=".", ms=3)
+        for wn in fitted:
+            k = int(np.argmin(np.abs(w - wn)))
+            ax.scatter([z[k].real], [z[k].imag], color="tab:red", zorder=3)
+            ax.annotate(f"{wn * RPM:.0f} rpm", (z[k].real, z[k].imag), fontsize=8,
+                        xytext=(4, 4), textcoords="offset points")  # fmt: skip
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_title(f"support {c.support}: -A / w^4 from {EDGE * hi * RPM:.0f} rpm (scaled)")
         ax.set_xlabel("Re")
         ax.set_ylabel("Im")
-        if c.resonances:
-            ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
 
