@@ -251,3 +251,66 @@ def modal_fit(omega_rad_s: FloatArray, shapes: list[tuple[ComplexArray, FloatArr
     dof = max(2 * len(w) * len(shapes) - (2 * n_modes + 4 * n_modes * len(shapes)), 1)
     return ModalFit(tuple(float(v) for v in wn[order]), tuple(float(v) for v in zeta[order]),
                     math.sqrt(float(np.sum(fit.fun**2)) / dof))  # fmt: skip
+
+
+def _swept_states(poles: ComplexArray, w: FloatArray, dt: FloatArray, u: ComplexArray
+                  ) -> ComplexArray:  # fmt: skip
+    """Each block's mean of the phasors ``p_j`` of ``p' = (lambda_j - i w(t)) p + u(t)``
+    (``w``, ``u`` constant over a block of length ``dt``), from the steady state at the
+    first block: exact for piecewise-constant speed, (N, poles)."""
+    mu = poles[None, :] - 1j * w[:, None]  # (N, J)
+    e = np.exp(mu * dt[:, None])
+    f = (e - 1.0) / mu  # integral of exp(mu s) over the block
+    g = (f - dt[:, None]) / mu  # integral of (exp(mu s) - 1) / mu
+    out = np.empty((len(w), len(poles)), dtype=complex)
+    p = -u[0] / mu[0]  # steady at the first block
+    for k in range(len(w)):
+        out[k] = (p * f[k] + u[k] * g[k]) / dt[k]
+        p = e[k] * p + f[k] * u[k]
+    return out
+
+
+def swept_fit(omega_rad_s: FloatArray, t_s: FloatArray, accels: list[tuple[ComplexArray,
+              FloatArray]], keep: NDArray[np.bool_], start: ModalFit) -> ModalFit:  # fmt: skip
+    """The modes fitted to the supports' 1x accelerations ``A`` (standard errors ``se``)
+    as a sweep gives them, not as steady states would.
+
+    Each block (its mean speed ``w``, its start ``t_s``, of one revolution) is a stretch
+    of constant speed; the unbalance's force is ``U (w^2 - i alpha) e^{i theta}``
+    (``alpha`` the sweep).  A mode's phasor ``p = q e^{-i theta}`` then obeys ``p' =
+    (lambda - i w) p + (w^2 - i alpha)``, integrated exactly block by block along the
+    measured speed; a support's acceleration is ``sum_j c_j p_j + d (w^2 - i alpha)``
+    (the state space's output with its direct term), its ``c_j, d`` complex and solved
+    linearly for each trial of the poles.  The blocks ``keep`` are fitted (the others only
+    carry the state); started from ``start`` (:func:`modal_fit`)."""
+    from scipy.optimize import least_squares
+
+    w = np.asarray(omega_rad_s, dtype=float)
+    dt = np.diff(np.append(t_s, t_s[-1] + 2 * math.pi / w[-1]))
+    alpha = np.gradient(w, t_s)
+    u = w * w - 1j * alpha
+    n = len(start.omega_rad_s)
+
+    def misfit(x: FloatArray) -> FloatArray:
+        p = _poles(x)
+        basis = np.hstack((_swept_states(np.concatenate((p, p.conj())), w, dt, u),
+                           u[:, None]))[keep]  # fmt: skip
+        out: list[FloatArray] = []
+        for A, se in accels:
+            Bw, Aw = basis / se[keep, None], A[keep] / se[keep]
+            c, *_ = np.linalg.lstsq(Bw, Aw, rcond=None)
+            r = Bw @ c - Aw
+            out.extend((r.real, r.imag))
+        return np.concatenate(out)
+
+    x0 = np.array([*start.omega_rad_s, *np.log(np.maximum(start.zeta, 1e-4))])
+    lo = np.array([w.min()] * n + [math.log(1e-4)] * n)
+    hi = np.array([w.max() * 1.5] * n + [math.log(0.9)] * n)
+    fit = least_squares(misfit, np.clip(x0, lo, hi), bounds=(lo, hi), x_scale="jac")
+    poles = _poles(fit.x)
+    wn, zeta = np.abs(poles), -poles.real / np.abs(poles)
+    order = np.argsort(wn)
+    dof = max(2 * int(np.count_nonzero(keep)) * len(accels) - (2 * n + 2 * (2 * n + 1) *
+                                                                len(accels)), 1)  # fmt: skip
+    return ModalFit(tuple(float(v) for v in wn[order]), tuple(float(v) for v in zeta[order]),
+                    math.sqrt(float(np.sum(fit.fun**2)) / dof))  # fmt: skip

@@ -1,11 +1,13 @@
 """A recorded run-up or coast-down read as the stand's frequency response: each support's
 1x order-tracked block by block (:func:`stand.measuring.track.track_1x`), the resonances
-its response shape shows (:mod:`stand.core.resonance`), set against the stand model's own
-modes, and the balancing speed's separation margin from each.
+its response shape shows (:mod:`stand.core.resonance`): the modes fitted as the sweep
+gives them (a run-up read as steady states reads each mode high by about its decay time
+times the sweep), set against the stand model's own, and the balancing speed's separation
+margin from each.
 
 What the data cannot carry is said, never passed on: a run too short or of one speed, a
 speed that goes backwards, a reference mark lost mid-sweep (the revolutions without an
-edge are left out of the curve), a sweep too fast for a resonance's bandwidth.
+edge are left out of the fit), a fit that leaves more than the points' noise.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from stand.core.resonance import (
     resonances,
     response_shape,
     separation_margin_required,
+    swept_fit,
 )
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.errors import MeasurementError
@@ -36,14 +39,6 @@ REVS_PER_BLOCK = 1
 EDGE = 0.3
 """The modal fit reads the curve above this fraction of its top speed (below, the 1x is
 a few counts: ``A ~ w^4`` far below the resonances) and below 97 % of it (the hold)."""
-SWEEP_BIAS = 2.5
-"""A run-up reads a mode's frequency high by at most ``SWEEP_BIAS alpha / (zeta w_n^2)``
-of it (``alpha`` the sweep [rad/s^2]): the response lags the sweep by about the mode's
-decay time.  Measured on the demo stand with damping (``tests/field/test_runup.py``, and
-``docs/runup.md``'s table: 5, 20 and 60 rpm/s, both modes, 0.42 to 8 %; the bias was up
-to 2.1 times ``alpha / (zeta w_n^2)``)."""
-MAX_BIAS = 0.01
-"""A mode whose sweep bias bound exceeds this fraction is said: run up slower."""
 MIN_BLOCKS = 20
 """Fewer blocks than this in a support's curve: too short a run-up to read."""
 MIN_SPAN = 0.3
@@ -51,6 +46,9 @@ MIN_SPAN = 0.3
 BACKWARDS = 0.02
 """A block slower than the fastest before it by this fraction of the span (a run-up;
 faster than the slowest before it, a coast-down): the speed went backwards."""
+MAX_CHI = 3.0
+"""A fit that leaves more than this many times the points' own noise is said: the stand
+did not behave as a linear one with these modes (a loose part, a rub, a wrong count)."""
 
 
 @dataclass(frozen=True)
@@ -88,7 +86,7 @@ class RunupAnalysis:
     revs_per_block: int
     curves: tuple[SupportCurve, ...]
     modes: ModalFit | None
-    sweep_bias: tuple[float, ...]
+    steady: ModalFit | None
     model_omega_rad_s: tuple[float, ...]
     model_zeta: tuple[float, ...]
     balancing_omega_rad_s: float
@@ -163,19 +161,32 @@ def _sweep(w_blocks: np.ndarray) -> float:
     return float(np.polyfit(t[band], w_blocks[band], 1)[0])
 
 
-def _fit(curves: tuple[SupportCurve, ...], n_modes: int) -> ModalFit | None:
-    """The modes fitted to both supports' shapes at once, on support 1's speeds between
-    :data:`EDGE` and 97 % of the top (support 2's curve interpolated to them)."""
-    c1 = curves[0]
-    top = float(c1.omega_rad_s[-1])
-    keep = (c1.omega_rad_s >= EDGE * top) & (c1.omega_rad_s <= 0.97 * top)
-    w = c1.omega_rad_s[keep]
-    shapes = []
+def _fits(curves: tuple[SupportCurve, ...], tracked: tuple[np.ndarray, ...], n_modes: int
+          ) -> tuple[ModalFit | None, ModalFit | None]:  # fmt: skip
+    """The modes as steady states would give them (:func:`modal_fit` on the response
+    shapes), then as the sweep gives them (:func:`swept_fit`, started from those): on
+    support 1's blocks in time order ``tracked``, between :data:`EDGE` and 97 % of the top,
+    the blocks a lost mark left out kept out; support 2 interpolated to its speeds."""
+    w, A1, se1 = tracked
+    top = float(w.max())
+    keep = (w >= EDGE * top) & (w <= 0.97 * top) & np.isin(w, curves[0].omega_rad_s)
+    shapes, accels = [], []
     for c in curves:
-        G, se = response_shape(c.omega_rad_s, c.accel_m_s2), c.se_m_s2 / c.omega_rad_s**4
-        Gw = np.interp(w, c.omega_rad_s, G.real) + 1j * np.interp(w, c.omega_rad_s, G.imag)
-        shapes.append((Gw, np.maximum(np.interp(w, c.omega_rad_s, se), 1e-300)))
-    return modal_fit(w, shapes, n_modes)
+        if c.support == 1:
+            A, se = A1, se1
+        else:
+            A = np.interp(w, c.omega_rad_s, c.accel_m_s2.real) + 1j * np.interp(
+                w, c.omega_rad_s, c.accel_m_s2.imag)  # fmt: skip
+            se = np.interp(w, c.omega_rad_s, c.se_m_s2)
+        se = np.maximum(se, 1e-12 * float(np.abs(A).max()))
+        accels.append((A, se))
+        shapes.append((response_shape(w[keep], A[keep]), se[keep] / w[keep] ** 4))
+    order = np.argsort(w[keep], kind="stable")
+    steady = modal_fit(w[keep][order], [(G[order], s[order]) for G, s in shapes], n_modes)
+    if steady is None:
+        return None, None
+    t = np.concatenate(([0.0], np.cumsum(2 * math.pi * REVS_PER_BLOCK / w)[:-1]))
+    return swept_fit(w, t, accels, keep, steady), steady
 
 
 def analyse_runup(
@@ -193,7 +204,8 @@ def analyse_runup(
         raise MeasurementError(f"a run-up needs both supports' nodes, got {sorted(streams.nodes)}")
     gamma = math.radians(cfg.stand.reference_angle_deg)
     warn: list[str] = []
-    timed = track_1x(streams.nodes[1], gamma, REVS_PER_BLOCK)[0]
+    tracked = track_1x(streams.nodes[1], gamma, REVS_PER_BLOCK)
+    timed = tracked[0]
     direction = _direction(timed)
     curves = tuple(_curve(streams.nodes[i], i, gamma, warn) for i in (1, 2))
     sweep = _sweep(timed)
@@ -201,28 +213,24 @@ def analyse_runup(
     lo = max(float(c.omega_rad_s[0]) for c in curves)
     hi = min(float(c.omega_rad_s[-1]) for c in curves)
     w_bal = (balancing_rpm or hi * 30 / math.pi) * math.pi / 30
-    fit = _fit(curves, max(len(wn_model), 1))
-    bias: tuple[float, ...] = ()
+    fit, steady = _fits(curves, tracked, max(len(wn_model), 1))
     margins = []
     if fit is None:
         warn.append("too few points for the modal fit: the resonances are the peaks' only")
     else:
-        bias = tuple(SWEEP_BIAS * abs(sweep) / (z * w * w)
-                     for w, z in zip(fit.omega_rad_s, fit.zeta, strict=True))  # fmt: skip
-        for w, z, b in zip(fit.omega_rad_s, fit.zeta, bias, strict=True):
-            margins.append(_margin(w, z, w_bal, warn))
-            if b > MAX_BIAS:
-                slower = MAX_BIAS / b * abs(sweep) * 30 / math.pi
-                warn.append(f"the sweep ({abs(sweep) * 30 / math.pi:.1f} rpm/s) may read the "
-                            f"mode at {w * 30 / math.pi:.0f} rpm up to {b:.1%} high: run up "
-                            f"at {slower:.1f} rpm/s at most for 1 %")  # fmt: skip
+        margins = [_margin(w, z, w_bal, warn) for w, z in zip(fit.omega_rad_s, fit.zeta,
+                                                              strict=True)]  # fmt: skip
+        if fit.chi > MAX_CHI:
+            warn.append(f"the modes fitted leave {fit.chi:.1f} times the points' noise: the "
+                        "stand did not respond as a linear one with these modes (a loose "
+                        "part, a rub?): read them with care")  # fmt: skip
     if len(wn_model) and w_bal < float(wn_model.max()):
         warn.append(f"the balancing speed {w_bal * 30 / math.pi:.0f} rpm is below the supports' "
                     f"resonance at {float(wn_model.max()) * 30 / math.pi:.0f} rpm (the model's):"
                     " a soft-bearing stand measures above its supports' resonances")  # fmt: skip
     return RunupAnalysis(
         direction=direction, sweep_rad_s2=sweep, omega_range_rad_s=(lo, hi),
-        revs_per_block=REVS_PER_BLOCK, curves=curves, modes=fit, sweep_bias=bias,
+        revs_per_block=REVS_PER_BLOCK, curves=curves, modes=fit, steady=steady,
         model_omega_rad_s=tuple(float(x) for x in wn_model),
         model_zeta=tuple(float(x) for x in zeta_model), balancing_omega_rad_s=w_bal,
         margins=tuple(margins), warnings=tuple(warn),

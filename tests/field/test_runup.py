@@ -39,25 +39,24 @@ def _json(args: list[str], capsys: pytest.CaptureFixture[str]) -> dict:
     return out
 
 
-def test_both_modes_within_the_sweep_bias_it_states_and_their_damping_within_10_pct(
+def test_both_modes_within_1_pct_of_the_models_and_their_damping_within_10_pct(
     runup: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """At 20 rpm/s each mode reads high by less than the bound it states (the model's
-    frequency between the found one less its bound and the found one plus 0.2 %: the fit's
-    own scatter), its damping within 10 % of the model's; the balancing speed 600 rpm
-    clears both by API 684's margin; the plots are PNGs, not written over without
-    --force."""
+    """At 20 rpm/s the modes fitted as the sweep gives them are the model's eigenvalues
+    within 1 % (0.07 % measured) and their damping within 10 % (0.7 %); read as steady
+    states the same points put each mode high (3.2 % and 1.6 %: the sweep's lag), which
+    the answer gives beside, never as, the mode; the balancing speed 600 rpm clears both by
+    API 684's margin; the plots are PNGs, not written over without --force."""
     plots = tmp_path / "plots"
     out = _json(["runup", str(runup), "--plots", str(plots)], capsys)
     assert out["direction"] == "run-up" and abs(out["sweep_rpm_per_s"] - 20) < 1, out
-    assert len(out["modes"]) == 2, out
+    assert len(out["modes"]) == 2 and not out["warnings"], out
     for m in out["modes"]:
-        bound = m["sweep_bias_bound_pct"] / 100
-        assert m["rpm"] / (1 + bound) <= m["model_rpm"] <= m["rpm"] * 1.002, m
+        assert abs(m["rpm"] / m["model_rpm"] - 1) <= 0.01, m
         assert abs(m["zeta"] / m["model_zeta"] - 1) <= 0.10, m
+        assert m["steady_reading_rpm"] > m["model_rpm"] * 1.01, m  # the lag, 1.6 % at least
         assert m["below_balancing_speed"] and m["margin_pct"] > m["required_pct"], m
-    said = " ".join(out["warnings"])
-    assert "run up at" in said and "for 1 %" in said  # 20 rpm/s is too fast for 1 %: said
+    assert out["fit_residual"] < 3, out  # the points' own noise, about
     for name in ("bode.png", "polar.png"):
         assert (plots / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     capsys.readouterr()
