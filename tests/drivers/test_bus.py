@@ -130,14 +130,14 @@ def test_open_bus_failures_are_bus_errors() -> None:
 
 
 class _Slow:
-    """A bus whose ``send`` takes 0.5 ms: a player that falls behind its frames, as on a
-    loaded machine (the frames are due every 0.25 ms)."""
+    """A bus whose ``send`` takes ``pause_s``: a player that falls behind its frames, as on
+    a loaded machine."""
 
-    def __init__(self, bus: Any):
-        self.bus = bus
+    def __init__(self, bus: Any, pause_s: float):
+        self.bus, self.pause_s = bus, pause_s
 
     def send(self, msg: can.Message) -> None:
-        time.sleep(0.0005)
+        time.sleep(self.pause_s)
         self.bus.send(msg)
 
 
@@ -150,19 +150,22 @@ def test_a_late_player_still_stamps_its_frames_with_their_wire_time(interface: s
             s.bind(("127.0.0.1", 0))
             channel = s.getsockname()[1]
     kwargs = {"interface": interface, "channel": channel}
-    f = sine_run(seconds=0.15)  # 4000 frames/s, 600 frames
+    f = sine_run(seconds=0.15)
+    span = float(f.t_s[-1] - f.t_s[0])
+    pause = 2 * span / (len(f) - 1)  # every send takes twice the frames' mean spacing
     tx, stamps = open_player_bus(kwargs)
     rx = open_bus(kwargs)
     try:
         with BusReader(rx, silence_timeout_s=0.5) as reader:
             start = time.time()
-            play(_Slow(tx), f, wire_stamps=stamps)
-            late_s = time.time() - start - float(f.t_s[-1] - f.t_s[0])
+            play(_Slow(tx, pause), f, wire_stamps=stamps)
+            took_s = time.time() - start
             got, _ = _drain(reader)
     finally:
         tx.shutdown()
         rx.shutdown()
-    assert stamps and late_s > 0.1  # 600 sends of 0.5 ms each: 0.3 s at least, for 0.15 s
+    # a sleep never ends early: the sends alone took twice the frames' span (late by one)
+    assert stamps and took_s >= pause * len(f) > 2 * span
     assert len(got) == len(f)
     # each stamp is the start's time.time() plus the frame's offset: exact but for the
     # resolution of a double at 1.8e9 s (2.4e-7 s) and the microseconds between the two
