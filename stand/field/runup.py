@@ -161,28 +161,36 @@ def _sweep(w_blocks: np.ndarray) -> float:
     return float(np.polyfit(t[band], w_blocks[band], 1)[0])
 
 
+def _covered(w: np.ndarray, c: SupportCurve) -> np.ndarray:
+    """Which speeds ``w`` the curve ``c`` has a point within two of its spacings of: none
+    about the revolutions a lost mark left out (interpolating across them would invent)."""
+    k = np.clip(np.searchsorted(c.omega_rad_s, w), 1, len(c.omega_rad_s) - 1)
+    near = np.minimum(np.abs(w - c.omega_rad_s[k - 1]), np.abs(w - c.omega_rad_s[k]))
+    covered: np.ndarray = near <= 2 * float(np.median(np.diff(c.omega_rad_s)))
+    return covered
+
+
 def _fits(curves: tuple[SupportCurve, ...], tracked: tuple[np.ndarray, ...], n_modes: int
           ) -> tuple[ModalFit | None, ModalFit | None]:  # fmt: skip
     """The modes as steady states would give them (:func:`modal_fit` on the response
     shapes), then as the sweep gives them (:func:`swept_fit`, started from those): on
     support 1's blocks in time order ``tracked``, between :data:`EDGE` and 97 % of the top,
-    the blocks a lost mark left out kept out; support 2 interpolated to its speeds."""
+    the revolutions a lost mark left out of either support kept out; support 2
+    interpolated to support 1's speeds."""
     w, A1, se1 = tracked
     top = float(w.max())
     keep = (w >= EDGE * top) & (w <= 0.97 * top) & np.isin(w, curves[0].omega_rad_s)
-    shapes, accels = [], []
-    for c in curves:
-        if c.support == 1:
-            A, se = A1, se1
-        else:
-            A = np.interp(w, c.omega_rad_s, c.accel_m_s2.real) + 1j * np.interp(
-                w, c.omega_rad_s, c.accel_m_s2.imag)  # fmt: skip
-            se = np.interp(w, c.omega_rad_s, c.se_m_s2)
-        se = np.maximum(se, 1e-12 * float(np.abs(A).max()))
-        accels.append((A, se))
-        shapes.append((response_shape(w[keep], A[keep]), se[keep] / w[keep] ** 4))
+    accels = [(A1, se1)]
+    for c in curves[1:]:
+        keep &= _covered(w, c)
+        accels.append((np.interp(w, c.omega_rad_s, c.accel_m_s2.real)
+                       + 1j * np.interp(w, c.omega_rad_s, c.accel_m_s2.imag),
+                       np.interp(w, c.omega_rad_s, c.se_m_s2)))  # fmt: skip
+    accels = [(A, np.maximum(se, 1e-12 * float(np.abs(A).max()))) for A, se in accels]
     order = np.argsort(w[keep], kind="stable")
-    steady = modal_fit(w[keep][order], [(G[order], s[order]) for G, s in shapes], n_modes)
+    wk = w[keep][order]
+    shapes = [(response_shape(wk, A[keep][order]), se[keep][order] / wk**4) for A, se in accels]
+    steady = modal_fit(wk, shapes, n_modes)
     if steady is None:
         return None, None
     t = np.concatenate(([0.0], np.cumsum(2 * math.pi * REVS_PER_BLOCK / w)[:-1]))

@@ -159,3 +159,14 @@ def test_a_mark_lost_mid_sweep_is_said_and_its_revolutions_left_out(
     assert said and all("left out" in w for w in said), lost["warnings"]
     for a, b in zip(lost["modes"], whole["modes"], strict=True):
         assert a["rpm"] == pytest.approx(b["rpm"], rel=2e-3), (a, b)
+
+
+def test_speeds_about_a_gap_in_the_other_supports_curve_are_not_interpolated() -> None:
+    """Support 2's curve is interpolated to support 1's speeds for the fit, except across
+    the revolutions a lost mark took from it (more than two of its spacings from a point)."""
+    from stand.field.runup import SupportCurve, _covered
+
+    w2 = np.concatenate((np.arange(20.0, 30.0, 0.1), np.arange(31.0, 40.0, 0.1)))
+    c = SupportCurve(2, w2, np.ones(len(w2), complex), np.ones(len(w2)), ())
+    w1 = np.array([20.05, 29.95, 30.2, 30.5, 30.75, 31.05, 39.9])
+    assert _covered(w1, c).tolist() == [True, True, False, False, False, True, True]
