@@ -24,7 +24,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rpm", type=float, metavar="RPM",
                    help="the balancing speed whose margins are asked (default: the run's top "
                    "speed)")  # fmt: skip
-    p.add_argument("--plots", metavar="DIR", help="write bode.png and polar.png into DIR")
+    p.add_argument("--plots", metavar="DIR",
+                   help="write bode.png, polar.png and waterfall.png into DIR")  # fmt: skip
     add_force_argument(p, "the plots")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 

@@ -64,6 +64,17 @@ class SupportCurve:
 
 
 @dataclass(frozen=True)
+class Waterfall:
+    """One support's spectrum against speed: the speed at each slice's middle [rad/s], the
+    frequencies [Hz] and the amplitude spectrum of each slice [m/s^2] (slices, freqs)."""
+
+    support: int
+    omega_rad_s: np.ndarray
+    freq_hz: np.ndarray
+    amplitude_m_s2: np.ndarray
+
+
+@dataclass(frozen=True)
 class Margin:
     """The balancing speed against one fitted mode: its amplification factor ``1 / (2
     zeta)``, the margin the speed has and the one API 684 asks [fractions of the balancing
@@ -92,6 +103,7 @@ class RunupAnalysis:
     balancing_omega_rad_s: float
     margins: tuple[Margin, ...]
     warnings: tuple[str, ...]
+    waterfalls: tuple[Waterfall, ...] = ()
 
 
 def _lost_marks(s: NodeStream) -> list[tuple[float, float]]:
@@ -128,6 +140,34 @@ def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str]) -> Su
     order = np.argsort(w, kind="stable")
     w, A, se = w[order], A[order], se[order]
     return SupportCurve(support, w, A, se, tuple(resonances(w, response_shape(w, A))))
+
+
+SLICE_REVS = 16
+"""The waterfall's slices last this many revolutions at the run's top speed (Hann
+windows, half overlapping): a sixteenth of the top 1x frequency apart, its bins."""
+
+
+def waterfall(s: NodeStream, support: int) -> Waterfall:
+    """The support's amplitude spectrum in slices of :data:`SLICE_REVS` (scipy's
+    ``spectrogram``, Hann, half overlapping; the samples of its longest segment taken as
+    contiguous: a lost frame is a glitch of a few samples), each slice's speed
+    interpolated from the reference edges."""
+    from scipy.signal import spectrogram
+
+    lo, hi, pos, rev = node_segment(s)
+    assert s.rate_hz is not None
+    a = s.accel(lo, hi)
+    if len(pos) < 2:
+        return Waterfall(support, np.zeros(0), np.zeros(0), np.zeros((0, 0)))
+    edge_w = 2 * math.pi * np.diff(rev) / np.diff(pos) * s.rate_hz  # at the edges' middles
+    n = max(16, int(SLICE_REVS * 2 * math.pi / float(edge_w.max()) * s.rate_hz))
+    if len(a) < n:
+        return Waterfall(support, np.zeros(0), np.zeros(0), np.zeros((0, 0)))
+    f, t, S = spectrogram(a, fs=s.rate_hz, window="hann", nperseg=n, noverlap=n // 2,
+                          scaling="spectrum", mode="magnitude")  # fmt: skip
+    middle = float(s.index[lo]) + t * s.rate_hz
+    w = np.interp(middle, 0.5 * (pos[1:] + pos[:-1]), edge_w)
+    return Waterfall(support, w, f, 2 * S.T)  # one-sided: a sine's amplitude
 
 
 def _direction(w_blocks: np.ndarray) -> str:
@@ -242,6 +282,7 @@ def analyse_runup(
         model_omega_rad_s=tuple(float(x) for x in wn_model),
         model_zeta=tuple(float(x) for x in zeta_model), balancing_omega_rad_s=w_bal,
         margins=tuple(margins), warnings=tuple(warn),
+        waterfalls=tuple(waterfall(streams.nodes[i], i) for i in (1, 2)),
     )  # fmt: skip
 
 

@@ -1,6 +1,7 @@
 """A run-up's pictures: the Bode plot (each support's 1x amplitude and phase against speed,
-the resonances found, the model's modes, the balancing speed) and the polar plot (each
-support's response shape ``-A / w^4`` in the complex plane, the speeds marked)."""
+the modes fitted, the model's modes, the balancing speed), the polar plot (each support's
+response shape ``-A / w^4`` in the complex plane, the modes marked) and the waterfall
+(each support's spectrum against speed, the orders 1 to 4 drawn)."""
 
 from __future__ import annotations
 
@@ -64,9 +65,33 @@ def _polar(plt: Any, a: Any) -> Any:
     return fig
 
 
+def _waterfall(plt: Any, a: Any) -> Any:
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5), sharey=True)
+    for ax, wf in zip(axes, a.waterfalls, strict=True):
+        if not len(wf.omega_rad_s):
+            ax.set_title(f"support {wf.support}: too short for a waterfall")
+            continue
+        top_hz = float(wf.omega_rad_s.max()) / (2 * math.pi)
+        band = wf.freq_hz <= 4.5 * top_hz
+        level = 20 * np.log10(np.maximum(wf.amplitude_m_s2[:, band], 1e-6))
+        mesh = ax.pcolormesh(wf.freq_hz[band], wf.omega_rad_s * RPM, level, shading="auto",
+                             cmap="viridis", vmin=float(level.max()) - 60)  # fmt: skip
+        for order in (1, 2, 3, 4):
+            ax.plot(order * wf.omega_rad_s / (2 * math.pi), wf.omega_rad_s * RPM, color="white",
+                    lw=0.6, ls=":")  # fmt: skip
+        ax.set_xlim(0, 4.5 * top_hz)
+        ax.set_title(f"support {wf.support}: spectrum against speed (orders 1 to 4 dotted)")
+        ax.set_xlabel("frequency [Hz]")
+        fig.colorbar(mesh, ax=ax, label="dB re 1 m/s^2")
+    axes[0].set_ylabel("speed [rpm]")
+    fig.tight_layout()
+    return fig
+
+
 def runup_plots(analysis: Any, folder: str, force: bool) -> list[str]:
-    """Write ``bode.png`` and ``polar.png`` into ``folder`` (made if missing; each file
-    safely: a temporary name, then the file; never over one without ``force``)."""
+    """Write ``bode.png``, ``polar.png`` and ``waterfall.png`` into ``folder`` (made if
+    missing; each file safely: a temporary name, then the file; never over one without
+    ``force``)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -74,7 +99,8 @@ def runup_plots(analysis: Any, folder: str, force: bool) -> list[str]:
 
     Path(folder).mkdir(parents=True, exist_ok=True)
     written = []
-    for name, draw in (("bode.png", _bode), ("polar.png", _polar)):
+    for name, draw in (("bode.png", _bode), ("polar.png", _polar),
+                       ("waterfall.png", _waterfall)):  # fmt: skip
         fig = draw(plt, analysis)
         path = str(Path(folder) / name)
         with output(path, force=force) as tmp:

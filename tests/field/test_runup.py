@@ -57,7 +57,7 @@ def test_both_modes_within_1_pct_of_the_models_and_their_damping_within_10_pct(
         assert m["steady_reading_rpm"] > m["model_rpm"] * 1.01, m  # the lag, 1.6 % at least
         assert m["below_balancing_speed"] and m["margin_pct"] > m["required_pct"], m
     assert out["fit_residual"] < 3, out  # the points' own noise, about
-    for name in ("bode.png", "polar.png"):
+    for name in ("bode.png", "polar.png", "waterfall.png"):
         assert (plots / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     capsys.readouterr()
     assert main(["runup", str(runup), "--plots", str(plots)]) == 2
@@ -170,3 +170,27 @@ def test_speeds_about_a_gap_in_the_other_supports_curve_are_not_interpolated() -
     c = SupportCurve(2, w2, np.ones(len(w2), complex), np.ones(len(w2)), ())
     w1 = np.array([20.05, 29.95, 30.2, 30.5, 30.75, 31.05, 39.9])
     assert _covered(w1, c).tolist() == [True, True, False, False, False, True, True]
+
+
+def test_the_waterfalls_ridge_is_the_1x_at_its_speed(runup: Path) -> None:
+    """Each slice of the waterfall above 200 rpm peaks at the shaft's frequency (within one
+    bin, a sixteenth of the top 1x); above the resonances (480 rpm, where the 1x changes
+    slowly with speed: below, it grows as w^4 across a slice of 1.6 s) with the amplitude
+    the order tracking reads at that speed (within 20 %: the Hann window's scalloping
+    loses up to 15 % between bins)."""
+    from stand.field.runup import analyse_runup
+    from stand.solve.recordings import read_run
+
+    got = read_run(str(runup), None)
+    a = analyse_runup(got.streams, got.cfg, got.params)
+    for wf, c in zip(a.waterfalls, a.curves, strict=True):
+        fast = wf.omega_rad_s > 200 / RPM
+        assert np.count_nonzero(fast) >= 10, wf.omega_rad_s
+        bin_hz = float(wf.freq_hz[1] - wf.freq_hz[0])
+        for w, spectrum in zip(wf.omega_rad_s[fast], wf.amplitude_m_s2[fast], strict=True):
+            k = int(np.argmax(spectrum[1:])) + 1  # past the mean
+            assert abs(wf.freq_hz[k] - w / (2 * math.pi)) <= bin_hz, (w, wf.freq_hz[k])
+            one_x = abs(np.interp(w, c.omega_rad_s, np.abs(c.accel_m_s2)))
+            if w * RPM > 480:
+                assert abs(spectrum[k] / one_x - 1) <= 0.20, (w * RPM, spectrum[k], one_x)
+        assert np.count_nonzero(wf.omega_rad_s * RPM > 480) >= 4
