@@ -10,13 +10,12 @@ resonance.  From ``G``:
   the peak (linear interpolation); the damping ratio ``zeta = (w_2 - w_1) / (2 w_n)`` and
   the amplification factor ``AF = w_n / (w_2 - w_1)`` (API 684's, from the half-power
   points);
-- **circle fit** (Ewins, *Modal Testing*, 2nd ed., section 4.3): near a mode a receptance
-  traces a circle in the complex plane.  The circle through the points within the
-  half-power band (algebraic least squares, Kasa 1976); the natural frequency where the
-  angle swept per unit ``w^2`` is largest; the damping from two points ``a`` below and
-  ``b`` above it, ``eta = (w_a^2 - w_b^2) / (w_n^2 (tan(th_a / 2) + tan(th_b / 2)))``
-  (``th`` the angle each makes at the centre with the natural frequency's point),
-  ``zeta = eta / 2``, averaged over the pairs.
+- **circle fit** (Ewins, *Modal Testing*, 2nd ed., section 4.3): near a viscously damped
+  mode the mobility ``i w G`` traces a circle in the complex plane.  The circle through
+  the points within the half-power band (algebraic least squares, Kasa 1976); the
+  natural frequency where the angle turns fastest; the damping from two points ``a``
+  below and ``b`` above it (``th`` the angle each makes at the centre with the natural
+  frequency's point), the median over the pairs (:func:`circle_fit`).
 
 Arrays in, arrays out, SI units (rad/s).
 """
@@ -94,29 +93,33 @@ def _peak(w: FloatArray, mag: FloatArray, k: int) -> float:
 
 def circle_fit(w: FloatArray, G: ComplexArray) -> tuple[float, float] | None:
     """Natural frequency [rad/s] and damping ratio of the points ``G`` at ``w`` about one
-    mode (see the module's docstring), or None with fewer than 5 points or no pair."""
+    mode (see the module's docstring), or None with fewer than 5 points or no pair.
+
+    The circle is fitted to the mobility ``i w G``, which a viscously damped mode traces
+    exactly (the receptance only nearly); the natural frequency is where the angle turns
+    fastest against ``w``, the damping ``zeta = (w_b^2 - w_a^2) / (2 w_n (w_a tan(th_a / 2)
+    + w_b tan(th_b / 2)))`` (Ewins, 4.3, viscous damping), the median over the pairs."""
     if len(w) < 5:
         return None
-    x, y = G.real, G.imag
+    Y = 1j * w * G
+    x, y = Y.real, Y.imag
     A = np.column_stack((x, y, np.ones_like(x)))
     sol, *_ = np.linalg.lstsq(A, x * x + y * y, rcond=None)
     xc, yc = sol[0] / 2, sol[1] / 2
     ang = np.unwrap(np.angle((x - xc) + 1j * (y - yc)))
-    w2 = w * w
-    rate = np.abs(np.diff(ang) / np.diff(w2))
+    rate = np.abs(np.diff(ang) / np.diff(w))
     m = int(np.argmax(rate))
-    wn2 = float(0.5 * (w2[m] + w2[m + 1]))
-    an = float(0.5 * (ang[m] + ang[m + 1]))
-    below, above = np.flatnonzero(w2 < wn2), np.flatnonzero(w2 > wn2)
-    etas = []
-    for a in below:
-        for b in above:
+    wn, an = float(0.5 * (w[m] + w[m + 1])), float(0.5 * (ang[m] + ang[m + 1]))
+    zetas = []
+    for a in np.flatnonzero(w < wn):
+        for b in np.flatnonzero(w > wn):
             ta, tb = abs(an - ang[a]), abs(ang[b] - an)
             if 0 < ta < math.pi and 0 < tb < math.pi:
-                etas.append((w2[b] - w2[a]) / (wn2 * (math.tan(ta / 2) + math.tan(tb / 2))))
-    if not etas:
+                turn = w[a] * math.tan(ta / 2) + w[b] * math.tan(tb / 2)
+                zetas.append((w[b] ** 2 - w[a] ** 2) / (2 * wn * turn))
+    if not zetas:
         return None
-    return math.sqrt(wn2), float(np.median(etas)) / 2
+    return wn, float(np.median(zetas))
 
 
 def resonances(omega_rad_s: FloatArray, G: ComplexArray) -> list[Resonance]:
