@@ -231,10 +231,16 @@ def _fits(curves: tuple[SupportCurve, ...], tracked: tuple[np.ndarray, ...], n_m
     wk = w[keep][order]
     shapes = [(response_shape(wk, A[keep][order]), se[keep][order] / wk**4) for A, se in accels]
     steady = modal_fit(wk, shapes, n_modes)
-    if steady is None:
+    if steady is None or not _finite(steady):
         return None, None
     t = np.concatenate(([0.0], np.cumsum(2 * math.pi * REVS_PER_BLOCK / w)[:-1]))
-    return swept_fit(w, t, accels, keep, steady), steady
+    swept = swept_fit(w, t, accels, keep, steady)
+    return (swept if _finite(swept) else None), steady
+
+
+def _finite(fit: ModalFit) -> bool:
+    """Every figure of ``fit`` finite (a fit that failed numerically is no answer)."""
+    return all(math.isfinite(v) for v in (*fit.omega_rad_s, *fit.zeta, fit.chi))
 
 
 def analyse_runup(
@@ -264,7 +270,8 @@ def analyse_runup(
     fit, steady = _fits(curves, tracked, max(len(wn_model), 1))
     margins = []
     if fit is None:
-        warn.append("too few points for the modal fit: the resonances are the peaks' only")
+        warn.append("no modal fit (too few points, or the fit failed numerically): the "
+                    "resonances are the supports' peaks only")  # fmt: skip
     else:
         margins = [_margin(w, z, w_bal, warn) for w, z in zip(fit.omega_rad_s, fit.zeta,
                                                               strict=True)]  # fmt: skip
