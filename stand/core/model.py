@@ -228,7 +228,7 @@ def apparent_masses(
 def support_matrix(p: StandParameters, omega_rad_s: ArrayLike) -> ComplexArray:
     """The matrix ``D'`` of ``D' X = B U`` [kg], shape ``omega.shape + (2, 2)``."""
     t = _Terms(p, _omega(omega_rad_s))
-    D = np.empty((*t.g1r.hi.shape, 2, 2), dtype=np.complex128)
+    D = np.empty((*np.shape(t.g1r.hi), 2, 2), dtype=np.complex128)
     D[..., 0, 0] = t.complex(t.g1r - DD(p.M3) * t.L2 / t.L, t.g1i)
     D[..., 0, 1] = t.complex(t.g2r - DD(p.M3) * t.L1 / t.L, t.g2i)
     D[..., 1, 0] = t.complex(t.L1 * t.g1r - DD(p.J3) / t.L, t.L1 * t.g1i)
@@ -251,7 +251,7 @@ def _plane_matrix(p: StandParameters, t: _Terms) -> ComplexArray:
     M3, J3 = DD(p.M3), DD(p.J3)
     abc = t.L1 + p.c
     bcd = DD(p.b) + p.c + p.d
-    N = np.empty((*t.g1r.hi.shape, 2, 2), dtype=np.complex128)
+    N = np.empty((*np.shape(t.g1r.hi), 2, 2), dtype=np.complex128)
     N[..., 0, 0] = t.complex(abc * t.g1r - (M3 * p.c * t.L2 + J3) / t.L, abc * t.g1i)
     N[..., 0, 1] = t.complex(-(DD(p.d) * t.g2r) - (M3 * p.c * t.L1 - J3) / t.L, -(DD(p.d) * t.g2i))
     N[..., 1, 0] = t.complex(-(DD(p.a) * t.g1r) - (M3 * p.b * t.L2 - J3) / t.L, -(DD(p.a) * t.g1i))
