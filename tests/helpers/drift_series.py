@@ -32,19 +32,22 @@ def series(
     prescribes, put on with the operator's scatter, the check; the stand is ``truth(p)``
     from rotor ``change_at`` on."""
     w = rpm * math.pi / 30
-    G = np.linalg.inv(np.asarray(forward(p, w, np.eye(2))).T)  # forward(eye) has a row per plane
+    # the model is linear in U: A = F U, F's columns the answers to each plane's unit
+    # (forward(eye) has a row per plane); two matrices instead of 2 n calls of the model
+    before, after = (np.asarray(forward(q, w, np.eye(2))).T for q in (p, truth(p)))
+    G = np.linalg.inv(before)
     out = []
     for i in range(n):
-        pt = truth(p) if change_at is not None and i >= change_at else p
+        F = after if change_at is not None and i >= change_at else before
 
         def noise() -> np.ndarray:
             return (rng.normal(size=2) + 1j * rng.normal(size=2)) * NOISE_M_S2
 
         U0 = (rng.normal(size=2) + 1j * rng.normal(size=2)) * unbalance_kg_m
-        A0 = forward(pt, w, U0) + noise()
+        A0 = F @ U0 + noise()
         dU = -(G @ A0)
         eps = rng.normal(size=2) * scatter_rel - 1j * rng.normal(size=2) * math.radians(scatter_deg)
-        A1 = forward(pt, w, U0 + dU * (1 + eps)) + noise()
+        A1 = F @ (U0 + dU * (1 + eps)) + noise()
         cov = np.eye(4) * NOISE_M_S2**2
         out.append(Datum(w, A0, A1, cov, cov, dU))
     return out
