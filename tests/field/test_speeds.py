@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -191,6 +192,12 @@ def test_advise_proposes_the_speeds_and_a_third_plane_for_the_bending_auger(
     plan = json.loads(capsys.readouterr().out)["across_speeds"]
     assert plan["planes_mm"] == [170.0, 850.0, 1530.0] and plan["two_plane_left"] > 0.1
     assert len(plan["speeds_rpm"]) == 3 and plan["speeds_rpm"][-1] == 1500.0
+    # docs/speeds.md's command block runs at the speeds advise gives, to the rpm
+    docs = (root / "docs" / "speeds.md").read_text(encoding="utf-8")
+    (block,) = re.findall(r"stand balance --scene auger-bow --speeds ([0-9,.]+) ", docs)
+    assert [float(v) for v in block.split(",")] == [round(v) for v in plan["speeds_rpm"]], block
+    for v in block.split(","):
+        assert docs.count(f"bow-{v}rpm.h5") == 3, v  # solve, report, simulate --apply
     stiff = tmp_path / "stiff.toml"
     stiff.write_text(
         (root / "examples" / "auger-shaft.toml")
