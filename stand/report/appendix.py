@@ -80,10 +80,10 @@ def appendix(out: dict[str, Any], result: Result, _: Language) -> str:
 <table><tr>{heads}</tr>{supports}</table>
 {_uncertainty(out, _)}
 <h2>{e(_("Spectrum around 1x"))}</h2><img alt="spectrum" src="{spectrum}">
-<h2>{e(_("Speed over the run"))}</h2><img alt="speed" src="{speed}">
+<h2>{e(_("Speed over the run"))}</h2><img class=speed alt="speed" src="{speed}">
 <h2>{e(_("Warnings"))}</h2>{warnings}
-<h2>{e(_("Run and parameters"))}</h2><table>{rows}</table>
-<p class=muted>{e(kept)}</p>
+<div class=keep><h2>{e(_("Run and parameters"))}</h2><table>{rows}</table>
+<p class=muted>{e(kept)}</p></div>
 </div>"""
 
 

@@ -51,8 +51,9 @@ pre { font-size: 0.8em; background: #f6f6f6; padding: 0.6em; white-space: pre-wr
 @media print {
   body { margin: 0; max-width: none; font-size: 11px; }
   .appendix { break-before: page; }
-  img { max-height: 88mm; }
-  h2 { break-after: avoid; } table, .sign { break-inside: avoid; }
+  img { max-height: 88mm; } .appendix img { max-height: 76mm; }
+  .appendix img.speed { max-height: 52mm; }
+  h2 { break-after: avoid; } table, .sign, .keep { break-inside: avoid; }
 }
 """
 

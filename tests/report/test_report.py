@@ -103,7 +103,9 @@ def test_the_certificate_carries_job_basis_before_after_calibration_and_signatur
 
 def test_the_certificate_prints_to_a_pdf_of_two_a4_pages(tmp_path: Path) -> None:
     """Chromium prints it with its print layout: page 1 the certificate, then the
-    measurement (pdftoppm renders them, as README's pictures were made)."""
+    measurement (pdftoppm renders them, as README's pictures were made), two pages in
+    every language: a check's German and Ukrainian certificates ran onto a third page
+    holding the appendix's last line."""
     import shutil
     import subprocess
 
@@ -120,7 +122,14 @@ def test_the_certificate_prints_to_a_pdf_of_two_a4_pages(tmp_path: Path) -> None
         pytest.skip("pdftoppm is not installed (Debian: apt-get install poppler-utils)")
     subprocess.run(["pdftoppm", "-r", "30", "-png", str(pdf), str(tmp_path / "p")], check=True)
     pages = sorted(tmp_path.glob("p-*.png"))
-    assert 2 <= len(pages) <= 4
+    assert len(pages) == 2
+    for lang in ("de", "uk"):
+        other = tmp_path / f"cert-{lang}.pdf"
+        args = ["report", str(after), "--check", str(before), "--lang", lang]
+        assert main([*args, "--pdf", str(other)]) == 0
+        subprocess.run(["pdftoppm", "-r", "10", "-png", str(other), str(tmp_path / lang)],
+                       check=True)  # fmt: skip
+        assert len(list(tmp_path.glob(f"{lang}-*.png"))) == 2, lang
     from matplotlib.image import imread
 
     h, w = imread(pages[0]).shape[:2]
