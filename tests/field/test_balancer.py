@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scenes import edited_scene
 
 from stand.cli import main
 from stand.field.balancer import onset
@@ -19,13 +20,8 @@ SCENE = Path(str(shipped_scenes()["demo-balls"]))
 
 
 def _scene(tmp_path: Path, **changes: str) -> Path:
-    text = SCENE.read_text().replace("seconds = 60.0", "seconds = 30.0")
-    for old, new in changes.items():
-        assert old in text, old
-        text = text.replace(old, new)
-    path = tmp_path / "scene.toml"
-    path.write_text(text)
-    return path
+    """demo-balls at 30 s (was 60), then ``changes``."""
+    return edited_scene("demo-balls", tmp_path, {"seconds = 60.0": "seconds = 30.0"}, changes)
 
 
 def _starts(tmp_path: Path, scene: Path | str, n: int, capsys: pytest.CaptureFixture[str]

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scenes import edited_scene
 
 from stand.cli import main
 from stand.core.model import natural_frequencies
@@ -111,16 +112,6 @@ def test_api_684_separation_margins(af: float, below: bool, want: float) -> None
     assert separation_margin_required(af, below) == pytest.approx(want, rel=1e-12)
 
 
-def _scene(tmp_path: Path, **replace: str) -> Path:
-    text = Path(str(shipped_scenes()["demo-runup"])).read_text()
-    for old, new in replace.items():
-        assert old in text, old
-        text = text.replace(old, new)
-    path = tmp_path / "s.toml"
-    path.write_text(text)
-    return path
-
-
 @pytest.mark.parametrize(
     ("change", "says"),
     [
@@ -135,7 +126,10 @@ def test_runs_that_are_no_run_up_are_refused_in_one_line(
     change: dict[str, str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     run = tmp_path / "r.h5"
-    assert main(["simulate", str(_scene(tmp_path, **change)), "--out", str(run)]) == 0
+    assert (
+        main(["simulate", str(edited_scene("demo-runup", tmp_path, change)), "--out", str(run)])
+        == 0
+    )
     capsys.readouterr()
     assert main(["runup", str(run)]) == 2
     err = capsys.readouterr().err

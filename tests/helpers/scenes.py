@@ -1,13 +1,15 @@
 """A small simulated stand for tests: the base scene's tables, a scene with some tables
-changed (and effects added), and its simulation."""
+changed (and effects added), and its simulation; a shipped scene with some text edited."""
 
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from stand.config import validate
-from stand.sim import Scene, Simulation, simulate
+from stand.sim import Scene, Simulation, shipped_scenes, simulate
 
 BASE: dict[str, Any] = {
     "stand": {
@@ -51,3 +53,17 @@ def scene(effects: dict[str, Any] | None = None, **changes: Any) -> Scene:
 def run(sc: Scene) -> Simulation:
     cfg = sc.config()
     return simulate(sc, cfg.parameters())
+
+
+def edited_scene(name: str, folder: Path, *edits: Mapping[str, str]) -> Path:
+    """The shipped scene ``name``'s text with each edit's ``old -> new`` replaced, the
+    edits in turn (each ``old`` must be there: an edit that misses is a test's mistake),
+    written as ``folder/<name>-edited.toml``."""
+    text = Path(str(shipped_scenes()[name])).read_text(encoding="utf-8")
+    for edit in edits:
+        for old, new in edit.items():
+            assert old in text, old
+            text = text.replace(old, new)
+    path = folder / f"{name}-edited.toml"
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -11,11 +11,9 @@ import math
 from pathlib import Path
 
 import pytest
+from scenes import edited_scene
 
 from stand.cli import main
-from stand.sim import shipped_scenes
-
-SCENE = Path(str(shipped_scenes()["demo-balls"]))
 
 
 def _json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict:  # type: ignore[type-arg]
@@ -44,16 +42,6 @@ def test_a_minute_with_free_balls_measures_the_predicted_residual(
     assert not [w for w in out["warnings"] if "balls" in w], out["warnings"]
 
 
-def _variant(tmp_path: Path, **changes: str) -> Path:
-    text = SCENE.read_text()
-    for old, new in changes.items():
-        assert old in text
-        text = text.replace(old, new)
-    path = tmp_path / "scene.toml"
-    path.write_text(text)
-    return path
-
-
 @pytest.mark.parametrize(
     ("changes", "says"),
     [
@@ -68,7 +56,8 @@ def test_balls_that_do_not_settle_are_flagged(
     """Below the first window (300 rpm, 20 s) the balls gather on the heavy side; at 900
     rpm after 6 s they are still on their way: the answer says each, never silently."""
     run = tmp_path / "b.h5"
-    assert main(["simulate", str(_variant(tmp_path, **changes)), "--out", str(run)]) == 0
+    scene = edited_scene("demo-balls", tmp_path, changes)
+    assert main(["simulate", str(scene), "--out", str(run)]) == 0
     capsys.readouterr()
     out = _json(["solve", str(run), "--json"], capsys)
     assert any(says in w for w in out["warnings"]), out["warnings"]
@@ -87,7 +76,7 @@ def test_balls_that_do_not_settle_are_flagged(
 def test_a_bad_balancer_is_one_line(
     edit: tuple[str, str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    path = _variant(tmp_path, **{edit[0]: edit[1]})
+    path = edited_scene("demo-balls", tmp_path, {edit[0]: edit[1]})
     assert main(["simulate", str(path), "--out", str(tmp_path / "x.h5")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err, err
