@@ -28,8 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 Real = FloatArray | float
 """A value of :class:`DD`'s parts: an array, or one number as a Python float (the same
-IEEE operations as a 0-d array, about thirty times quicker: the model is evaluated at one
-speed at a time by most of its callers)."""
+IEEE operations as a 0-d array without numpy's per-call cost: the model at one speed, as
+most of its callers ask for it, about 3x quicker, docs/performance.md)."""
 
 _SPLIT = 134217729.0  # 2**27 + 1
 
@@ -62,7 +62,10 @@ class DD:
     """An array of double-double numbers ``hi + lo`` with ``|lo| <= ulp(hi) / 2``.
 
     Supports ``+ - * /`` with another :class:`DD` or a float (array); ``hi``
-    is the value rounded to double.  A scalar is kept as two Python floats.
+    is the value rounded to double.  A scalar is kept as two Python floats: the same
+    bits as a one-element array, except that dividing by zero raises
+    ``ZeroDivisionError`` where numpy gives ``inf`` (the model divides only by speeds and
+    lengths it has checked to be positive).
     """
 
     __slots__ = ("hi", "lo")
