@@ -126,10 +126,8 @@ def test_runs_that_are_no_run_up_are_refused_in_one_line(
     change: dict[str, str], says: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     run = tmp_path / "r.h5"
-    assert (
-        main(["simulate", str(edited_scene("demo-runup", tmp_path, change)), "--out", str(run)])
-        == 0
-    )
+    scene = edited_scene("demo-runup", tmp_path, change)
+    assert main(["simulate", str(scene), "--out", str(run)]) == 0
     capsys.readouterr()
     assert main(["runup", str(run)]) == 2
     err = capsys.readouterr().err
