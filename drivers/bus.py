@@ -333,6 +333,7 @@ def play(
     stop: threading.Event | None = None,
     tick_s: float = 0.005,
     wire_stamps: bool = False,
+    start_s: float | None = None,
 ) -> int:
     """Send frames on a bus, paced by their host timestamps (the simulated nodes' side).
 
@@ -353,6 +354,9 @@ def play(
         for a bus that keeps a sender's stamp (``preserve_timestamps``): a player late on
         a loaded machine then delivers late frames, not a slower clock.  If False, the
         receiving interface stamps each frame when it is sent.
+    start_s
+        The ``time.monotonic()`` the first frame is due at (default: now), so that a
+        simulated drive and the frames share one clock.
 
     Returns
     -------
@@ -365,7 +369,9 @@ def play(
     if len(frames) == 0:
         return 0
     t_rel = frames.t_s - frames.t_s[0]
-    start, wall = time.monotonic(), time.time()
+    now = time.monotonic()
+    start = now if start_s is None else start_s
+    wall = time.time() + (start - now)
     sent = 0
     for m, due in zip(messages_from_frames(frames), t_rel.tolist(), strict=True):
         if stop is not None and stop.is_set():

@@ -361,3 +361,38 @@ class KeyFileError(StandError, OSError):
     def __init__(self, message: str, *, path: str):
         self.path = path
         super().__init__(f"{path}: {message}")
+
+
+class DriveError(StandError, ConnectionError):
+    """The stand's drive does not answer, answers nonsense, or refuses the cycle (guard
+    open, emergency stop, a fault of its own): the rotor is brought to rest where the drive
+    still answers, and the run, if any, is kept.
+
+    Attributes
+    ----------
+    where : str
+        The drive, named for a person (family and address).
+    """
+
+    def __init__(self, message: str, *, where: str):
+        self.where = where
+        super().__init__(f"drive {where}: {message}")
+
+
+class CycleAbortedError(StandError, RuntimeError):
+    """The stand's cycle was stopped by its supervision (guard opened, emergency stop, a
+    fault, over-speed, a 1x over its limit during run-up): the rotor quick-stopped, the
+    run kept and marked aborted.  The CLI exits with ``EXIT_ABORTED``.
+
+    Attributes
+    ----------
+    reason : str
+        Why, with the time into the cycle.
+    run_file : str
+        The run kept ("" when nothing was recorded).
+    """
+
+    def __init__(self, reason: str, *, run_file: str):
+        self.reason, self.run_file = reason, run_file
+        kept = f"; the run so far is kept in {run_file}" if run_file else ""
+        super().__init__(f"cycle aborted: {reason} (quick stop){kept}")

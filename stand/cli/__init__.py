@@ -19,12 +19,15 @@ from collections.abc import Callable, Sequence
 from types import FrameType
 
 from stand import __version__
-from stand.errors import StandError, UsageError
+from stand.errors import CycleAbortedError, StandError, UsageError
 from stand.process import one_blas_thread, skip_last_collection
 
 EXIT_OK = 0
 EXIT_INTERNAL = 1
 EXIT_BAD_INPUT = 2
+EXIT_ABORTED = 4
+"""The stand's cycle was aborted by its supervision (guard, emergency stop, fault,
+over-speed): the run is kept, the reason said in one line."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -170,7 +173,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             traceback.print_exc()
         message = str(exc)  # "stand balance: ..." reads "stand: error: balance: ..."
         print(f"stand: error: {message.removeprefix('stand ')}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return EXIT_ABORTED if isinstance(exc, CycleAbortedError) else EXIT_BAD_INPUT
     except BrokenPipeError:  # `stand inspect RUN | head -1`: the reader left; end quietly
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())

@@ -70,7 +70,8 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
         metavar="RUN",
         help="with --apply of several runs: the slow-roll run taken out of them first",
     )
-    g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]")
+    g.add_argument("--rpm", type=parse_rpm, help="run the scene at this speed [rpm]; with a "
+                   "[drive], the speed the drive is set to")  # fmt: skip
     g.add_argument(
         "--index",
         type=parse_angle,
@@ -304,6 +305,8 @@ def add_live_measure_arguments(p: argparse.ArgumentParser, *, default_target: st
     add_archive_argument(p)
     add_actor_arguments(p)
     p.add_argument("--no-archive", action="store_true", help="do not archive the run")
+    p.add_argument("--index-both", action="store_true", help="with a [drive]: after plane 1, "
+                   "turn plane 2's correction place to the mark too, without asking")  # fmt: skip
     add_bus_arguments(p)
 
 

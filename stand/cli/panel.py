@@ -36,6 +36,7 @@ from stand.field.speeds import correction_masses_across_speeds
 from stand.i18n import Display
 from stand.i18n.language import ENGLISH, N_, Language, language
 from stand.live import live_source, measure_live
+from stand.live.cycle import run_cycle
 from stand.sim import Mass
 from stand.solve import Job
 from stand.solve.recordings import correction_masses
@@ -251,24 +252,43 @@ def measure_live_from_args(
     job = mes_job(args, source.cfg) if getattr(args, "job", None) is not None else job_from(args)
     show = LiveDisplay(source, path, quiet=args.quiet, words=language(getattr(args, "lang", None)))
     silence, first = silences(args)
-    with show:
+
+    def measure(stop: Any = None, on_play: Any = None, watch: Any = None) -> Any:
+        def progress(p: Any) -> None:
+            show.progress(p)
+            if watch is not None:
+                watch(p)
+
         result, session = measure_live(
-            source,
-            kwargs,
-            path,
-            options,
-            targets,
-            max_seconds=args.max_seconds,
-            silence_timeout_s=silence,
-            first_frame_s=first,
-            on_start=show.start,
-            on_progress=show.progress,
-            on_wait=show.wait,
-            job=job,
-        )
-    if session.failure is not None and not args.quiet:
-        print(f"stand: {session.failure}", file=sys.stderr)
+            source, kwargs, path, options, targets, max_seconds=args.max_seconds,
+            silence_timeout_s=silence, first_frame_s=first, on_start=show.start,
+            on_progress=progress, on_wait=show.wait, job=job, stop=stop, on_play=on_play,
+        )  # fmt: skip
+        if session.failure is not None and not args.quiet:
+            print(f"stand: {session.failure}", file=sys.stderr)
+        return result
+
+    with show:
+        if source.drive is None:
+            result = measure()
+        else:
+            result = run_cycle(source.drive, source.cfg, measure, run_path=path,
+                               rpm=getattr(args, "rpm", None),
+                               plane2=lambda: ask_plane2(args))  # fmt: skip
     return result, source.cfg, source.params
+
+
+def ask_plane2(args: argparse.Namespace) -> bool:
+    """Turn plane 2's correction place to the mark too: ``--index-both``, or the operator
+    says so at a terminal."""
+    if getattr(args, "index_both", False):
+        return True
+    if args.json or not sys.stdin.isatty():
+        return False
+    _ = language(getattr(args, "lang", None))
+    print(_("plane 1's correction place is at the mark; Enter turns plane 2's there, "
+            "q and Enter ends"), file=sys.stderr)  # fmt: skip
+    return input().strip().lower() != "q"
 
 
 def scene_masses(args: argparse.Namespace) -> list[Any]:

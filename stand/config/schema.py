@@ -18,6 +18,8 @@ Tables (SI units, the seed's symbols)::
     [archive]     (optional) url: the database runs are archived in
     [tooling], [plant], [calibration] (optional): the tooling, the plant's systems,
                   how well the calibration is known
+    [drive]       (optional) the stand's drive, its shaft and the cycle's limits
+                  (:mod:`stand.config.drive`)
 
 Unknown keys and tables are refused (``extra="forbid"``); numbers must be
 TOML numbers (a quoted ``"8.0"`` is refused, not guessed at).  The physical
@@ -40,6 +42,7 @@ from stand.config.autobalancer import AutobalancerTable, check_autobalancer
 from stand.config.bus import bus_choice
 from stand.config.correction import CorrectionTable as CorrectionTable  # re-exported
 from stand.config.correction import check_correction
+from stand.config.drive import DriveTable, drive_choice
 from stand.config.plant import PlantTable as PlantTable  # re-exported
 from stand.config.rotor import SHAFT_AGREE
 from stand.config.rotor import RotorTable as RotorTable  # re-exported
@@ -186,6 +189,7 @@ class Config(BaseModel):
     plant: PlantTable | None = None
     calibration: CalibrationTable = CalibrationTable()
     autobalancer: AutobalancerTable | None = None
+    drive: DriveTable | None = None
 
     def measure_options(self) -> dict[str, Any]:
         """What :func:`stand.measuring.measure.measure` needs from the configuration."""
@@ -231,6 +235,8 @@ def config_from_dict(
     check_correction(cfg.correction, cfg.rotor, source)
     if cfg.bus is not None:  # the family and its table, checked now
         bus_choice(cfg.bus, source)
+    if cfg.drive is not None:  # the family and its table, checked now
+        drive_choice(cfg.drive, source)
     params = parameters_of(cfg, source)
     check_tolerance(cfg.tolerance, params, source)
     check_keys(cfg.rotor.keys, params, source)

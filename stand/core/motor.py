@@ -123,10 +123,13 @@ class Trajectory:
         """When the last piece starts: the motion is settled (at speed or at rest)."""
         return self.t_s[-1]
 
-    def then(self, t_s: float, alpha_rad_s2: float) -> Trajectory:
-        """This trajectory up to ``t_s``, then a piece accelerating at ``alpha_rad_s2``."""
+    def then(self, t_s: float, alpha_rad_s2: float, omega_rad_s: float | None = None
+             ) -> Trajectory:  # fmt: skip
+        """This trajectory up to ``t_s``, then a piece accelerating at ``alpha_rad_s2``
+        (from ``omega_rad_s`` where the caller knows it exactly: a set point, rest)."""
         n = sum(1 for t in self.t_s if t < t_s)
-        th, w = float(self.theta(t_s)), float(self.omega(t_s))
+        th = float(self.theta(t_s))
+        w = float(self.omega(t_s)) if omega_rad_s is None else omega_rad_s
         return Trajectory(
             (*self.t_s[:n], t_s),
             (*self.theta_rad[:n], th),
@@ -147,7 +150,7 @@ def ramp_to(path: Trajectory, t_s: float, motor: Motor, omega_set_rad_s: float) 
         return path.then(t_s, 0.0)
     a = motor.accel_rad_s2 if omega_set_rad_s > w else -motor.decel_rad_s2
     reach = t_s + (omega_set_rad_s - w) / a
-    return path.then(t_s, a).then(reach, 0.0)
+    return path.then(t_s, a).then(reach, 0.0, omega_set_rad_s)
 
 
 def quick_stop(path: Trajectory, t_s: float, motor: Motor) -> Trajectory:
@@ -167,7 +170,7 @@ def stop_at(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
     braking = w * w / (2 * a)
     extra = (target_rad - float(path.theta(t_s)) - braking) % TWO_PI
     begin = t_s + extra / w
-    return path.then(t_s, 0.0).then(begin, -a).then(begin + w / a, 0.0)
+    return path.then(t_s, 0.0).then(begin, -a).then(begin + w / a, 0.0, 0.0)
 
 
 def turn_to(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
@@ -181,7 +184,7 @@ def turn_to(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
     a1, a2 = share * motor.accel_rad_s2, share * motor.decel_rad_s2
     peak = math.sqrt(2 * d * a1 * a2 / (a1 + a2))
     t1 = t_s + peak / a1
-    return path.then(t_s, a1).then(t1, -a2).then(t1 + peak / a2, 0.0)
+    return path.then(t_s, a1).then(t1, -a2).then(t1 + peak / a2, 0.0, 0.0)
 
 
 def wrap_deg(angle_deg: float) -> float:

@@ -353,10 +353,12 @@ def measure_live(
     job: Job | None = None,
     stop: threading.Event | None = None,
     max_interval_s: float | None = None,
+    on_play: Callable[[float], None] | None = None,
 ) -> tuple[Result, LiveSession]:
     """One live session measured until precise: the result, and the session (closed).
     ``job`` (serial, order, operator, note) is recorded with the run; ``stop`` and
-    ``max_interval_s`` as in :func:`measure_until_precise`."""
+    ``max_interval_s`` as in :func:`measure_until_precise`; ``on_play`` is told the
+    ``time.monotonic()`` of a scene's physics time 0 (a simulated drive's clock)."""
 
     cfg, params = source.cfg, source.params
     check_matrix(options, cfg, live=True)
@@ -376,6 +378,7 @@ def measure_live(
         run_attrs=attrs,
         acquisition=source.acquisition,
         modules=source.modules,
+        on_play=on_play,
     ) as session:
         if on_start:
             on_start(session.where)

@@ -19,6 +19,7 @@ import json
 import signal
 import threading
 import time
+from collections.abc import Callable
 from types import FrameType
 from typing import Any
 
@@ -66,6 +67,7 @@ class LiveSession:
         run_attrs: dict[str, str] | None = None,
         acquisition: Acquired | None = None,
         modules: Any = None,
+        on_play: Callable[[float], None] | None = None,
     ):
         acquisition = acquisition or default_acquisition()
         self._setup = acquisition.setup()
@@ -84,6 +86,7 @@ class LiveSession:
         self.failure: BusError | None = None
         self.stop_signal: int | None = None
         self._scene_frames = scene_frames
+        self._on_play = on_play
         self._timeout, self._first_frame_s = silence_timeout_s, first_frame_s
         self._stop_player = threading.Event()
         self._player: threading.Thread | None = None
@@ -116,11 +119,16 @@ class LiveSession:
             raise
         if self._scene_frames is not None:
             tx, stamps = open_player_bus(self.bus_kwargs)
-            frames, stop = self._scene_frames, self._stop_player
-            self._player = threading.Thread(
-                target=lambda: (play(tx, frames, stop=stop, wire_stamps=stamps), tx.shutdown()),
-                daemon=True,
-            )
+            frames, stop, on_play = self._scene_frames, self._stop_player, self._on_play
+
+            def player() -> None:
+                start = time.monotonic()
+                if on_play is not None and len(frames):  # the physics' time 0, on this clock
+                    on_play(start - float(frames.t_s[0]))
+                play(tx, frames, stop=stop, wire_stamps=stamps, start_s=start)
+                tx.shutdown()
+
+            self._player = threading.Thread(target=player, daemon=True)
         quiet = () if self._setup is None else self._setup.clock_ids
         self.reader = BusReader(self.bus, channel_info=self.where, silence_timeout_s=self._timeout,
                                 first_frame_s=self._first_frame_s, quiet_ids=quiet)  # fmt: skip

@@ -12,8 +12,11 @@ from typing import Any
 
 from stand.config import Config, config_toml
 from stand.config.bus import bus_choice
+from stand.config.drive import drive_choice
 from stand.errors import UsageError
+from stand.live.cycle import DriveLink
 from stand.sim import load_scene, scene_modules, simulate, with_masses
+from stand.sim.drive import drive_scene, sim_drive
 from stand.solve.acquisition import Acquired, acquisition_of
 from stand.solve.pipeline import load_config_text
 
@@ -37,6 +40,8 @@ class LiveSource:
     modules: Any = None  # a CANopen scene's modules (stand.sim.canopen_node)
     scene_seed: int | None = None
     """The simulated run's noise seed (recorded with the run), None on a real bus."""
+    drive: DriveLink | None = None
+    """The drive the cycle commands (None: the operator spins the rotor)."""
 
 
 def live_source(
@@ -76,6 +81,11 @@ def live_source(
         else:
             cfg, params = sc.config(), physical
             text = config_toml(cfg)
+        link = drive_link(cfg, config)
+        if link is not None:  # the drive's shaft is the scene's: its run-up, its speed
+            link.rpm = rpm or link.choice.drive.speed_rpm or sc.run.rpm
+            sc = drive_scene(sc, link.choice.drive.motor(), link.rpm)
+            link.sim = sim_drive(sc, link.choice.drive.motor(), link.choice.table)
         acq = acquisition_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
         return LiveSource(
@@ -87,13 +97,23 @@ def live_source(
             acquisition=acq,
             modules=scene_modules(sc),
             scene_seed=sc.run.seed,
+            drive=link,
         )
-    if masses or rpm is not None or index_deg is not None:
-        raise UsageError(
-            f"stand {command}: --add, --apply, --rpm and --index change a --scene's rotor"
-        )
+    if masses or index_deg is not None:
+        raise UsageError(f"stand {command}: --add, --apply and --index change a --scene's rotor")
     if not config:
         raise UsageError(f"stand {command}: give --config CFG (with its [bus] table) or --scene")
     cfg, params, text = load_config_text(config)
+    link = drive_link(cfg, config)
+    if rpm is not None and link is None:
+        raise UsageError(f"stand {command}: --rpm sets a --scene's speed or a [drive]'s")
     return LiveSource(cfg, params, text, bus_table=cfg.bus,
-                      acquisition=acquisition_of(cfg, config))  # fmt: skip
+                      acquisition=acquisition_of(cfg, config), drive=link)  # fmt: skip
+
+
+def drive_link(cfg: Config, source: str | None) -> DriveLink | None:
+    """The drive a config's ``[drive]`` names, when the product commands it."""
+    if cfg.drive is None:
+        return None
+    choice = drive_choice(cfg.drive, source or "the config")
+    return DriveLink(choice) if choice.family.commanded else None

@@ -302,6 +302,24 @@ class CanopenFaults(_Table):
     """The modules refuse to have TPDO1 mapped (SDO abort 0x06040041)."""
 
 
+class DriveFaults(_Table):
+    """``[effects.drive]`` (a config with a ``[drive]`` the scene's simulated drive serves):
+    what the stand's drive and guard do wrong."""
+
+    guard_open: bool = False
+    """The guard is open from the start."""
+    guard_opens_at_s: NonNegative | None = None
+    """The guard opens at this time after the run-up began."""
+    fault_code: Annotated[int, Field(ge=0, le=0xFFFF)] = 0
+    """The drive is in fault with this code."""
+    silent: bool = False
+    """The drive never answers."""
+    speed_scale: Annotated[FiniteFloat, Field(gt=0.0, le=10.0)] = 1.0
+    """The speed the drive reports, times this (a map with a wrong scaling)."""
+    overspeed_pct: Annotated[FiniteFloat, Field(ge=0.0, le=50.0)] = 0.0
+    """The drive runs this much over its set point (a speed loop gone wrong)."""
+
+
 class Effects(_Table):
     """``[effects.*]``: each absent unless named."""
 
@@ -324,6 +342,7 @@ class Effects(_Table):
     runout: Runout | None = None
     placement: PlacementEffect | None = None
     canopen: CanopenFaults | None = None
+    drive: DriveFaults | None = None
     autobalancer: AutobalancerTable | None = None
     """A ball balancer on the rotor, its balls free on their race (the ``[autobalancer]``
     table's keys): integrated with the stand (:mod:`stand.core.balls`)."""

@@ -226,6 +226,41 @@ class LiveInfo:
 
 
 @dataclass(frozen=True)
+class IndexStop:
+    """One plane's correction place brought to the operator's mark by the drive [deg]."""
+
+    plane: int
+    target_deg: float
+    """The drive's angle asked for: the mark plus the place's angle from the reference mark."""
+    stopped_deg: float
+    """Where the drive says it came to rest."""
+    seconds: float
+
+    @property
+    def error_deg(self) -> float:
+        """Stopped minus target, in (-180, 180]."""
+        return -((self.target_deg - self.stopped_deg + 180.0) % 360.0 - 180.0)
+
+
+@dataclass(frozen=True)
+class CycleInfo:
+    """The stand's own cycle, when a drive ran it: each phase's time [s], the physical
+    floor of the moving phases and the measurement (:func:`stand.core.motor.floors`), the
+    stops at the mark, and why the cycle was aborted (None: it was not)."""
+
+    drive: str
+    runup_s: float
+    settle_s: float
+    measure_s: float
+    brake_s: float
+    index_s: float
+    total_s: float
+    floor_s: float
+    index: tuple[IndexStop, ...] = ()
+    aborted: str | None = None
+
+
+@dataclass(frozen=True)
 class Traces:
     """What the report plots besides the result: spectra and speed per node.
 
@@ -252,6 +287,8 @@ class Result:
     uncertainty: Uncertainty | None = None
     check: Check | None = None
     live: LiveInfo | None = None
+    cycle: CycleInfo | None = None
+    """The drive's cycle (run-up, measure, brake, index), when a drive ran the run."""
     within_noise: tuple[bool, bool] = (False, False)
     """Per plane: the unbalance is inside its own 95 % interval (no correction prescribed)."""
     within_tolerance: tuple[bool, bool] = (False, False)

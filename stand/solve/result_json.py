@@ -17,7 +17,7 @@ from stand.core.balance import Correction
 from stand.core.dsp import radius95
 from stand.measuring import Measurement
 from stand.solve.keys import KeyEffect
-from stand.solve.result import RESULT_VERSION, Check, Result
+from stand.solve.result import RESULT_VERSION, Check, CycleInfo, Result
 from stand.solve.verdict import RULES
 
 
@@ -270,6 +270,18 @@ def _check(c: Check) -> dict[str, Any]:
     return {"previous_run": c.previous_run, "planes": planes}
 
 
+def _cycle(c: CycleInfo) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """``cycle`` (each phase's seconds, the floor, why aborted) and ``index`` (per plane)."""
+    phases = ("runup_s", "settle_s", "measure_s", "brake_s", "index_s", "total_s", "floor_s")
+    cycle: dict[str, Any] = {"drive": c.drive, **{k: round(getattr(c, k), 3) for k in phases}}
+    cycle["total_over_floor"] = round(c.total_s / c.floor_s, 3) if c.floor_s > 0 else None
+    cycle["aborted"] = c.aborted
+    index = [{"plane": i.plane, "target_deg": round(i.target_deg, 3),
+              "stopped_deg": round(i.stopped_deg, 3), "error_deg": round(i.error_deg, 3),
+              "seconds": round(i.seconds, 3)} for i in c.index]  # fmt: skip
+    return cycle, index
+
+
 def to_json(r: Result) -> dict[str, Any]:
     """The result as one JSON-ready object (g mm, deg, mm, rpm at this edge only).
 
@@ -321,6 +333,8 @@ def to_json(r: Result) -> dict[str, Any]:
         out["elapsed_s"] = round(r.live.elapsed_s, 3)
         out["targets_g_mm"] = [_g_mm(t) for t in r.live.targets_kg_m]
         out["run_file"] = r.provenance.run_file
+    if r.cycle is not None:
+        out["cycle"], out["index"] = _cycle(r.cycle)
     p = r.provenance
     out["job"] = {**asdict(p.job), "rotor_type": p.rotor_type}
     out["provenance"] = {

@@ -92,6 +92,17 @@ def test_stop_at_from_rest_is_a_turn() -> None:
     assert float(path.theta(path.end_s)) == pytest.approx(math.pi / 2, abs=1e-9)
 
 
+def test_a_second_stop_after_a_stop_is_a_turn_not_a_creep() -> None:
+    """After braking the shaft is at rest exactly: a roundoff speed of 1e-14 rad/s once
+    made the next stop wait 1e14 s for its angle."""
+    w = 94.24777960769379
+    first = stop_at(ramp_to(at_rest(), 0.0, DEMO, w), 3.0, DEMO, 0.523)
+    assert float(first.omega(first.end_s + 1)) == 0.0
+    second = stop_at(first, first.end_s + 1, DEMO, 3.49)
+    assert second.end_s < first.end_s + 3
+    assert float(second.theta(second.end_s)) % (2 * math.pi) == pytest.approx(3.49, abs=1e-9)
+
+
 @pytest.mark.parametrize(
     ("field", "value"),
     [("inertia_kg_m2", 0.0), ("torque_n_m", -1.0), ("brake_torque_n_m", math.nan),
