@@ -8,6 +8,7 @@ lone stand) and from where.
 
 from stand.actions.accounts import add_account, lock_account, set_account
 from stand.actions.calibration import save_calibration, save_matrix
+from stand.actions.cycles import journal_abort
 from stand.actions.door import Actor, Rights, os_actor, os_user
 from stand.actions.evaluations import archive_evaluation
 from stand.actions.jobs import command_job, leave_job, receive_job, start_job
@@ -28,6 +29,7 @@ __all__ = [
     "command_job",
     "config_seen",
     "import_runs",
+    "journal_abort",
     "keep_tooling",
     "leave_job",
     "lock_account",

@@ -42,8 +42,9 @@ from stand.errors import UsageError
 GENESIS = "0" * 64
 """The previous hash of the first entry."""
 ACTIONS = ("config", "calibration", "matrix", "tooling", "account", "evaluation", "release",
-           "run", "job", "trust")  # fmt: skip
-"""What an entry records a change of (``release``: a certificate released)."""
+           "run", "job", "trust", "cycle")  # fmt: skip
+"""What an entry records a change of (``release``: a certificate released; ``cycle``: the
+stand's cycle aborted by its supervision, the run it kept)."""
 EVENTS = ("login", "logout", "login_failed", "refused", "session_end")
 """The security events an entry records (nothing changed: someone came, went, or was
 refused)."""

@@ -31,7 +31,7 @@ from stand.cli.common import (
 )
 from stand.config import Config
 from stand.core import rad_s_to_rpm, unbalance_to_polar
-from stand.errors import ArchiveError, UsageError
+from stand.errors import ArchiveError, CycleAbortedError, StandError, UsageError
 from stand.field.speeds import correction_masses_across_speeds
 from stand.i18n import Display
 from stand.i18n.language import ENGLISH, N_, Language, language
@@ -272,9 +272,13 @@ def measure_live_from_args(
         if source.drive is None:
             result = measure()
         else:
-            result = run_cycle(source.drive, source.cfg, measure, run_path=path,
-                               rpm=getattr(args, "rpm", None),
-                               plane2=lambda: ask_plane2(args))  # fmt: skip
+            try:
+                result = run_cycle(source.drive, source.cfg, measure, run_path=path,
+                                   rpm=getattr(args, "rpm", None),
+                                   plane2=lambda: ask_plane2(args))  # fmt: skip
+            except CycleAbortedError as exc:
+                journal_aborted(args, source.cfg, exc)
+                raise
     return result, source.cfg, source.params
 
 
@@ -305,6 +309,21 @@ def scene_masses(args: argparse.Namespace) -> list[Any]:
             for p, g, a, r, x in correction_masses_across_speeds(runs, slow_roll=slow)
         ]
     return masses
+
+
+def journal_aborted(args: argparse.Namespace, cfg: Config, exc: CycleAbortedError) -> None:
+    """An aborted cycle into the audit trail (unless ``--no-archive``); an archive out of
+    reach is said, and the abort still reported."""
+    if args.no_archive:
+        return
+    from stand.actions import journal_abort
+    from stand.archive import url_for
+
+    url = url_for(args.archive, cfg)
+    try:
+        journal_abort(url, actor_of(args, url), exc.reason, exc.run_file)
+    except StandError as err:
+        print(f"stand: the abort is not journaled: {err}", file=sys.stderr)
 
 
 def archive_live(args: argparse.Namespace, result: Any, cfg: Config) -> None:

@@ -146,8 +146,9 @@ def run(args: argparse.Namespace) -> int:
     station.sessions.lifetime_s = args.session_hours * 3600.0
     if args.opcua:  # beside the screens, on this machine only (stand opcua --host: beyond)
 
-        def state() -> str:
-            return "Executing" if station.snapshot().phase == "measuring" else "NotExecuting"
+        def state() -> str:  # a cycle, or a plane turned to the mark, is the machine executing
+            busy = station.snapshot().phase == "measuring" or station.drive.turning
+            return "Executing" if busy else "NotExecuting"
 
         ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state,
                           rotor_types=station.rotor_types,

@@ -101,12 +101,22 @@ def check_ready(drive: Drive) -> DriveState:
     return st
 
 
+StateSink = Callable[[str, DriveState], None]
+"""Told the cycle's phase (``run-up``, ``measuring``, ``braking``, ``turning``) and the
+drive's latest state, about every :data:`SHOW_S`: a screen's drive line."""
+SHOW_S = 0.25
+
+
 class Supervisor:
     """Reads the drive every :data:`POLL_S` while the rotor runs up and is measured; on a
-    fault quick-stops it, sets ``stop`` and keeps the reason."""
+    fault, or ``outside`` set (the operator's Stop), quick-stops it, sets ``stop`` and
+    keeps the reason; hands the state to ``show`` now and then."""
 
-    def __init__(self, drive: Drive, omega_rad_s: float, t0: float) -> None:
+    def __init__(self, drive: Drive, omega_rad_s: float, t0: float,
+                 outside: threading.Event | None = None, show: StateSink | None = None
+                 ) -> None:  # fmt: skip
         self.drive, self.omega, self.t0 = drive, omega_rad_s, t0
+        self.outside, self.show, self._shown = outside, show, 0.0
         self.stop = threading.Event()
         self.reason: str | None = None
         self.at_speed_s: float | None = None
@@ -144,12 +154,18 @@ class Supervisor:
             why = self._why(st)
             if why:
                 return self.abort(why)
+            now = time.monotonic()
+            if self.show is not None and now - self._shown >= SHOW_S:
+                self._shown = now
+                self.show("measuring" if self.at_speed_s is not None else "run-up", st)
             if st.at_speed:
                 if self.at_speed_s is None:
                     self.at_speed_s = time.monotonic() - self.t0
                 self.speeds.append(st.speed_rad_s)
 
     def _why(self, st: DriveState) -> str | None:
+        if self.outside is not None and self.outside.is_set():
+            return "stopped by the operator"
         if not st.guard_closed:
             return "guard opened"
         if not st.estop_clear:
@@ -168,8 +184,11 @@ telling a simulated drive the scene's time 0, each progress handed to ``watch``.
 
 
 def run_cycle(link: DriveLink, cfg: Config, measure: Measure, *, run_path: str,
-              rpm: float | None, plane2: Callable[[], bool] = lambda: False) -> Result:  # fmt: skip
-    """The whole cycle; the measurement's result with its :class:`CycleInfo`.
+              rpm: float | None, plane2: Callable[[], bool] = lambda: False,
+              stop: threading.Event | None = None, show: StateSink | None = None
+              ) -> Result:  # fmt: skip
+    """The whole cycle; the measurement's result with its :class:`CycleInfo`.  ``stop``
+    set (a screen's Stop) is a quick stop; ``show`` is told the drive's state.
 
     Raises
     ------
@@ -185,12 +204,14 @@ def run_cycle(link: DriveLink, cfg: Config, measure: Measure, *, run_path: str,
         check_ready(drive)
         t0 = time.monotonic()
         drive.run(omega)
-        with Supervisor(drive, omega, t0) as sup:
+        with Supervisor(drive, omega, t0, stop, show) as sup:
             result = _measured(sup, measure, link, d.runup_limit_m_s2, run_path)
         t_measured = time.monotonic() - t0
         if sup.reason is not None:
             raise CycleAbortedError(sup.reason, run_file=run_path)
         _speeds_agree(drive, sup, result, d.speed_agree_pct)
+        if show is not None:
+            show("braking", drive.read())
         stops = [index_plane(drive, result, 1, d.index_mark_deg, omega)]
         total = time.monotonic() - t0  # the cycle: run-up to plane 1 at the mark
         if plane2():
@@ -236,6 +257,16 @@ def _speeds_agree(drive: Drive, sup: Supervisor, result: Result, pct: float) -> 
             f"rotor was stopped, the run is kept in {result.provenance.run_file}",
             where=drive.where,
         )
+
+
+def turn_to_mark(link: DriveLink, result: Result, plane: int) -> IndexStop:
+    """After a cycle, from rest: turn ``plane``'s correction place to the mark (a screen's
+    button, on request)."""
+    with connected(link) as drive:
+        check_ready(drive)
+        stop = index_plane(drive, result, plane, link.choice.drive.index_mark_deg, 0.0)
+        drive.disable()
+    return stop
 
 
 def correction_place_deg(result: Result, plane: int) -> float:

@@ -15,7 +15,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from stand.actions import Actor, leave_job, release_certificate, start_job
+from stand.actions import Actor, archive_run, leave_job, os_actor, release_certificate, start_job
 from stand.archive import Archive, correction_rows, file_digest
 from stand.archive.evaluations import evaluations_due
 from stand.archive.jobs import jobs_of
@@ -26,8 +26,11 @@ from stand.field import balance_speeds, speeds_json
 from stand.files import output
 from stand.health import datum_row, health, health_json
 from stand.i18n.language import LANGUAGES, Language
-from stand.plant import export_qdas
+from stand.i18n.words import said
+from stand.plant import export_qdas, publish_archived
 from stand.report import render, render_speeds, write_pdf
+from stand.solve import Job
+from stand.solve.pipeline import load_config_text
 from stand.solve.recordings import result_masses
 from stand.station.snapshot import Snapshot
 
@@ -36,6 +39,39 @@ log = logging.getLogger(__name__)
 
 class ArchiveSide:
     """The archive's side of a :class:`~stand.station.service.Station`."""
+
+    @staticmethod
+    def _actor(job: Job) -> Actor:
+        """Who measures a rotor, as the journal names a run archived and a rotor type found
+        edited: the operator the job names (the account logged in, where there are
+        accounts), else the operating system's user the station runs as."""
+        return Actor(job.operator, None, "station") if job.operator else os_actor("station")
+
+    def _file(self, result: Any, config: Path) -> tuple[int | None, tuple[str, ...]]:
+        """The report beside the run, then the archive (a failure of either is noted: the
+        run file is kept whatever happens)."""
+
+        notes = []
+        run = Path(result.provenance.run_file)
+        try:
+            data = render(result, self.language(None)).encode("utf-8")
+            with output(run.with_suffix(".html"), need_bytes=len(data)) as tmp:
+                tmp.write_bytes(data)
+        except StandError as exc:
+            notes.append(said("no report: {why}", why=exc))
+        run_id = None
+        try:
+            run_id = archive_run(result, self.archive_url, self._actor(result.provenance.job),
+                                 config=str(config))  # fmt: skip
+        except StandError as exc:
+            notes.append(said("not archived ({why}); the run is kept in {run}", why=exc, run=run))
+            return run_id, tuple(notes)
+
+        told = publish_archived(result, run_id, load_config_text(str(config))[0],
+                                self.archive_url)  # fmt: skip
+        if told and told.startswith("not"):
+            notes.append(told)
+        return run_id, tuple(notes)
 
     runs_dir: Path
     archive_url: str

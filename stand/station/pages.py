@@ -19,6 +19,7 @@ from stand.i18n.language import N_, Language
 from stand.plant import TokenGate
 from stand.solve import to_json
 from stand.station.certificates import certificate_links
+from stand.station.drive_views import drive_line, index_line, turn_buttons
 from stand.station.face import SEEN_FROM, face_svg
 from stand.station.guard import session_of
 from stand.station.history import REFRESH_S, guard, history_screen, notify
@@ -213,6 +214,7 @@ def measure_screen(station: Station) -> None:
         onward.mark("onward")
         head = ui.label().classes("big").mark("measure-head")
     sub = ui.label().classes("text-h6").mark("measure-sub")
+    drive_line(station, _)
     with ui.row().classes("w-full no-wrap gap-4"):
         planes = [_PlaneView(i, _) for i in (1, 2)]
     note = ui.label(_(ANGLE_NOTE)).classes("text-body1 text-grey-8")
@@ -254,6 +256,30 @@ def measure_screen(station: Station) -> None:
     ui.timer(REFRESH_S, redraw)
 
 
+def _plane_card(station: Station, ins: Any, out: dict[str, Any], _: Language) -> None:
+    """One plane's card on the Correct screen: the instruction, then the rotor face."""
+    pos = out.get("correction_positions") or {}
+    with ui.card().classes("w-1/2").style("min-width: 0").mark(f"correct-plane{ins.plane}"):
+        ui.label(ins.headline).classes("text-h6")
+        index_line(station, ins.plane, _)
+        with ui.row().classes("w-full no-wrap items-start gap-2"):  # words, then face
+            with ui.column().classes("gap-0").style("flex: 1 1 auto; min-width: 0"):
+                for what, where, stock in ins.lines:
+                    ui.label(what).classes("instruction")
+                    ui.label(where).classes("text-h6")
+                    if stock:
+                        ui.label(stock).classes("text-body1 text-grey-8 q-mb-xs")
+            svg = face_svg(
+                ins.marks,
+                positions=int(pos.get("count") or 0),
+                position1_deg=float(pos.get("position1_deg") or 0.0),
+                action=out["correction_mode"],
+                title=_("plane {i}").format(i=ins.plane),
+                words=_,
+            )
+            ui.html(svg, sanitize=False).style("flex: 0 0 13rem; max-width: 13rem")
+
+
 def correct_screen(station: Station) -> None:
     """Correct: per plane the instruction in large type, on the rotor face."""
     _ = words(station)
@@ -262,32 +288,15 @@ def correct_screen(station: Station) -> None:
         ui.label(_("Measure the rotor first (Start).")).classes("big")
         return
     out = to_json(latest)
-    pos = out.get("correction_positions") or {}
     ui.label(_("Correction of {rotor}").format(rotor=s.job.serial or _("the rotor"))).classes("big")
     with ui.row().classes("w-full no-wrap gap-6"):
         for ins in instructions(out, _):
-            with ui.card().classes("w-1/2").style("min-width: 0").mark(f"correct-plane{ins.plane}"):
-                ui.label(ins.headline).classes("text-h6")
-                with ui.row().classes("w-full no-wrap items-start gap-2"):  # words, then face
-                    with ui.column().classes("gap-0").style("flex: 1 1 auto; min-width: 0"):
-                        for what, where, stock in ins.lines:
-                            ui.label(what).classes("instruction")
-                            ui.label(where).classes("text-h6")
-                            if stock:
-                                ui.label(stock).classes("text-body1 text-grey-8 q-mb-xs")
-                    svg = face_svg(
-                        ins.marks,
-                        positions=int(pos.get("count") or 0),
-                        position1_deg=float(pos.get("position1_deg") or 0.0),
-                        action=out["correction_mode"],
-                        title=_("plane {i}").format(i=ins.plane),
-                        words=_,
-                    )
-                    ui.html(svg, sanitize=False).style("flex: 0 0 13rem; max-width: 13rem")
+            _plane_card(station, ins, out, _)
     ui.label(_("{angles}; the faces are drawn {seen}").format(angles=_(ANGLE_NOTE),
                                                              seen=_(SEEN_FROM))).classes(
         "text-body1")  # fmt: skip
     with ui.row().classes("no-wrap gap-4 q-py-sm actions"):  # kept in view (STYLE: sticky)
+        turn_buttons(station, _)
         if s.simulated and s.phase == "done":
 
             def apply() -> None:

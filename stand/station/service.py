@@ -23,26 +23,23 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from stand.actions import Actor, archive_run, config_seen, os_actor
+from stand.actions import config_seen
 from stand.archive import drift_rows
 from stand.archive.query import serials_starting
 from stand.config import default_stand_id, load_config, rotor_types_in
 from stand.config.serials import next_serial, rule_prefix
 from stand.drivers.bus import ALLOW_URL
 from stand.errors import StandError, StationBusyError, UsageError
-from stand.files import output
 from stand.health import with_drift
 from stand.i18n.language import N_, Language, language
-from stand.i18n.words import said
 from stand.live import live_source, measure_live
-from stand.plant import publish_archived
-from stand.report import render
 from stand.sim import Mass, shipped_scenes
 from stand.solve import Job, with_check
 from stand.solve.pipeline import SolveOptions, load_config_text
 from stand.solve.recordings import correction_masses
 from stand.solve.verdict import tolerance_of
 from stand.station.archive_side import ArchiveSide
+from stand.station.drive_side import DriveSide
 from stand.station.sessions import Sessions
 from stand.station.snapshot import BUS, Snapshot
 
@@ -101,6 +98,7 @@ class Station(ArchiveSide):
         self.sessions = Sessions(archive_url)  # who is logged in (none: a lone stand)
         self.default_language = "en"  # the screens' language where no account names one
         self._languages: dict[str, Language] = {}
+        self.drive = DriveSide(archive_url)  # the stand's drive, when a rotor type has one
 
     # -- what there is to choose -------------------------------------------------------------
     def language(self, code: str | None) -> Language:
@@ -201,13 +199,6 @@ class Station(ArchiveSide):
         self._launch(
             "initial", rotor_type=rotor_type, source=source, job=job, config=config, before=None
         )
-
-    @staticmethod
-    def _actor(job: Job) -> Actor:
-        """Who measures a rotor, as the journal names a run archived and a rotor type found
-        edited: the operator the job names (the account logged in, where there are
-        accounts), else the operating system's user the station runs as."""
-        return Actor(job.operator, None, "station") if job.operator else os_actor("station")
 
     def _generated_serial(self, config: Path) -> str:
         """The next serial of the rotor type's ``[rotor] serial_rule`` for today (local),
@@ -349,20 +340,27 @@ class Station(ArchiveSide):
         self.runs_dir.mkdir(parents=True, exist_ok=True)
         stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")
         path = self.runs_dir / f"{safe_name(s.job.serial or 'rotor')}-{kind}-{stamp}.h5"
-        result, _ = measure_live(
-            src,
-            kwargs,
-            str(path),
-            SolveOptions(traces=True),
-            self.targets,
-            max_seconds=self.max_seconds,
-            silence_timeout_s=SILENCE_S,
-            on_progress=lambda p: self._set(progress=p, waiting=""),
-            on_wait=lambda t, why: self._set(waiting=why),
-            job=s.job,
-            stop=self._stop,
-            max_interval_s=UPDATE_S,
-        )
+
+        def measure(stop: Any, on_play: Any = None, watch: Any = None) -> Any:
+            def progress(p: Any) -> None:
+                self._set(progress=p, waiting="")
+                if watch is not None:
+                    watch(p)
+
+            result, _ = measure_live(
+                src, kwargs, str(path), SolveOptions(traces=True), self.targets,
+                max_seconds=self.max_seconds, silence_timeout_s=SILENCE_S, on_progress=progress,
+                on_wait=lambda t, why: self._set(waiting=why), job=s.job, stop=stop,
+                max_interval_s=UPDATE_S, on_play=on_play,
+            )  # fmt: skip
+            return result
+
+        self.drive.link = None
+        if src.drive is None:
+            result = measure(self._stop)
+        else:
+            result = self.drive.run(src.drive, src.cfg, measure, str(path), self._stop,
+                                    self._actor(s.job))  # fmt: skip
         if kind == "check":
             prev = before.provenance.run_file
             result = with_check(result, prev, src.cfg, src.params, strict=True)
@@ -374,32 +372,6 @@ class Station(ArchiveSide):
         except StandError as exc:
             log.warning("stand health not checked: %s", exc)
         return result
-
-    def _file(self, result: Any, config: Path) -> tuple[int | None, tuple[str, ...]]:
-        """The report beside the run, then the archive (a failure of either is noted: the
-        run file is kept whatever happens)."""
-
-        notes = []
-        run = Path(result.provenance.run_file)
-        try:
-            data = render(result, self.language(None)).encode("utf-8")
-            with output(run.with_suffix(".html"), need_bytes=len(data)) as tmp:
-                tmp.write_bytes(data)
-        except StandError as exc:
-            notes.append(said("no report: {why}", why=exc))
-        run_id = None
-        try:
-            run_id = archive_run(result, self.archive_url, self._actor(result.provenance.job),
-                                 config=str(config))  # fmt: skip
-        except StandError as exc:
-            notes.append(said("not archived ({why}); the run is kept in {run}", why=exc, run=run))
-            return run_id, tuple(notes)
-
-        told = publish_archived(result, run_id, load_config_text(str(config))[0],
-                                self.archive_url)  # fmt: skip
-        if told and told.startswith("not"):
-            notes.append(told)
-        return run_id, tuple(notes)
 
 
 FILING = N_("writing the report and archiving the run")  # the Check screen, meanwhile

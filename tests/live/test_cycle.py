@@ -10,6 +10,7 @@ plus the measurement's own angle interval (its 95 % radius over the unbalance, i
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from pathlib import Path
@@ -133,3 +134,19 @@ def test_supervision_stops_the_rotor_and_keeps_the_run(
     err = capsys.readouterr().err.strip().splitlines()
     assert got == code and words in err[-1], err
     assert run.exists() and str(run) in err[-1]  # the run is kept, and said where
+
+
+@pytest.mark.realtime
+def test_an_aborted_cycle_is_journaled_with_its_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    scene = _with_drive_fault(tmp_path, "guard_opens_at_s = 2.0")
+    run, url = tmp_path / "r.h5", f"sqlite:///{tmp_path / 'archive.db'}"
+    assert main(["balance", "--scene", str(scene), "--config", CONFIG, "--out", str(run),
+                 "--archive", url]) == EXIT_ABORTED  # fmt: skip
+    capsys.readouterr()
+    assert main(["audit", "list", "--action", "cycle", "--archive", url, "--json"]) == 0
+    (entry,) = json.loads(capsys.readouterr().out)["entries"]
+    assert entry["reason"].startswith("guard opened at")
+    assert entry["new_sha256"] == hashlib.sha256(run.read_bytes()).hexdigest()
+    assert main(["audit", "verify", "--archive", url]) == 0
