@@ -12,7 +12,7 @@ from typing import Any, TextIO
 
 from stand.i18n import Display
 from stand.i18n.language import ENGLISH, N_, Language
-from stand.report.units import ACTIONS, verdict_word
+from stand.report.units import ACTIONS, cycle_sentence, verdict_word
 from stand.solve import json_text
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 from stand.solve.recordings import recording_summary
@@ -279,6 +279,8 @@ def print_result(out: dict[str, Any], _: Language = ENGLISH) -> None:
             why=_(out["stopped_by"]),
             seconds=Display.of(out, _).decimals(f"{out['elapsed_s']:.1f}"),
             run=out["run_file"]))  # fmt: skip
+    if line := cycle_sentence(out, _):
+        print(line)
     print_check(out, _)
     for w in out["warnings"]:
         print(_("warning: {message}").format(message=_(w)), file=sys.stderr)

@@ -34,6 +34,9 @@ POLL_S = 0.02
 """The supervisor's period [s]: at 1500 rpm half a revolution between two readings."""
 OVERSPEED = 1.02
 """A measured speed this much over the set point stops the rotor."""
+RUNUP_ALLOWANCE = (2.0, 2.0)
+"""The set point must be reached within twice the run-up the torque allows, plus 2 s (a
+real drive's own ramp and its speed loop's settling): else the rotor is stopped."""
 RPM = math.pi / 30.0
 
 
@@ -113,9 +116,11 @@ class Supervisor:
     keeps the reason; hands the state to ``show`` now and then."""
 
     def __init__(self, drive: Drive, omega_rad_s: float, t0: float,
-                 outside: threading.Event | None = None, show: StateSink | None = None
-                 ) -> None:  # fmt: skip
+                 outside: threading.Event | None = None, show: StateSink | None = None,
+                 runup_s: float = math.inf) -> None:  # fmt: skip
         self.drive, self.omega, self.t0 = drive, omega_rad_s, t0
+        self.runup_s = runup_s
+        """The longest run-up allowed [s] (:data:`RUNUP_ALLOWANCE` of the torque's)."""
         self.outside, self.show, self._shown = outside, show, 0.0
         self.stop = threading.Event()
         self.reason: str | None = None
@@ -175,6 +180,11 @@ class Supervisor:
         if st.speed_rad_s > OVERSPEED * self.omega:
             return (f"over-speed ({st.speed_rad_s / RPM:.0f} rpm, set point "
                     f"{self.omega / RPM:.0f} rpm)")  # fmt: skip
+        late = time.monotonic() - self.t0
+        if self.at_speed_s is None and not st.at_speed and late > self.runup_s:
+            return (f"the set point {self.omega / RPM:.0f} rpm was not reached ("
+                    f"{st.speed_rad_s / RPM:.0f} rpm after {late:.1f} s; the torque allows "
+                    f"a run-up of {self.runup_s:.1f} s with its allowance)")  # fmt: skip
         return None
 
 
@@ -204,7 +214,9 @@ def run_cycle(link: DriveLink, cfg: Config, measure: Measure, *, run_path: str,
         check_ready(drive)
         t0 = time.monotonic()
         drive.run(omega)
-        with Supervisor(drive, omega, t0, stop, show) as sup:
+        motor = d.motor()
+        allowed = RUNUP_ALLOWANCE[0] * omega / motor.accel_rad_s2 + RUNUP_ALLOWANCE[1]
+        with Supervisor(drive, omega, t0, stop, show, allowed) as sup:
             result = _measured(sup, measure, link, d.runup_limit_m_s2, run_path)
         t_measured = time.monotonic() - t0
         if sup.reason is not None:
@@ -245,9 +257,8 @@ def _measured(sup: Supervisor, measure: Measure, link: DriveLink, limit: float |
 def _speeds_agree(drive: Drive, sup: Supervisor, result: Result, pct: float) -> None:
     """The drive's speed at the set point against the reference mark's: a map with a wrong
     scaling is refused, both figures named (the rotor brought to rest first)."""
-    if not sup.speeds:
-        return
-    said = sum(sup.speeds) / len(sup.speeds)
+    speeds = sup.speeds or [drive.read().speed_rad_s]  # never at speed: as it is now
+    said = sum(speeds) / len(speeds)
     mark = result.omega_rad_s
     if abs(said / mark - 1) > pct / 100:
         drive.quick_stop()

@@ -84,7 +84,8 @@ def live_source(
         link = drive_link(cfg, config)
         if link is not None:  # the drive's shaft is the scene's: its run-up, its speed
             link.rpm = rpm or link.choice.drive.speed_rpm or sc.run.rpm
-            sc = drive_scene(sc, link.choice.drive.motor(), link.rpm)
+            stall = sc.effects.drive.stall_rpm if sc.effects.drive else None
+            sc = drive_scene(sc, link.choice.drive.motor(), min(link.rpm, stall or link.rpm))
             link.sim = sim_drive(sc, link.choice.drive.motor(), link.choice.table)
         acq = acquisition_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"

@@ -20,7 +20,7 @@ from stand.i18n.display import Display
 from stand.i18n.language import ENGLISH, N_, Language
 from stand.report.appendix import appendix, file_name
 from stand.report.plots import polar
-from stand.report.units import ACTIONS, verdict_word
+from stand.report.units import ACTIONS, cycle_sentence, verdict_word
 from stand.solve import Result, to_json
 from stand.solve.keys import CONVENTION_WORDS, FITTED_WORDS
 
@@ -314,6 +314,12 @@ def _signatures(out: dict[str, Any], _: Language) -> str:
     )
 
 
+def _cycle(out: dict[str, Any], _: Language) -> str:
+    """The stand's own cycle, when a drive ran it: each phase's time and each stop."""
+    text = cycle_sentence(out, _)
+    return f"<p class=muted>{html.escape(text)}</p>" if text else ""
+
+
 def render(result: Result, words: Language = ENGLISH) -> str:
     """The certificate of a result as one HTML document (figures embedded), in the
     language ``words`` (the customer's)."""
@@ -347,6 +353,7 @@ def render(result: Result, words: Language = ENGLISH) -> str:
             )
         )
     }</p>
+{_cycle(out, _)}
 {_calibration(out, result, _)}
 {_signatures(out, _)}
 {appendix(out, result, _)}

@@ -71,8 +71,10 @@ class SimDrive:
 
     def _run(self, t: float, omega: float) -> None:
         over = 1.0 + (getattr(self.fx, "overspeed_pct", 0.0) or 0.0) / 100
+        stall = getattr(self.fx, "stall_rpm", None)
         self.set_point, self.mode = omega, "run"
-        self.path = ramp_to(self.path, t, self.motor, omega * over)
+        top = omega * over if stall is None else min(omega * over, stall * RPM)
+        self.path = ramp_to(self.path, t, self.motor, top)
 
     def command(self, word: int, set_point_counts: int, target_counts: int) -> None:
         """A control word written, with the set point and target registers as they are."""

@@ -318,6 +318,8 @@ class DriveFaults(_Table):
     """The speed the drive reports, times this (a map with a wrong scaling)."""
     overspeed_pct: Annotated[FiniteFloat, Field(ge=0.0, le=50.0)] = 0.0
     """The drive runs this much over its set point (a speed loop gone wrong)."""
+    stall_rpm: Annotated[FiniteFloat, Field(gt=0.0, le=1e5)] | None = None
+    """The drive never turns faster than this (a motor too weak, a brake left on)."""
 
 
 class Effects(_Table):

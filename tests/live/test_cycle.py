@@ -122,7 +122,8 @@ def test_a_silent_drive_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixtur
     ("fault", "code", "words"),
     [("guard_opens_at_s = 2.0", EXIT_ABORTED, "cycle aborted: guard opened at"),
      ("overspeed_pct = 5.0", EXIT_ABORTED, "cycle aborted: over-speed"),
-     ("speed_scale = 0.98", 2, "reports 882.0 rpm, the reference mark gives 900.0 rpm")],
+     ("speed_scale = 0.98", 2, "reports 882.0 rpm, the reference mark gives 900.0 rpm"),
+     ("stall_rpm = 200.0", EXIT_ABORTED, "the set point 900 rpm was not reached (200 rpm")],
 )  # fmt: skip
 def test_supervision_stops_the_rotor_and_keeps_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], fault: str, code: int, words: str
