@@ -17,14 +17,18 @@ their state (:class:`DriveState`) so that the cycle never commands what they for
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
-from stand.errors import ConfigError
+from stand.core.motor import Motor
+from stand.errors import ConfigError, DriveError
 
 DRIVES: dict[str, str] = {
     "none": "stand.drivers.nodrive",
     "modbus": "stand.drivers.modbus",
+    "cia402": "stand.drivers.cia402",
 }
 """``[drive] family`` names -> the module whose ``FAMILY`` implements it."""
 
@@ -91,20 +95,48 @@ class Drive(Protocol):
         """Let the connection go (quick-stops a drive still turning)."""
 
 
+@dataclass(frozen=True)
+class DriveContext:
+    """What a family connects with besides its table: each exchange's time limit [s], the
+    config's folder and name (description files are relative to it), the stand's CAN bus
+    (``can.Bus`` options; a drive on the bus uses it) and the shaft it turns."""
+
+    timeout_s: float
+    base: Path
+    source: str
+    bus: dict[str, Any] | None
+    motor: Motor
+
+
 class DriveFamily(Protocol):
     """A family of drives.  An implementation shall name itself (``name``, its ``[drive]
     family`` value), give the pydantic model of its ``[drive.<name>]`` table (``table``;
     None: it takes none; every key bounded), say whether the product commands it
     (``commanded``: False for ``none``, where the operator spins the rotor) and connect to
     one drive from a checked table (:meth:`connect`), raising
-    :class:`~stand.errors.DriveError` when it does not answer."""
+    :class:`~stand.errors.DriveError` when it does not answer and
+    :class:`~stand.errors.ConfigError` for a description file that is wrong (read bounded,
+    :func:`stand.drivers.family.read_description`)."""
 
     name: str
     table: type[Any] | None
     commanded: bool
 
-    def connect(self, table: Any, *, timeout_s: float) -> Drive:
-        """A connected drive (``timeout_s``: each exchange's limit)."""
+    def connect(self, table: Any, ctx: DriveContext) -> Drive:
+        """A connected drive."""
+
+
+def close_link(quick_stop: Callable[[], None], running: bool, release: Callable[[], None]
+               ) -> None:  # fmt: skip
+    """A drive's :meth:`Drive.close`: quick-stop it first while it still runs, then let the
+    link go (a link gone already: the drive's own watchdog stops it)."""
+    try:
+        if running:
+            quick_stop()
+    except DriveError:
+        pass
+    finally:
+        release()
 
 
 def drive_family_of(name: str, source: str = "the config") -> DriveFamily:

@@ -16,7 +16,7 @@ class NoDrive:
     table = None
     commanded = False
 
-    def connect(self, table: Any, *, timeout_s: float) -> Any:
+    def connect(self, table: Any, ctx: Any) -> Any:
         raise UsageError("[drive] family = \"none\": the operator spins the rotor, there "
                          "is no drive to connect to")  # fmt: skip
 

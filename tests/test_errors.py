@@ -32,6 +32,8 @@ SAMPLES = {
     "ThrottledError": {"who": "kim", "right": "log in"},
     "KeyFileError": {"path": "audit/stand-key.pem"},
     "TooLargeError": {"what": "run.log", "needed_bytes": 10**11, "available_bytes": 10**10},
+    "DriveError": {"where": "modbus 127.0.0.1:502 unit 1"},
+    "CycleAbortedError": {"reason": "guard opened at 2.1 s", "run_file": "r.h5"},
 }  # fmt: skip
 CLASSES = [
     c for _, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, errors.StandError)
@@ -44,7 +46,7 @@ def _make(cls: type[errors.StandError]) -> errors.StandError:
     takes_message = "message" in inspect.signature(cls.__init__).parameters
     if cls.__name__ in ("ParameterError", "PlanesTooCloseError"):
         return cls(**kwargs)
-    if cls.__name__ == "UnusualLogError":
+    if cls.__name__ in ("UnusualLogError", "CycleAbortedError"):
         return cls(**kwargs)
     if takes_message or cls.__init__ is Exception.__init__:
         return cls("what went wrong", **kwargs)

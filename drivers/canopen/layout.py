@@ -108,7 +108,7 @@ def _mapping(od: Any, eds: str) -> tuple[int, ...]:
     return entries
 
 
-def _od(desc: Description, node_id: int, where: str) -> Any:
+def object_dictionary(desc: Description, node_id: int, where: str) -> Any:
     """The object dictionary of an EDS text (the canopen library), every fault one line."""
     from canopen.objectdictionary import ObjectDictionaryError, import_od
 
@@ -148,7 +148,7 @@ def _node(n: Any, base: Path, source: str, stored: Kept | None
     eds = Path(n.eds) if Path(n.eds).is_absolute() else base / n.eds
     desc, note = read_description(eds, "bus.canopen", source, stored)
     where = f"{source}, {eds.name}"
-    od = _od(desc, n.node_id, where)
+    od = object_dictionary(desc, n.node_id, where)
     sig: list[Signal | None] = []
     for ref in (n.accel, n.mark, n.accel_status, n.mark_status):
         if ref is None:

@@ -16,10 +16,10 @@ class Modbus:
     table = ModbusTable
     commanded = True
 
-    def connect(self, table: Any, *, timeout_s: float) -> Any:
+    def connect(self, table: Any, ctx: Any) -> Any:
         from stand.drivers.modbus.client import ModbusDrive
 
-        return ModbusDrive(table, timeout_s=timeout_s)
+        return ModbusDrive(table, timeout_s=ctx.timeout_s)
 
 
 FAMILY = Modbus()

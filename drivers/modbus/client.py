@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from stand.drivers.drive import DriveState
+from stand.drivers.drive import DriveState, close_link
 from stand.drivers.modbus.table import (
     CONTROL_INDEX,
     CONTROL_QUICK_STOP,
@@ -111,10 +111,4 @@ class ModbusDrive:
         self._running = False
 
     def close(self) -> None:
-        try:
-            if self._running:
-                self.quick_stop()
-        except DriveError:
-            pass  # the link is gone: the drive's own watchdog stops it
-        finally:
-            self._client.close()
+        close_link(self.quick_stop, self._running, self._client.close)

@@ -165,6 +165,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             import logging  # here, not at the top: --help and --version need none of it
 
             logging.getLogger("can").setLevel(logging.ERROR)
+            # the 402 profile says "not a configured TPDO, fallback to SDO" at every read of
+            # a drive that maps none: the product reads it over SDO on purpose
+            logging.getLogger("canopen").setLevel(logging.ERROR)
         return run(args)
     except StandError as exc:
         if debug:

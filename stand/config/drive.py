@@ -74,6 +74,8 @@ class DriveTable(BaseModel):
     """One exchange with the drive [s]: longer, the drive does not answer."""
     modbus: dict[str, Any] | None = None
     """``[drive.modbus]``: the inverter's address and register map (docs/drive.md)."""
+    cia402: dict[str, Any] | None = None
+    """``[drive.cia402]``: the servo's node id, EDS and units (docs/drive.md)."""
 
     @field_validator("family")
     @classmethod

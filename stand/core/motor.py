@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from stand.errors import ParameterError
+from stand.errors import ModelError, ParameterError
 
 FloatArray = NDArray[np.float64]
 
@@ -163,22 +163,52 @@ def stop_at(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
     """From ``t_s`` on, hold the speed, then brake at ``share`` of the full braking so as
     to come to rest with the angle at ``target_rad`` (mod ``2 pi``); from rest,
     :func:`turn_to`."""
-    w = float(path.omega(t_s))
+    return stop_at_position(path, t_s, motor, nearest_stop(path, t_s, motor, target_rad, share),
+                            share)  # fmt: skip
+
+
+def nearest_stop(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
+                 share: float = INDEX_DECEL_SHARE) -> float:  # fmt: skip
+    """The first unwrapped angle ``= target_rad (mod 2 pi)`` the shaft can stop at from its
+    state at ``t_s``, braking at ``share`` of the full figure [rad]: what a host asks a
+    drive's profile position for."""
+    w = max(float(path.omega(t_s)), 0.0)
+    ahead = float(path.theta(t_s)) + w * w / (2 * share * motor.decel_rad_s2)
+    return ahead + (target_rad - ahead) % TWO_PI
+
+
+def stop_at_position(path: Trajectory, t_s: float, motor: Motor, position_rad: float,
+                     share: float = INDEX_DECEL_SHARE) -> Trajectory:  # fmt: skip
+    """From ``t_s`` on, come to rest at the unwrapped angle ``position_rad``: at speed, hold
+    it, then brake at ``share`` of the full braking (harder, up to the full, when the
+    position is nearer); from rest, :func:`turn_to`.
+
+    Raises
+    ------
+    ModelError
+        The position lies behind, or nearer than the full braking allows.
+    """
+    w, d = float(path.omega(t_s)), position_rad - float(path.theta(t_s))
     if w <= 0.0:
-        return turn_to(path, t_s, motor, target_rad, share)
-    a = share * motor.decel_rad_s2
-    braking = w * w / (2 * a)
-    extra = (target_rad - float(path.theta(t_s)) - braking) % TWO_PI
-    begin = t_s + extra / w
+        if d < 0.0:
+            raise ModelError(f"a stop {-d:.3g} rad behind the shaft: it turns forward only")
+        return turn_to(path, t_s, motor, position_rad, share)
+    if d < w * w / (2 * motor.decel_rad_s2):
+        raise ModelError(f"a stop {d:.3g} rad ahead at {w:.3g} rad/s: nearer than braking allows")
+    a = max(share * motor.decel_rad_s2, w * w / (2 * d))
+    begin = t_s + (d - w * w / (2 * a)) / w
     return path.then(t_s, 0.0).then(begin, -a).then(begin + w / a, 0.0, 0.0)
 
 
 def turn_to(path: Trajectory, t_s: float, motor: Motor, target_rad: float,
             share: float = INDEX_DECEL_SHARE) -> Trajectory:  # fmt: skip
-    """From rest at ``t_s``, turn in the direction of rotation to ``target_rad`` (mod
-    ``2 pi``): accelerate, then brake, each at ``share`` of the full figure (the
-    shortest move the torques allow, with the position loop's reserve)."""
-    d = (target_rad - float(path.theta(t_s))) % TWO_PI
+    """From rest at ``t_s``, turn in the direction of rotation to ``target_rad``: an
+    unwrapped angle ahead, or (mod ``2 pi``) the next one: accelerate, then brake, each
+    at ``share`` of the full figure (the shortest move the torques allow, with the
+    position loop's reserve)."""
+    d = target_rad - float(path.theta(t_s))
+    if not 0.0 <= d < 2 * TWO_PI:
+        d %= TWO_PI
     if d == 0.0:
         return path.then(t_s, 0.0)
     a1, a2 = share * motor.accel_rad_s2, share * motor.decel_rad_s2

@@ -17,16 +17,17 @@ import math
 import threading
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import Any
 
 from stand.config import Config
 from stand.config.drive import DriveChoice
 from stand.core.motor import floors
-from stand.drivers.drive import Drive, DriveState
+from stand.drivers.drive import Drive, DriveContext, DriveState
 from stand.errors import CycleAbortedError, DriveError, StandError, UsageError
-from stand.sim.drive import SimDrive, SimInverter
+from stand.sim.shaft import SimShaft
 from stand.solve import Result
 from stand.solve.result import CycleInfo, IndexStop
 
@@ -42,34 +43,32 @@ RPM = math.pi / 30.0
 
 @dataclass
 class DriveLink:
-    """The drive a live source commands: the config's choice and, for a scene, the simulated
-    drive that serves it (its inverter started by :func:`connected`)."""
+    """The drive a live source commands: the config's choice, where the config is (its
+    description files are relative to it), the stand's CAN bus, and, for a scene, the
+    simulated drive that serves it (started by :func:`connected`)."""
 
     choice: DriveChoice
-    sim: SimDrive | None = None
+    base: Path = Path(".")
+    source: str = "the config"
+    bus: dict[str, Any] | None = None
+    sim: SimShaft | None = None
     rpm: float | None = None
     """The set point chosen where the source was made (a scene's speed) [rpm]."""
 
 
 @contextmanager
 def connected(link: DriveLink) -> Iterator[Drive]:
-    """The drive, connected (a scene's simulated inverter served on 127.0.0.1 first);
-    closed (a drive still turning quick-stopped) on the way out."""
-    drive_table = link.choice.drive
-    if link.sim is None:
-        drive = link.choice.family.connect(link.choice.table, timeout_s=drive_table.timeout_s)
-        try:
-            yield drive
-        finally:
-            drive.close()
-        return
-    with SimInverter(link.sim) as server:
-        table = link.choice.table.model_copy(update={"host": "127.0.0.1", "port": server.port})
-        drive = link.choice.family.connect(table, timeout_s=drive_table.timeout_s)
-        try:
-            yield drive
-        finally:
-            drive.close()
+    """The drive, connected (a scene's simulated drive served first); closed (a drive
+    still turning quick-stopped) on the way out."""
+    d = link.choice.drive
+    with ExitStack() as stack:
+        table, bus = link.choice.table, link.bus
+        if link.sim is not None:
+            table, bus = stack.enter_context(link.sim.serve(table, bus))  # type: ignore[attr-defined]
+        ctx = DriveContext(d.timeout_s, link.base, link.source, bus, d.motor())
+        drive = link.choice.family.connect(table, ctx)
+        stack.callback(drive.close)
+        yield drive
 
 
 def set_point(link: DriveLink, cfg: Config, rpm: float | None) -> float:

@@ -8,6 +8,7 @@ import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from stand.config import Config, config_toml
@@ -16,7 +17,8 @@ from stand.config.drive import drive_choice
 from stand.errors import UsageError
 from stand.live.cycle import DriveLink
 from stand.sim import load_scene, scene_modules, simulate, with_masses
-from stand.sim.drive import drive_scene, sim_drive
+from stand.sim.drives import simulated_drive
+from stand.sim.shaft import drive_scene
 from stand.solve.acquisition import Acquired, acquisition_of
 from stand.solve.pipeline import load_config_text
 
@@ -86,7 +88,8 @@ def live_source(
             link.rpm = rpm or link.choice.drive.speed_rpm or sc.run.rpm
             stall = sc.effects.drive.stall_rpm if sc.effects.drive else None
             sc = drive_scene(sc, link.choice.drive.motor(), min(link.rpm, stall or link.rpm))
-            link.sim = sim_drive(sc, link.choice.drive.motor(), link.choice.table)
+            link.sim = simulated_drive(link.choice.family.name, sc, link.choice.drive.motor(),
+                                       link.choice.table)  # fmt: skip
         acq = acquisition_of(cfg, config, scene_bus=sc.config().bus, scene=scene)
         channel = f"stand-{command}-{os.getpid()}-{time.monotonic_ns()}"
         return LiveSource(
@@ -116,5 +119,8 @@ def drive_link(cfg: Config, source: str | None) -> DriveLink | None:
     """The drive a config's ``[drive]`` names, when the product commands it."""
     if cfg.drive is None:
         return None
-    choice = drive_choice(cfg.drive, source or "the config")
-    return DriveLink(choice) if choice.family.commanded else None
+    where = source or "the config"
+    choice = drive_choice(cfg.drive, where)
+    base = Path(source).resolve().parent if source else Path.cwd()
+    return DriveLink(choice, base=base, source=where, bus=cfg.bus) \
+        if choice.family.commanded else None  # fmt: skip

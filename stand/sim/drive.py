@@ -1,17 +1,11 @@
 """A simulated frequency inverter on Modbus TCP, served on 127.0.0.1 as a real one would
-be: the register map of :mod:`stand.drivers.modbus.table`, a motor
-(:mod:`stand.core.motor`) that turns the simulated rotor.
-
-The scene's shaft and the drive's are one: the scene is simulated with the run-up the
-motor gives (a ramp at the torque limit, :func:`drive_scene`), and the drive's clock starts
-when the scene's player sends its first frame (:meth:`SimDrive.start_clock`), so the angle
-the drive reports is the angle the sensors' frames come from.  After the measurement the
-drive's own commands (brake, stop at an angle, quick stop) move the shaft from where the
-scene left it.
+be: the register map of :mod:`stand.drivers.modbus.table` on the simulated shaft
+(:class:`stand.sim.shaft.SimShaft`, which turns the scene's rotor).
 
 Faults for the tests and the demo come from the scene's ``[effects.drive]``: a guard open
-from the start or opening at a time, a fault code, a drive that never answers, a speed
-reported with a wrong scaling, a speed running over the set point.
+from the start or opening at a time, a fault code, a drive that never answers (its
+requests are never answered), a speed reported with a wrong scaling, a speed running over
+the set point, a drive that stalls.
 """
 
 from __future__ import annotations
@@ -19,10 +13,11 @@ from __future__ import annotations
 import asyncio
 import math
 import threading
-import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
-from stand.core.motor import Motor, Trajectory, at_rest, quick_stop, ramp_to, stop_at
+from stand.core.motor import Motor
 from stand.drivers.modbus.table import (
     CONTROL_INDEX,
     CONTROL_QUICK_STOP,
@@ -31,109 +26,51 @@ from stand.drivers.modbus.table import (
     status_word,
 )
 from stand.errors import DriveError
-
-RPM = math.pi / 30.0
-AT_SPEED = 0.005
-"""The drive's at-speed window: within 0.5 % of the set point."""
-STANDSTILL_RAD_S = 0.01
-"""Below this the drive says standstill (0.1 rpm)."""
+from stand.sim.shaft import RPM, STANDSTILL_RAD_S, SimShaft
 
 
-class SimDrive:
-    """The inverter's behaviour: commands in, state out, on the monotonic clock.
-
-    ``gamma_rad``: where the reference sensor sees the mark (the scene's), so that the
-    reported angle counts from the mark passing the sensor.  ``effects``: the scene's
-    ``[effects.drive]`` (None: a healthy drive, guard closed).
-    """
+class SimDrive(SimShaft):
+    """The inverter's registers on :class:`~stand.sim.shaft.SimShaft`: commands written,
+    state read, as :mod:`stand.drivers.modbus.table` maps them."""
 
     def __init__(self, motor: Motor, table: ModbusTable, gamma_rad: float,
                  effects: Any = None) -> None:  # fmt: skip
-        self.motor, self.map, self.gamma = motor, table, gamma_rad
-        self.fx = effects
-        self.path: Trajectory = at_rest()
-        self.t0: float | None = None
-        self.pending: float | None = None
-        self.set_point = 0.0
-        self.mode = "off"
-        self.lock = threading.Lock()
-
-    def start_clock(self, t0_monotonic: float) -> None:
-        """The scene's physics time 0 is this instant: a run asked for starts now."""
-        with self.lock:
-            self.t0 = t0_monotonic
-            if self.pending is not None:
-                self._run(0.0, self.pending)
-
-    def now(self) -> float:
-        """The drive's time [s] since the scene started (0 before)."""
-        return 0.0 if self.t0 is None else time.monotonic() - self.t0
-
-    def _run(self, t: float, omega: float) -> None:
-        over = 1.0 + (getattr(self.fx, "overspeed_pct", 0.0) or 0.0) / 100
-        stall = getattr(self.fx, "stall_rpm", None)
-        self.set_point, self.mode = omega, "run"
-        top = omega * over if stall is None else min(omega * over, stall * RPM)
-        self.path = ramp_to(self.path, t, self.motor, top)
+        super().__init__(motor, gamma_rad, effects)
+        self.map = table
 
     def command(self, word: int, set_point_counts: int, target_counts: int) -> None:
         """A control word written, with the set point and target registers as they are."""
         with self.lock:
-            t = self.now()
             if word & CONTROL_QUICK_STOP:
-                self.path, self.mode = quick_stop(self.path, t, self.motor), "stop"
-                self.pending = None
+                self.stop()
             elif word & CONTROL_INDEX:
-                angle = 2 * math.pi * target_counts / self.map.counts_per_rev + self.gamma
-                self.path, self.mode = stop_at(self.path, t, self.motor, angle), "index"
+                self.stop_at_angle(2 * math.pi * target_counts / self.map.counts_per_rev)
             elif word & CONTROL_RUN:
-                if self.fault_code() or not self.guard_closed(t):
-                    return  # the hardware interlock: a drive in fault or behind an open guard
-                omega = (set_point_counts - 0x10000 if set_point_counts & 0x8000
-                         else set_point_counts) / self.map.speed_per_rpm * RPM  # fmt: skip
-                if self.t0 is None:
-                    self.pending, self.set_point, self.mode = omega, omega, "run"
-                else:
-                    self._run(t, omega)
+                self.run((set_point_counts - 0x10000 if set_point_counts & 0x8000
+                          else set_point_counts) / self.map.speed_per_rpm * RPM)  # fmt: skip
             elif self.mode != "off":
-                self.path, self.mode = quick_stop(self.path, t, self.motor), "off"
-
-    def guard_closed(self, t: float) -> bool:
-        fx = self.fx
-        if fx is None:
-            return True
-        if fx.guard_open:
-            return False
-        return fx.guard_opens_at_s is None or self.t0 is None or t < fx.guard_opens_at_s
-
-    def fault_code(self) -> int:
-        return int(getattr(self.fx, "fault_code", 0) or 0)
+                self.stop("off")
 
     def registers(self) -> dict[int, int]:
         """The read registers' values now."""
         with self.lock:
-            t = self.now()
-            guard = self.guard_closed(t)
-            if not guard and self.mode == "run":  # the interlock cuts the drive's power
-                self.path, self.mode = quick_stop(self.path, t, self.motor), "stop"
-            w = float(self.path.omega(t))
-            theta = float(self.path.theta(t)) - self.gamma
+            t, w, theta, guard = self.state()
+            at_speed, in_position = self.at_speed(t), self.in_position(t)
         m, fault = self.map, self.fault_code()
-        scale = getattr(self.fx, "speed_scale", 1.0) or 1.0
         still = abs(w) < STANDSTILL_RAD_S
         status = status_word(
             estop_clear=True, guard_closed=guard, fault=bool(fault), ready=not fault,
-            standstill=still, in_position=still and self.mode == "index" and t >= self.path.end_s,
-            at_speed=self.mode == "run" and abs(w - self.set_point) <= AT_SPEED * self.set_point,
+            standstill=still, in_position=still and in_position, at_speed=at_speed,
         )  # fmt: skip
-        speed = round(w * scale / RPM * m.speed_per_rpm) & 0xFFFF
+        speed = round(w / RPM * m.speed_per_rpm) & 0xFFFF
         counts = round(theta % (2 * math.pi) / (2 * math.pi) * m.counts_per_rev) % m.counts_per_rev
         return {m.status: status, m.speed: speed, m.angle: counts, m.fault: fault}
 
-    def true_angle_rad(self) -> float:
-        """The shaft's angle from the mark now, exactly (for the tests' truth) [rad]."""
-        with self.lock:
-            return (float(self.path.theta(self.now())) - self.gamma) % (2 * math.pi)
+    @contextmanager
+    def serve(self, table: ModbusTable, bus: Any) -> Iterator[tuple[ModbusTable, Any]]:
+        """Served on 127.0.0.1 while inside: the table pointing at it, and the bus as given."""
+        with SimInverter(self) as server:
+            yield table.model_copy(update={"host": "127.0.0.1", "port": server.port}), bus
 
 
 class SimInverter:
@@ -206,20 +143,8 @@ class SimInverter:
         await server.shutdown()
 
 
-def drive_scene(scene: Any, motor: Motor, rpm: float) -> Any:
-    """The scene run by the drive: at ``rpm``, from standstill on the ramp the motor's torque
-    gives (``[effects.run_up] ramp_s = w / a_up``), so that the frames come from the shaft
-    the simulated drive turns."""
-    from stand.sim.tables import RunUp
-
-    ramp = rpm * RPM / motor.accel_rad_s2
-    effects = scene.effects.model_copy(update={"run_up": RunUp(ramp_s=ramp)})
-    run = scene.run.model_copy(update={"rpm": rpm})
-    return scene.model_copy(update={"run": run, "effects": effects})
-
-
 def sim_drive(scene: Any, motor: Motor, table: ModbusTable) -> SimDrive:
-    """The drive a scene's stand has: its motor, the config's register map, the scene's
+    """The inverter a scene's stand has: its motor, the config's register map, the scene's
     reference sensor and its ``[effects.drive]``."""
     return SimDrive(motor, table, math.radians(scene.stand.reference_angle_deg),
                     scene.effects.drive)  # fmt: skip

@@ -1,9 +1,11 @@
 """The stand's own cycle against its physical floor (not a test: run it by hand).
 
     .venv/bin/python tests/bench/bench_cycle.py [--runs 5] [--plot docs/drive-cycle.png]
+        [--config examples/drive-cia402.toml]
 
 The shipped ``demo-drive`` scene run by ``examples/drive-modbus.toml``'s simulated inverter
-(Modbus TCP on 127.0.0.1, played in real time), as ``stand balance`` runs it: each
+(Modbus TCP on 127.0.0.1; or another config's drive), played in real time, as ``stand
+balance`` runs it: each
 phase's time, the floor (run-up ``J w / T``, the measurement's own window, braking
 ``J w / T_b``, one revolution for the index) and the ratio, the median over the runs; the
 goal is the whole cycle within 1.15x the floor.  ``--plot``: one cycle's speed (the
@@ -79,13 +81,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--plot", type=Path)
+    ap.add_argument("--config", default=str(ROOT / "examples" / "drive-modbus.toml"))
     args = ap.parse_args()
     from test_cycle import _cycle
 
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for i in range(args.runs):
-            result, sim = _cycle("demo-drive", Path(d) / f"r{i}.h5", plane2=False)
+            result, sim = _cycle("demo-drive", Path(d) / f"r{i}.h5", plane2=False,
+                                 config=args.config)  # fmt: skip
             c = result.cycle
             rows.append({**{k: getattr(c, k) for k in PHASES}, "ratio": c.total_s / c.floor_s,
                          "index_deg": c.index[0].error_deg})  # fmt: skip

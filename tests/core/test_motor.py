@@ -19,13 +19,15 @@ from stand.core.motor import (
     Motor,
     at_rest,
     floors,
+    nearest_stop,
     quick_stop,
     ramp_to,
     stop_at,
+    stop_at_position,
     turn_to,
     wrap_deg,
 )
-from stand.errors import ParameterError
+from stand.errors import ModelError, ParameterError
 
 DEMO = Motor(inertia_kg_m2=0.35, torque_n_m=25.0, brake_torque_n_m=40.0, friction_n_m=0.5)
 
@@ -120,3 +122,20 @@ def test_motor_refuses_unphysical_figures(field: str, value: float) -> None:
 )  # fmt: skip
 def test_wrap_deg(angle: float, wrapped: float) -> None:
     assert wrap_deg(angle) == pytest.approx(wrapped)
+
+
+def test_a_stop_at_a_position_brakes_harder_when_nearer_and_refuses_the_impossible() -> None:
+    w = 100.0
+    path = ramp_to(at_rest(), 0.0, DEMO, w)
+    t = 5.0
+    theta = float(path.theta(t))
+    full = w * w / (2 * DEMO.decel_rad_s2)
+    near = stop_at_position(path, t, DEMO, theta + 1.02 * full)  # inside the share's reach
+    assert float(near.theta(near.end_s)) == pytest.approx(theta + 1.02 * full, abs=1e-9)
+    assert min(near.alpha_rad_s2) >= -DEMO.decel_rad_s2 * (1 + 1e-12)
+    with pytest.raises(ModelError, match="nearer than braking allows"):
+        stop_at_position(path, t, DEMO, theta + 0.9 * full)
+    with pytest.raises(ModelError, match="turns forward only"):
+        stop_at_position(at_rest(3.0), 0.0, DEMO, 2.0)
+    assert nearest_stop(path, t, DEMO, 1.0) >= theta + w * w / (2 * INDEX_DECEL_SHARE
+                                                                 * DEMO.decel_rad_s2)  # fmt: skip

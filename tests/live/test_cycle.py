@@ -26,6 +26,7 @@ from stand.solve import SolveOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = str(ROOT / "examples" / "drive-modbus.toml")
+CONFIGS = {"modbus": CONFIG, "cia402": str(ROOT / "examples" / "drive-cia402.toml")}
 INDEX_GOAL_DEG = 2.0
 
 
@@ -35,8 +36,8 @@ def _with_drive_fault(folder: Path, fault: str) -> Path:
     return edited_scene("demo-drive", folder, edit)
 
 
-def _cycle(scene: str, run: Path, plane2: bool = True):  # type: ignore[no-untyped-def]
-    source = live_source(scene, CONFIG, "balance")
+def _cycle(scene: str, run: Path, plane2: bool = True, config: str = CONFIG):  # type: ignore[no-untyped-def]
+    source = live_source(scene, config, "balance")
     assert source.drive is not None and source.drive.sim is not None
 
     def measure(stop, on_play, watch):  # type: ignore[no-untyped-def]
@@ -52,10 +53,11 @@ def _cycle(scene: str, run: Path, plane2: bool = True):  # type: ignore[no-untyp
 
 
 @pytest.mark.realtime
-def test_the_cycle_stops_each_place_at_the_mark(tmp_path: Path) -> None:
-    result, sim = _cycle("demo-drive", tmp_path / "r.h5", plane2=False)
+@pytest.mark.parametrize("family", sorted(CONFIGS))
+def test_the_cycle_stops_each_place_at_the_mark(tmp_path: Path, family: str) -> None:
+    result, sim = _cycle("demo-drive", tmp_path / "r.h5", plane2=False, config=CONFIGS[family])
     c = result.cycle
-    assert c is not None and c.aborted is None and c.drive == "modbus"
+    assert c is not None and c.aborted is None and c.drive == family
     (stop,) = c.index
     assert abs(stop.error_deg) <= INDEX_GOAL_DEG
     # the truth: plane 1's heavy spot (30 deg in the scene, drilled in mode remove) faces
