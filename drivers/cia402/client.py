@@ -63,8 +63,12 @@ class Cia402Drive:
         self.node.sdo.MAX_RETRIES = 1  # one attempt (the library counts the first)
         self._running = False
         setup: Any = self.node.setup_402_state_machine  # (the library's is untyped)
-        self._sdo(lambda: setup(read_pdos=False), "its set-up")
-        self._sdo(lambda: self.node.sdo[0x6041].raw, "statusword 0x6041")  # it answers
+        try:
+            self._sdo(lambda: setup(read_pdos=False), "its set-up")
+            self._sdo(lambda: self.node.sdo[0x6041].raw, "statusword 0x6041")  # it answers
+        except DriveError:
+            self.close()  # no thread or bus left behind by a drive that never answered
+            raise
 
     def _sdo(self, fn: Any, what: str) -> Any:
         from canopen.sdo.exceptions import SdoError
