@@ -4,10 +4,10 @@ screen's stops at the mark and its turn of plane 2."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 from typing import Any
 
+import pytest
 from test_station_browser import ROOT, _button, _see, _shot, _type, served
 
 
@@ -24,10 +24,13 @@ def _choose(driver: Any, label: str, option: str) -> None:
     driver.find_element(By.XPATH, item).click()
 
 
-def test_the_cycle_through_the_screens(browser: Any, tmp_path: Path) -> None:
+@pytest.mark.parametrize("family", ["modbus", "cia402"])
+def test_the_cycle_through_the_screens(browser: Any, tmp_path: Path, family: str) -> None:
     rotors = tmp_path / "rotors"
     rotors.mkdir()
-    shutil.copy(ROOT / "examples" / "drive-modbus.toml", rotors / "demo-auger.toml")
+    text = (ROOT / "examples" / f"drive-{family}.toml").read_text(encoding="utf-8")
+    eds = str(ROOT / "drivers" / "cia402" / "cia402_servo.eds")  # the copy's folder is another
+    (rotors / "demo-auger.toml").write_text(text.replace("../drivers/cia402/cia402_servo.eds", eds))
     with served(tmp_path, "--config-dir", str(rotors)) as base:
         browser.set_window_size(1024, 768)
         browser.get(base + "/")
