@@ -127,6 +127,7 @@ class Supervisor:
         self.speeds: list[float] = []
         self._done = threading.Event()
         self._lock = threading.Lock()
+        self._io = threading.RLock()
         self._thread = threading.Thread(target=self._watch, daemon=True, name="drive-watch")
 
     def __enter__(self) -> Supervisor:
@@ -145,14 +146,16 @@ class Supervisor:
             self.reason = f"{why} at {time.monotonic() - self.t0:.1f} s"
         self.stop.set()
         try:
-            self.drive.quick_stop()
+            with self._io:  # one exchange at a time: neither link is thread-safe
+                self.drive.quick_stop()
         except DriveError:
             pass  # silent: its own watchdog and the hardware stop it
 
     def _watch(self) -> None:
         while not self._done.wait(POLL_S):
             try:
-                st = self.drive.read()
+                with self._io:
+                    st = self.drive.read()
             except DriveError as exc:
                 return self.abort(f"the drive stopped answering ({exc})")
             why = self._why(st)
