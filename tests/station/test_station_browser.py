@@ -602,9 +602,10 @@ def test_the_screens_in_the_accounts_language(browser: Any, tmp_path: Path) -> N
         status, page = _fetch(base, f"/report/{run['id']}?lang=xx", browser.get_cookies())
         assert status == 400 and b"lang" in page, page
         browser.get(base + "/")  # the next rotor: the first one's certificates stay there
+        _see(browser, "Новий ротор")  # the form is there before a word is typed into it
         _type(browser, "серійний номер", "U-2")
         _button(browser, "Почати вимірювання").click()
-        _see(browser, "вимірювання U-2")
+        _see(browser, "вимірювання U-2", 60)
         for lang in ("de", "en"):
             status, page = _fetch(base, f"/report/{run['id']}?lang={lang}", browser.get_cookies())
             assert status == 200 and f'<html lang="{lang}">'.encode() in page, (lang, status)
