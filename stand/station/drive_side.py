@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import logging
 import threading
-from typing import Any
 
 from stand.actions import Actor, journal_abort
+from stand.config import Config
 from stand.core import rad_s_to_rpm
 from stand.drivers.drive import DriveState
 from stand.errors import CycleAbortedError, StandError, UsageError
@@ -40,7 +40,7 @@ class DriveSide:
     def show(self, phase: str, st: DriveState) -> None:
         self.state = (phase, st)
 
-    def run(self, link: DriveLink, cfg: Any, measure: Measure, run_path: str,
+    def run(self, link: DriveLink, cfg: Config, measure: Measure, run_path: str,
             stop: threading.Event, actor: Actor) -> Result:  # fmt: skip
         """The cycle, Stop its quick stop; an abort journaled, then raised."""
         self.link, self.result, self.state, self.at_mark = link, None, None, None
