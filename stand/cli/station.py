@@ -150,9 +150,12 @@ def run(args: argparse.Namespace) -> int:
             busy = station.snapshot().phase == "measuring" or station.drive.turning
             return "Executing" if busy else "NotExecuting"
 
+        def mode() -> str:  # a simulated rotor is a rehearsal: nothing is produced
+            return "Setup" if station.snapshot().simulated else "Processing"
+
         ua = ResultServer(url, station.stand_id(), "127.0.0.1", args.opcua_port, state=state,
-                          rotor_types=station.rotor_types,
-                          anonymous_read=args.anonymous_read)  # fmt: skip
+                          rotor_types=station.rotor_types, anonymous_read=args.anonymous_read,
+                          mode=mode)  # fmt: skip
         ua.run_in_thread()
         print(f"OPC UA on {ua.endpoint}", file=sys.stderr)
     scheme = "https" if args.certfile else "http"

@@ -85,6 +85,7 @@ def live_source(
             text = config_toml(cfg)
         link = drive_link(cfg, config)
         if link is not None:  # the drive's shaft is the scene's: its run-up, its speed
+            _damped(sc, scene)
             link.rpm = rpm or link.choice.drive.speed_rpm or sc.run.rpm
             stall = sc.effects.drive.stall_rpm if sc.effects.drive else None
             sc = drive_scene(sc, link.choice.drive.motor(), min(link.rpm, stall or link.rpm))
@@ -124,3 +125,14 @@ def drive_link(cfg: Config, source: str | None) -> DriveLink | None:
     base = Path(source).resolve().parent if source else Path.cwd()
     return DriveLink(choice, base=base, source=where, bus=cfg.bus) \
         if choice.family.commanded else None  # fmt: skip
+
+
+def _damped(sc: Any, scene: str) -> None:
+    """Refuse a scene whose supports have no damping for a drive: run up from rest through
+    the supports' resonance, they would ring for ever and saturate the sensors."""
+    if sc.stand.H1 == 0.0 and sc.stand.H2 == 0.0:
+        raise UsageError(
+            f"scene {scene}: its supports are undamped (H1 = H2 = 0 N s/m): run up by the "
+            "drive through their resonance they would ring for ever and saturate the "
+            "sensors; a drive needs a scene with damped supports (--scene demo-drive)"
+        )

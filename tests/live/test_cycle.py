@@ -110,6 +110,20 @@ def test_a_drive_that_may_not_start_is_refused_before_anything_turns(
     assert not run.exists()  # nothing measured, nothing left behind
 
 
+def test_an_undamped_scene_is_refused_for_a_drive(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The ``demo`` scene's supports have no damping: run up by a drive they would ring for
+    ever; refused in one line naming the scene that has damped supports."""
+    run = tmp_path / "r.h5"
+    code = main(["balance", "--scene", "demo", "--config", CONFIG, "--out", str(run),
+                 "--no-archive"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and "scene demo: its supports are undamped" in err, err
+    assert "--scene demo-drive" in err and len(err.strip().splitlines()) == 1
+    assert not run.exists()
+
+
 def test_a_silent_drive_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     scene = _with_drive_fault(tmp_path, "silent = true")
     code = main(["balance", "--scene", str(scene), "--config", CONFIG, "--out",

@@ -27,7 +27,7 @@ RESULT = "http://opcfoundation.org/UA/Machinery/Result/"
 NAMESPACE = "urn:rotor-stand:balancing-stand"
 """The stand's own namespace, as docs/plant.md gives it."""
 MACHINES, MACHINE_IDENTIFICATION_TYPE, ITEM_STATE_TYPE = 1001, 1012, 1002
-NOT_EXECUTING = 5007
+NOT_EXECUTING, OPERATION_MODE_TYPE = 5007, 1008
 RESULT_MANAGEMENT_TYPE, RESULT_READY_EVENT_TYPE = 1004, 1002
 """From the Foundation's NodeIds lists (Machinery, Machinery/Result)."""
 SERVER_OBJECT, ORGANIZES, HAS_ADD_IN = 2253, 35, 17604
@@ -123,6 +123,11 @@ async def _client(endpoint: str, url: str, run: Path) -> float:
         assert (await current.read_value()).Text == "NotExecuting"
         state_id = await (await current.get_child(["0:Id"])).read_value()
         assert state_id == ua.NodeId(NOT_EXECUTING, ns["m"])
+        mode = await blocks.get_child([f"{ns['m']}:MachineryOperationMode"])
+        assert await mode.read_type_definition() == ua.NodeId(OPERATION_MODE_TYPE, ns["m"])
+        mode_now = await mode.get_child(["0:CurrentState"])  # beside no station: none known
+        assert (await mode_now.read_value()).Text == "None"
+        assert await (await mode_now.get_child(["0:Id"])).read_value() == ua.NodeId(5024, ns["m"])
         rm = await _typed(machine, ua.NodeId(RESULT_MANAGEMENT_TYPE, ns["r"]), HAS_ADD_IN)
         await client.load_data_type_definitions()
         heard: list[tuple[float, Any]] = []

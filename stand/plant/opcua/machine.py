@@ -6,9 +6,12 @@ lay it out (the types: :mod:`stand.plant.opcua.model`)::
             Manufacturer, Model, SerialNumber (= the stand id), SoftwareRevision,
             ProductInstanceUri
         Machinery:MachineryBuildingBlocks          FolderType, referencing (HasAddIn)
-            Identification, MachineryItemState, ResultManagement
+            Identification, MachineryItemState, MachineryOperationMode,
+            ResultManagement, JobManagement
         Machinery:MachineryItemState               MachineryItemState_StateMachineType
             CurrentState (LocalizedText) with Id (the state's NodeId)
+        Machinery:MachineryOperationMode           MachineryOperationModeStateMachineType
+            CurrentState with Id, as the item state's
         Result:ResultManagement                    ResultManagementType
             Result:GetLatestResult, Result:GetResultById, Result:GetResultIdListFiltered
             Result:Results/ Result:LatestResult    ResultType (a ResultDataType)
@@ -36,13 +39,12 @@ from stand.plant.opcua.jobs import (
 )
 from stand.plant.opcua.model import (
     MACHINE_IDENTIFICATION_TYPE,
-    MACHINERY_ITEM_STATE_TYPE,
     MACHINES,
     NAMESPACE,
     RESULT_DATA,
     RESULT_MANAGEMENT_TYPE,
     RESULT_TYPE,
-    STATES,
+    STATE_MACHINES,
     Namespaces,
     empty_result,
     method_arguments,
@@ -58,10 +60,10 @@ class Machine:
     """The nodes the server writes to and calls on."""
 
     node: Any
-    state: Any
-    state_id: Any
-    states: dict[str, Any]
-    """Each state's name and NodeId (the value of CurrentState's Id)."""
+    state: StateVariable
+    """MachineryItemState: NotAvailable, OutOfService, NotExecuting, Executing."""
+    mode: StateVariable
+    """MachineryOperationMode: None, Maintenance, Setup, Processing."""
     management: Any
     latest: Any
     methods: dict[str, Any]
@@ -100,26 +102,40 @@ async def _identification(server: Any, ns: Namespaces, stand: str, machine: Any)
     return ident
 
 
-async def _state_machine(server: Any, ns: Namespaces, stand: str, parent: Any) -> tuple[Any, Any]:
+@dataclass(frozen=True)
+class StateVariable:
+    """A state machine's CurrentState, its Id, and each state's NodeId by name."""
+
+    current: Any
+    current_id: Any
+    states: dict[str, Any]
+
+
+async def _state_machine(server: Any, ns: Namespaces, stand: str, parent: Any,
+                         name: str) -> StateVariable:  # fmt: skip
+    """The machine's state machine ``name`` (a key of :data:`STATE_MACHINES`), in its first
+    state."""
     from asyncua import ua
 
+    type_number, _, states = STATE_MACHINES[name]
     sm = await add_node(
-        server, ua.NodeClass.Object, _id(ns, stand, "MachineryItemState"),
-        ua.QualifiedName("MachineryItemState", ns.machinery), parent, ua.ObjectIds.HasAddIn,
-        ua.NodeId(MACHINERY_ITEM_STATE_TYPE, ns.machinery),
+        server, ua.NodeClass.Object, _id(ns, stand, name),
+        ua.QualifiedName(name, ns.machinery), parent, ua.ObjectIds.HasAddIn,
+        ua.NodeId(type_number, ns.machinery),
     )  # fmt: skip
+    first = next(iter(states))
     current = await add_node(
-        server, ua.NodeClass.Variable, _id(ns, stand, "MachineryItemState/CurrentState"),
+        server, ua.NodeClass.Variable, _id(ns, stand, f"{name}/CurrentState"),
         ua.QualifiedName("CurrentState", 0), sm.nodeid, ua.ObjectIds.HasComponent,
         ua.ObjectIds.FiniteStateVariableType, DataType=ua.NodeId(ua.ObjectIds.LocalizedText),
-        ValueRank=-1, Value=ua.Variant(ua.LocalizedText("NotAvailable")),
+        ValueRank=-1, Value=ua.Variant(ua.LocalizedText(first)),
     )  # fmt: skip
-    first = ua.NodeId(STATES["NotAvailable"][0], ns.machinery)
-    state_id = await add_property(
-        server, current.nodeid, _id(ns, stand, "MachineryItemState/CurrentState/Id"),
-        ua.QualifiedName("Id", 0), ua.Variant(first, ua.VariantType.NodeId),
+    ids = {state: ua.NodeId(numbers[0], ns.machinery) for state, numbers in states.items()}
+    current_id = await add_property(
+        server, current.nodeid, _id(ns, stand, f"{name}/CurrentState/Id"),
+        ua.QualifiedName("Id", 0), ua.Variant(ids[first], ua.VariantType.NodeId),
     )  # fmt: skip
-    return current, state_id
+    return StateVariable(current, current_id, ids)
 
 
 async def _management(server: Any, ns: Namespaces, stand: str, parent: Any,
@@ -172,7 +188,8 @@ async def build_machine(server: Any, ns: Namespaces, stand: str, calls: dict[str
         ua.QualifiedName("MachineryBuildingBlocks", ns.machinery), node.nodeid,
         ua.ObjectIds.HasComponent, ua.ObjectIds.FolderType,
     )  # fmt: skip
-    current, state_id = await _state_machine(server, ns, stand, blocks.nodeid)
+    state = await _state_machine(server, ns, stand, blocks.nodeid, "MachineryItemState")
+    mode = await _state_machine(server, ns, stand, blocks.nodeid, "MachineryOperationMode")
     rm, latest, methods = await _management(server, ns, stand, node.nodeid, calls)
     obj = ua.NodeClass.Object
     for target in (ident.nodeid, rm.nodeid):
@@ -189,8 +206,7 @@ async def build_machine(server: Any, ns: Namespaces, stand: str, calls: dict[str
         ValueRank=-1, Value=ua.Variant("", ua.VariantType.String),
     )  # fmt: skip
     chain = (rm.nodeid, node.nodeid, machines, ua.NodeId(ua.ObjectIds.Server))
-    states = {name: ua.NodeId(ids[0], ns.machinery) for name, ids in STATES.items()}
-    return Machine(node, current, state_id, states, rm, latest, methods, chain, jobs, head)
+    return Machine(node, state, mode, rm, latest, methods, chain, jobs, head)
 
 
 async def _job_management(server: Any, ns: Namespaces, stand: str, parent: Any,

@@ -44,6 +44,18 @@ STATES = {"NotAvailable": (5005, 0, 6039), "OutOfService": (5004, 1, 6038),
           "NotExecuting": (5007, 2, 6041), "Executing": (5006, 3, 6040)}  # fmt: skip
 """MachineryItemState_StateMachineType's states: their NodeIds, StateNumbers and the
 StateNumber properties' NodeIds."""
+MACHINERY_OPERATION_MODE_TYPE = 1008
+MODES = {"None": (5024, 0, 6059), "Maintenance": (5025, 1, 6060), "Setup": (5027, 2, 6062),
+         "Processing": (5026, 3, 6061)}  # fmt: skip
+"""MachineryOperationModeStateMachineType's states, as :data:`STATES` gives the item's."""
+STATE_MACHINES = {
+    "MachineryItemState": (MACHINERY_ITEM_STATE_TYPE, "MachineryItemState_StateMachineType",
+                           STATES),
+    "MachineryOperationMode": (MACHINERY_OPERATION_MODE_TYPE,
+                               "MachineryOperationModeStateMachineType", MODES),
+}  # fmt: skip
+"""OPC 40001-1's two state machines of a machine: browse name -> (type's NodeId, type's
+name, states)."""
 RESULT_READY_EVENT_TYPE = 1002
 RESULT_MANAGEMENT_TYPE = 1004
 RESULT_TYPE = 2001
@@ -92,7 +104,8 @@ async def _object_type(server: Any, ns: int, number: int, name: str, parent: Any
 
 async def declare_machinery(server: Any, ns: Namespaces) -> None:
     """DI's FunctionalGroupType, Machinery's identification types, the MachineryItemState
-    state machine type with its four states, and the ``Machines`` folder under Objects."""
+    and MachineryOperationMode state machine types with their four states each, and the
+    ``Machines`` folder under Objects."""
     from asyncua import ua
 
     await _object_type(server, ns.di, DI_FUNCTIONAL_GROUP_TYPE, "FunctionalGroupType",
@@ -111,20 +124,20 @@ async def declare_machinery(server: Any, ns: Namespaces) -> None:
     ):  # fmt: skip
         await add_property(server, parent, ua.NodeId(number, ns.machinery),
                            ua.QualifiedName(name, ns.di), value, mandatory=True)  # fmt: skip
-    machine = ua.NodeId(MACHINERY_ITEM_STATE_TYPE, ns.machinery)
-    await _object_type(server, ns.machinery, MACHINERY_ITEM_STATE_TYPE,
-                       "MachineryItemState_StateMachineType",
-                       ua.NodeId(ua.ObjectIds.FiniteStateMachineType))  # fmt: skip
-    for name, (number, state_number, prop) in STATES.items():
-        state = await add_node(
-            server, ua.NodeClass.Object, ua.NodeId(number, ns.machinery),
-            ua.QualifiedName(name, ns.machinery), machine, ua.ObjectIds.HasComponent,
-            ua.ObjectIds.StateType,
-        )  # fmt: skip
-        await add_property(server, state.nodeid, ua.NodeId(prop, ns.machinery),
-                           ua.QualifiedName("StateNumber", 0),
-                           ua.Variant(state_number, ua.VariantType.UInt32),
-                           mandatory=True)  # fmt: skip
+    for number, name, states in STATE_MACHINES.values():
+        machine = ua.NodeId(number, ns.machinery)
+        await _object_type(server, ns.machinery, number, name,
+                           ua.NodeId(ua.ObjectIds.FiniteStateMachineType))  # fmt: skip
+        for state_name, (state_id, state_number, prop) in states.items():
+            state = await add_node(
+                server, ua.NodeClass.Object, ua.NodeId(state_id, ns.machinery),
+                ua.QualifiedName(state_name, ns.machinery), machine, ua.ObjectIds.HasComponent,
+                ua.ObjectIds.StateType,
+            )  # fmt: skip
+            await add_property(server, state.nodeid, ua.NodeId(prop, ns.machinery),
+                               ua.QualifiedName("StateNumber", 0),
+                               ua.Variant(state_number, ua.VariantType.UInt32),
+                               mandatory=True)  # fmt: skip
     await add_node(
         server, ua.NodeClass.Object, ua.NodeId(MACHINES, ns.machinery),
         ua.QualifiedName("Machines", ns.machinery), ua.NodeId(ua.ObjectIds.ObjectsFolder),

@@ -90,7 +90,7 @@ class ResultServer:
         A user and password; required beyond this machine.
     state
         Called at each poll: the machine's state (a key of
-        :data:`stand.plant.ua_model.STATES`); default
+        :data:`stand.plant.opcua.model.STATES`); default
         ``NotExecuting`` while the archive answers, ``OutOfService`` when it does not.
     cert_dir
         Where the server's certificate and key are kept (made on first start); only
@@ -98,6 +98,10 @@ class ResultServer:
     rotor_types
         The rotor types the stand can run now: the job orders it accepts
         (:mod:`stand.plant.opcua.job_control`); none given, it accepts none.
+    mode
+        Called at each poll: the machine's operation mode (a key of
+        :data:`stand.plant.opcua.model.MODES`); default ``None`` (OPC 40001-1: no operation
+        mode available: a server beside no station cannot know one).
     """
 
     def __init__(self, archive_url: str, stand_id: str, host: str = "127.0.0.1",
@@ -105,7 +109,8 @@ class ResultServer:
                  state: Callable[[], str] | None = None,
                  cert_dir: Path | None = None,
                  rotor_types: Callable[[], list[str]] | None = None,
-                 anonymous_read: bool = False) -> None:  # fmt: skip
+                 anonymous_read: bool = False,
+                 mode: Callable[[], str] | None = None) -> None:  # fmt: skip
         access = access or Access()
         self.users = Users(access, archive_url, anonymous_read)  # the accounts log in too
         check_bind(host, access, accounts=_has_accounts(archive_url))
@@ -113,6 +118,7 @@ class ResultServer:
             cert_folder(cert_dir)  # a folder that is not there: said now
         self.archive_url, self.stand_id = archive_url, stand_id
         self.host, self.port, self.access, self.state = host, port, access, state
+        self.mode = mode
         self.cert_dir = cert_dir
         self.endpoint = f"opc.tcp://{host}:{port}/stand/"
         self.ready = threading.Event()
@@ -257,11 +263,16 @@ class ResultServer:
             return out([], ARCHIVE_UNAVAILABLE)
         return out(ids[: most or None], 0)
 
-    async def _write_state(self, machine: Machine, name: str) -> None:
+    async def _write_state(self, machine: Machine, state: str, mode: str) -> None:
+        """The machine's item state and operation mode, written only when they change (a
+        client subscribed on them hears a change, not each poll)."""
         from asyncua import ua
 
-        await machine.state.write_value(ua.LocalizedText(name))
-        await machine.state_id.write_value(ua.Variant(machine.states[name], ua.VariantType.NodeId))
+        for var, name in ((machine.state, state), (machine.mode, mode)):
+            if (await var.current.read_value()).Text != name:
+                await var.current.write_value(ua.LocalizedText(name))
+                await var.current_id.write_value(ua.Variant(var.states[name],
+                                                            ua.VariantType.NodeId))  # fmt: skip
 
     async def _poll(self, machine: Machine, events: Any) -> None:
         seen: int | None = -1
@@ -286,7 +297,8 @@ class ResultServer:
                     said = str(exc)
                     print(f"stand opcua: out of service: {said}", file=sys.stderr, flush=True)
                 self._drop()
-            await self._write_state(machine, self.state() if self.state else state)
+            await self._write_state(machine, self.state() if self.state else state,
+                                    self.mode() if self.mode else "None")  # fmt: skip
             try:
                 await asyncio.wait_for(self._stop.wait(), POLL_S)
             except TimeoutError:
