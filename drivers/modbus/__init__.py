@@ -1,4 +1,4 @@
-"""A frequency inverter over Modbus TCP (``[drive] family = "modbus"``): its register map
+"""A frequency inverter over Modbus TCP or RTU (``[drive] family = "modbus"``): its register map
 (:mod:`~stand.drivers.modbus.table`) and the client that commands it
 (:mod:`~stand.drivers.modbus.client`, on pymodbus)."""
 
@@ -10,7 +10,8 @@ from stand.drivers.modbus.table import ModbusTable
 
 
 class Modbus:
-    """The family of inverters on Modbus TCP as a :class:`~stand.drivers.drive.DriveFamily`."""
+    """The family of inverters on Modbus TCP or RTU as a
+    :class:`~stand.drivers.drive.DriveFamily`."""
 
     name = "modbus"
     table = ModbusTable

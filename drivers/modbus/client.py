@@ -1,4 +1,4 @@
-"""A frequency inverter over Modbus TCP as a :class:`~stand.drivers.drive.Drive`: its
+"""A frequency inverter over Modbus TCP or RTU as a :class:`~stand.drivers.drive.Drive`: its
 state read in one request, commands written as the register map says
 (:mod:`stand.drivers.modbus.table`), every fault of the link one
 :class:`~stand.errors.DriveError` naming the inverter and the register."""
@@ -6,6 +6,8 @@ state read in one request, commands written as the register map says
 from __future__ import annotations
 
 import math
+import os
+import stat
 from typing import Any
 
 from stand.drivers.drive import DriveState, close_link
@@ -27,16 +29,42 @@ def signed(word: int) -> int:
     return word - 0x10000 if word & 0x8000 else word
 
 
+def serial_line(device: str, where: str) -> None:
+    """Refuse a ``device`` that is not a serial line before it is opened (a regular file or
+    a FIFO would be read as one, or hang): a character device, or a ``socket://`` URL."""
+    if device.startswith("socket://"):
+        return
+    try:
+        mode = os.stat(device).st_mode
+    except OSError as exc:
+        raise DriveError(f"the serial line: {exc.strerror}", where=where) from exc
+    if not stat.S_ISCHR(mode):
+        raise DriveError("the serial line is not a character device (a file, a folder or a "
+                         "FIFO given as device?)", where=where)  # fmt: skip
+
+
+def _client(table: ModbusTable, timeout_s: float) -> Any:
+    """pymodbus's client for the table's transport (its framing: MBAP or RTU with CRC)."""
+    from pymodbus.client import ModbusSerialClient, ModbusTcpClient
+
+    if table.transport == "tcp":
+        assert table.host is not None  # the table's validator
+        return ModbusTcpClient(table.host, port=table.port, timeout=timeout_s, retries=0)
+    assert table.device is not None
+    serial_line(table.device, table.where)
+    return ModbusSerialClient(table.device, baudrate=table.baudrate, parity=table.parity,
+                              stopbits=table.stopbits, bytesize=8, timeout=timeout_s,
+                              retries=0)  # fmt: skip
+
+
 class ModbusDrive:
-    """One inverter on Modbus TCP (pymodbus's client: its framing and transaction ids)."""
+    """One inverter on Modbus TCP or RTU (pymodbus's client: its framing, transaction ids
+    and CRC)."""
 
     def __init__(self, table: ModbusTable, *, timeout_s: float) -> None:
-        from pymodbus.client import ModbusTcpClient
-
         self.map = table
-        self.where = f"modbus {table.host}:{table.port} unit {table.unit}"
-        self._client: Any = ModbusTcpClient(table.host, port=table.port, timeout=timeout_s,
-                                            retries=0)  # fmt: skip
+        self.where = table.where
+        self._client: Any = _client(table, timeout_s)
         self._running = False
         connect: Any = self._client.connect  # (pymodbus's connect is untyped)
         if not connect():

@@ -1,12 +1,17 @@
 """``[drive] family = "modbus"`` and the ``[drive.modbus]`` table: a frequency inverter
-(or servo inverter) over Modbus TCP, its register map (the client:
-:mod:`stand.drivers.modbus.client`).
+(or servo inverter) over Modbus TCP or Modbus RTU on a serial line, its register map
+(the client: :mod:`stand.drivers.modbus.client`).
 
 ::
 
     [drive.modbus]
-    host = "192.168.10.20"     # the inverter's address
+    host = "192.168.10.20"     # Modbus TCP: the inverter's address
     port = 502
+    # transport = "rtu"        # Modbus RTU instead: the serial line, not host and port
+    # device = "/dev/ttyUSB0"  #   an RS-485 adapter (a character device)
+    # baudrate = 19200         #   and the line's settings (Modbus's default: 8 E 1)
+    # parity = "E"
+    # stopbits = 1
     unit = 1                   # the Modbus unit (device) id
     control = 0                # holding registers: the control word (bits: CONTROL_*)
     set_point = 1              #   the speed set point, signed, speed_per_rpm a rpm
@@ -24,7 +29,7 @@ registers of each other and are read in one request, so one state is one instant
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field, FiniteFloat, model_validator
 
@@ -69,6 +74,9 @@ READ_SPAN = 32
 """The read registers' largest spread: one request of at most this many registers."""
 
 Register = Annotated[int, Field(ge=0, le=0xFFFF)]
+DEVICE = r"^(/dev/[A-Za-z0-9_.\-/]+|COM[0-9]{1,3}|socket://[A-Za-z0-9.\-]+:[0-9]{1,5})$"
+"""A serial line: a device under /dev (COMn on Windows), or pyserial's ``socket://`` URL
+(an RTU line carried over TCP: a serial device server, the simulated inverter)."""
 
 
 class ModbusTable(BaseModel):
@@ -76,8 +84,14 @@ class ModbusTable(BaseModel):
 
     model_config = STRICT
 
-    host: Annotated[str, Field(min_length=1, max_length=253, pattern=r"^[A-Za-z0-9.:\-]+$")]
+    transport: Literal["tcp", "rtu"] = "tcp"
+    host: Annotated[str, Field(min_length=1, max_length=253,
+                               pattern=r"^[A-Za-z0-9.:\-]+$")] | None = None  # fmt: skip
     port: Annotated[int, Field(ge=1, le=65535)] = 502
+    device: Annotated[str, Field(max_length=200, pattern=DEVICE)] | None = None
+    baudrate: Literal[1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200] = 19200
+    parity: Literal["N", "E", "O"] = "E"
+    stopbits: Literal[1, 2] = 1
     unit: Annotated[int, Field(ge=0, le=247)] = 1
     control: Register = 0
     set_point: Register = 1
@@ -91,6 +105,10 @@ class ModbusTable(BaseModel):
 
     @model_validator(mode="after")
     def _map(self) -> ModbusTable:
+        if self.transport == "tcp" and (self.host is None or self.device is not None):
+            raise ValueError('transport "tcp" takes host (and port), not device')
+        if self.transport == "rtu" and (self.device is None or self.host is not None):
+            raise ValueError('transport "rtu" takes device (the serial line), not host')
         names = ("control", "set_point", "target", "status", "speed", "angle", "fault")
         seen: dict[int, str] = {}
         for name in names:
@@ -101,6 +119,14 @@ class ModbusTable(BaseModel):
             raise ValueError(f"status, speed, angle and fault span {max(read) - min(read) + 1} "
                              f"registers: at most {READ_SPAN}, read in one request")  # fmt: skip
         return self
+
+    @property
+    def where(self) -> str:
+        """The inverter in a message: ``modbus HOST:PORT unit U`` or ``modbus rtu DEVICE
+        unit U``."""
+        if self.transport == "rtu":
+            return f"modbus rtu {self.device} unit {self.unit}"
+        return f"modbus {self.host}:{self.port} unit {self.unit}"
 
     @property
     def first_read(self) -> int:

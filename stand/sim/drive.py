@@ -1,6 +1,8 @@
-"""A simulated frequency inverter on Modbus TCP, served on 127.0.0.1 as a real one would
-be: the register map of :mod:`stand.drivers.modbus.table` on the simulated shaft
-(:class:`stand.sim.shaft.SimShaft`, which turns the scene's rotor).
+"""A simulated frequency inverter on Modbus TCP or RTU, served on 127.0.0.1 as a real one
+would be (RTU: its frames, CRC and all, carried over TCP as a serial device server carries
+them, or on a serial line the tests give): the register map of
+:mod:`stand.drivers.modbus.table` on the simulated shaft (:class:`stand.sim.shaft.SimShaft`,
+which turns the scene's rotor).
 
 Faults for the tests and the demo come from the scene's ``[effects.drive]``: a guard open
 from the start or opening at a time, a fault code, a drive that never answers (its
@@ -70,17 +72,23 @@ class SimDrive(SimShaft):
     def serve(self, table: ModbusTable, bus: Any) -> Iterator[tuple[ModbusTable, Any]]:
         """Served on 127.0.0.1 while inside: the table pointing at it, and the bus as given."""
         with SimInverter(self) as server:
-            yield table.model_copy(update={"host": "127.0.0.1", "port": server.port}), bus
+            if table.transport == "rtu":
+                yield table.model_copy(update={"device": f"socket://127.0.0.1:{server.port}"}), bus
+            else:
+                yield table.model_copy(update={"host": "127.0.0.1", "port": server.port}), bus
 
 
 class SimInverter:
-    """:class:`SimDrive` served by pymodbus on 127.0.0.1 (a port of its own), in a thread.
+    """:class:`SimDrive` served by pymodbus on 127.0.0.1 (a port of its own), in a thread:
+    Modbus TCP, or RTU framing as the drive's map says; RTU on the serial line ``device``
+    when one is given.
 
     ``port``: the port it listens on once started.  Close it with :meth:`close`.
     """
 
-    def __init__(self, drive: SimDrive) -> None:
+    def __init__(self, drive: SimDrive, device: str | None = None) -> None:
         self.drive = drive
+        self.device = device
         self.port = 0
         self._loop = asyncio.new_event_loop()
         self._ready = threading.Event()
@@ -126,7 +134,7 @@ class SimInverter:
             self._loop.close()
 
     async def _main(self) -> None:
-        from pymodbus.server import ModbusTcpServer
+        from pymodbus.server import ModbusSerialServer, ModbusTcpServer
         from pymodbus.simulator import DataType, SimData, SimDevice
 
         m = self.drive.map
@@ -134,9 +142,16 @@ class SimInverter:
         device = SimDevice(id=m.unit, action=self._action,
                            simdata=[SimData(0, count=size, values=0,
                                             datatype=DataType.REGISTERS)])  # fmt: skip
-        server: Any = ModbusTcpServer(device, address=("127.0.0.1", 0))
+        server: Any
+        if m.transport == "rtu":
+            server = ModbusSerialServer(device, port=self.device or "socket://127.0.0.1:0",
+                                        baudrate=m.baudrate, parity=m.parity,
+                                        stopbits=m.stopbits)  # fmt: skip
+        else:
+            server = ModbusTcpServer(device, address=("127.0.0.1", 0))
         await server.serve_forever(background=True)
-        self.port = int(server.transport.sockets[0].getsockname()[1])
+        if self.device is None:
+            self.port = int(server.transport.sockets[0].getsockname()[1])
         self._stop = asyncio.Event()
         self._ready.set()
         await self._stop.wait()

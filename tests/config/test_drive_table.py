@@ -21,6 +21,7 @@ def _with(drive: dict[str, Any] | None = None, modbus: dict[str, Any] | None = N
           drop: str | None = None) -> dict[str, Any]:  # fmt: skip
     data = {**EXAMPLE, "drive": {**EXAMPLE["drive"], **(drive or {})}}
     data["drive"]["modbus"] = {**EXAMPLE["drive"]["modbus"], **(modbus or {})}
+    data["drive"]["modbus"] = {k: v for k, v in data["drive"]["modbus"].items() if v is not None}
     if drop:
         del data["drive"][drop]
     return data
@@ -68,6 +69,24 @@ HOSTILE = [
     (None, {"counts_per_rev": 4}, None, "drive.modbus.counts_per_rev"),
     (None, {"counts_per_rev": 3600.5}, None, "drive.modbus.counts_per_rev"),
     (None, {"coils": 5}, None, "drive.modbus.coils"),
+    (None, {"transport": "udp"}, None, "drive.modbus.transport"),
+    (None, {"transport": "rtu"}, None, "transport 'rtu' takes device"),  # host, no device
+    (None, {"device": "/dev/ttyUSB0"}, None, "transport 'tcp' takes host"),
+    (
+        None,
+        {"transport": "rtu", "host": None, "device": "/dev/tty USB0;x"},
+        None,
+        "drive.modbus.device",
+    ),
+    (
+        None,
+        {"transport": "rtu", "host": None, "device": "../../etc/passwd"},
+        None,
+        "drive.modbus.device",
+    ),
+    (None, {"baudrate": 12345}, None, "drive.modbus.baudrate"),
+    (None, {"parity": "X"}, None, "drive.modbus.parity"),
+    (None, {"stopbits": 3}, None, "drive.modbus.stopbits"),
     (None, None, "modbus", "[drive] family = 'modbus' needs a [drive.modbus] table"),
 ]
 

@@ -75,11 +75,13 @@ def test_the_cycle_stops_each_place_at_the_mark(tmp_path: Path, family: str) -> 
 
 
 @pytest.mark.realtime
-def test_balance_runs_the_cycle_from_the_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str]
-                                             ) -> None:  # fmt: skip
+@pytest.mark.parametrize("example", ["drive-modbus.toml", "drive-modbus-rtu.toml"])
+def test_balance_runs_the_cycle_from_the_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                             example: str) -> None:  # fmt: skip
+    """Modbus TCP, and Modbus RTU (the simulated inverter's RTU frames carried over TCP)."""
     run = tmp_path / "r.h5"
-    code = main(["balance", "--scene", "demo-drive", "--config", CONFIG, "--out", str(run),
-                 "--no-archive", "--json", "--index-both"])  # fmt: skip
+    code = main(["balance", "--scene", "demo-drive", "--config", str(ROOT / "examples" / example),
+                 "--out", str(run), "--no-archive", "--json", "--index-both"])  # fmt: skip
     out = json.loads(capsys.readouterr().out)
     assert code == 0
     cycle, index = out["cycle"], out["index"]
