@@ -125,6 +125,15 @@ KEEPS_STAMPS = ("virtual", "stand_loopback")
 simulated node's frames carry their wire time (:func:`play`'s ``wire_stamps``)."""
 
 
+def keep_stamps(bus: Any, kwargs: dict[str, Any]) -> bool:
+    """From now on, have ``bus`` (opened with ``kwargs``) send a message's own timestamp
+    (its wire time), where its interface can (:data:`KEEPS_STAMPS`); whether it does."""
+    keeps = kwargs.get("interface") in KEEPS_STAMPS
+    if keeps:
+        bus.preserve_timestamps = True
+    return keeps
+
+
 def open_player_bus(kwargs: dict[str, Any]) -> tuple[Any, bool]:
     """The simulated nodes' side of the bus ``kwargs`` names (:func:`open_bus`), and
     whether it keeps the stamps :func:`play` gives (on :data:`KEEPS_STAMPS` interfaces)."""

@@ -49,8 +49,10 @@ TRIM_MADS = 4.0
 clock's line is left out of the rate (:func:`recorded_rate`)."""
 
 
-def recorded_rate(index: NDArray[np.int64], t_s: NDArray[np.float64]) -> float | None:
-    """The sample rate the receive times show [Hz], or None when the span is too short.
+def clock_line(index: NDArray[np.int64], t_s: NDArray[np.float64]
+               ) -> tuple[float, float] | None:  # fmt: skip
+    """The clock's line: seconds a sample and the time of sample 0 [s], that the receive
+    times show, or None when the span is too short.
 
     The least-squares line of receive time against sample index, refitted without the
     samples that lie more than :data:`TRIM_MADS` robust deviations off it: receive jitter
@@ -64,7 +66,7 @@ def recorded_rate(index: NDArray[np.int64], t_s: NDArray[np.float64]) -> float |
     step = max(1, len(index) // RATE_POINTS)
     k, t = index[::step].astype(np.float64), t_s[::step]
     keep = np.ones(len(k), bool)
-    slope = 0.0
+    slope, at0 = 0.0, 0.0
     for _ in range(4):
         kk, tt = k[keep] - k[keep].mean(), t[keep] - t[keep].mean()
         den = float(kk @ kk)
@@ -73,12 +75,20 @@ def recorded_rate(index: NDArray[np.int64], t_s: NDArray[np.float64]) -> float |
         slope = float(kk @ tt) / den  # seconds per sample
         r = t - (t[keep].mean() + slope * (k - k[keep].mean()))
         mid = float(np.median(r[keep]))
+        at0 = float(t[keep].mean() - slope * k[keep].mean()) + mid
         mad = 1.4826 * float(np.median(np.abs(r[keep] - mid)))
         new = np.abs(r - mid) <= max(TRIM_MADS * mad, 1e-6)
         if np.array_equal(new, keep):
             break
         keep = new
-    return 1.0 / slope if slope > 0 else None
+    return (slope, at0) if slope > 0 else None
+
+
+def recorded_rate(index: NDArray[np.int64], t_s: NDArray[np.float64]) -> float | None:
+    """The sample rate the receive times show [Hz] (:func:`clock_line`), or None when the
+    span is too short."""
+    line = clock_line(index, t_s)
+    return None if line is None else 1.0 / line[0]
 
 
 def check_clock(rate_hz: float, recorded_hz: float | None, source: str, key: str) -> None:

@@ -24,6 +24,10 @@ is not known) and no sample's time of that node is trusted: its stream is flagge
 301's synchronous window; a host too busy to keep the SYNC's pace makes such runs)."""
 LATE_FLAG = "late_backlog"
 """The flag of a stream whose samples' times are not known (:data:`LATE_SHARE`)."""
+OFF_BEAT_FLAG = "sync_off_beat"
+"""The flag of a stream whose SYNCs came off the clock's beat for more than
+:data:`LATE_SHARE` of its samples: a host that did not keep the SYNC's pace, whose gaps
+and bursts leave too few whole revolutions to count the reference mark's edges by."""
 
 
 @dataclass(frozen=True)
@@ -92,6 +96,9 @@ class NodeStream:
     flags: tuple[str, ...]
     first_t_s: float
     last_t_s: float
+    off_beat_samples: int = 0
+    """CANopen: samples taken on a SYNC that came off the clock's beat (placed at their own
+    time or left out); more than :data:`LATE_SHARE` of them flags :data:`OFF_BEAT_FLAG`."""
 
     @property
     def marks(self) -> int:

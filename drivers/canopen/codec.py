@@ -40,14 +40,61 @@ from stand.drivers.checks import (
     check_clock,
     check_distinct,
     check_mark,
-    recorded_rate,
+    clock_line,
 )
 from stand.drivers.frames import FLAG_EXTENDED, Frames
 from stand.drivers.one_clock import BlockBuilder, Blocks, kept, mark_edges, one_clock_stream
-from stand.drivers.streams import LATE_FLAG, LATE_SHARE, NodeStream, RunStreams
+from stand.drivers.streams import (
+    LATE_FLAG,
+    LATE_SHARE,
+    OFF_BEAT_FLAG,
+    NodeStream,
+    RunStreams,
+)
 
 EMCY_BASE, BOOT_BASE = 0x80, 0x700
 """CiA 301's EMCY and NMT error control (boot-up) COB-IDs: the base plus the node id."""
+
+
+ON_BEAT = 0.5
+"""A SYNC within this many periods of its own beat (the SYNCs' line) came on time."""
+NEAR_BEAT = 0.1
+"""A SYNC that came late is placed on the beat nearest its time when it lies within this
+many periods of it (its samples' time then as far off as an on-time SYNC's jitter lets
+them be), else its samples are left out."""
+
+
+def sync_clock(sync_t: NDArray[np.float64], rate_hz: float, source: str
+               ) -> NDArray[np.int64] | None:  # fmt: skip
+    """The recording is the clock: the SYNC frames' own times checked against the
+    configured rate, and each SYNC's sample index, the beat of its own time (-1: left out;
+    None: too short a run to judge, each SYNC its own beat).
+
+    The modules sample when a SYNC comes, so the SYNCs' times are the samples' times: their
+    line (:func:`~stand.drivers.checks.clock_line`, robust: a stall leaves it where it
+    was) gives the rate and the beat, whatever the TPDOs' delivery did.  A SYNC on time
+    is its own beat; one that came late (a host that stalled, then caught up in a burst)
+    is placed on the beat nearest its time where it lies within :data:`NEAR_BEAT` of it,
+    never on the beat it missed; of several SYNCs on one beat (a burst) the nearest is
+    kept; the others are left out."""
+    line = clock_line(np.arange(len(sync_t)), sync_t)
+    if line is None:
+        return None
+    period, at0 = line
+    check_clock(rate_hz, 1.0 / period, source, "bus.canopen.rate_hz")
+    where = (sync_t - at0) / period
+    own = np.arange(len(sync_t))
+    beat = np.rint(where).astype(np.int64)
+    near = np.abs(where - beat)
+    beat = np.where(np.abs(where - own) <= ON_BEAT, own, beat)  # on time: its own beat
+    usable = (beat == own) | (near <= NEAR_BEAT)
+    order = np.lexsort((near, beat))  # by beat, the nearest first
+    first = np.ones(len(order), bool)
+    first[1:] = beat[order][1:] != beat[order][:-1]
+    first &= usable[order]
+    out = np.full(len(beat), -1, np.int64)
+    out[order[first]] = beat[order[first]]
+    return out
 
 
 def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_], int, int]:
@@ -70,6 +117,44 @@ def _indices(k: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.bool_]
             keep[s : s + n] = False
     keep &= k >= 0
     return k, keep, moved, int(np.count_nonzero(~keep))
+
+
+MAX_LATE_SYNCS = 64
+"""A TPDO's stamp places it at most this many SYNCs before its arrival (:func:`_by_stamp`);
+further back, its stamp is not its wire time (a frame sent unstamped)."""
+
+
+def _by_stamp(k: NDArray[np.int64], t: NDArray[np.float64],
+              sync_t: NDArray[np.float64]) -> tuple[NDArray[np.int64], int]:  # fmt: skip
+    """Each TPDO's SYNC: the last SYNC before its arrival (``k``), or an earlier one where
+    its stamp ``t`` says it was sent before SYNCs that reached the host ahead of it (a
+    stamp that is the frame's wire time: a bus stamping in hardware, a simulated module
+    stamping the time it answered within its window while its process ran late), at most
+    :data:`MAX_LATE_SYNCS` back.  On a recording whose stamps follow the arrival, as a
+    host's receive stamps do, this is the arrival's SYNC, always.  Returns the SYNCs and
+    how many TPDOs their stamps put back."""
+    if not len(k) or len(sync_t) < 2 or bool(np.any(np.diff(sync_t) < 0)):
+        return k, 0
+    by_t = np.searchsorted(sync_t, t, side="right") - 1
+    use = (by_t >= 0) & (by_t < k) & (k - by_t <= MAX_LATE_SYNCS)
+    out: NDArray[np.int64] = np.where(use, by_t, k)
+    return out, int(np.count_nonzero(use))
+
+
+def _placed(k: NDArray[np.int64], beats: NDArray[np.int64] | None
+            ) -> tuple[NDArray[np.int64], NDArray[np.bool_], int, int, int, int]:  # fmt: skip
+    """Each TPDO on its SYNC (:func:`_indices`), then at its SYNC's beat (``beats``:
+    :func:`sync_clock`).  Returns the sample indices, which are kept, how many TPDOs were
+    put back on their SYNC, how many left out in backlogs, how many placed at a beat
+    other than their SYNC's count (off the beat), how many left out with their SYNC."""
+    k, keep, moved, dropped = _indices(k)
+    if beats is None:
+        return k, keep, moved, dropped, 0, 0
+    inside = keep & (k < len(beats))
+    index = np.where(inside, beats[np.minimum(k, len(beats) - 1)], -1)
+    off = int(np.count_nonzero(inside & (index >= 0) & (index != k)))
+    gone = int(np.count_nonzero(inside & (index < 0)))
+    return index, keep & (index >= 0), moved, dropped, off, gone
 
 
 @dataclass
@@ -132,6 +217,7 @@ class PdoBuilder(BlockBuilder):
 
     def _reset(self) -> None:
         self._syncs, self._unknown = 0, 0
+        self._sync_t: list[NDArray[np.float64]] = []
         self._t0: float | None = None
         self._t1 = 0.0
         self._parts = {n.node_id: _Parts() for n in self.layout.nodes}
@@ -148,6 +234,7 @@ class PdoBuilder(BlockBuilder):
         for n in self.layout.nodes:
             known = known | self._take(n, frames, std, before)
         self._syncs += int(np.count_nonzero(is_sync))
+        self._sync_t.append(frames.t_s[is_sync])
         self._unknown += int(np.count_nonzero(~known))
         self._t0 = float(frames.t_s[0]) if self._t0 is None else self._t0
         self._t1 = float(frames.t_s[-1])
@@ -183,9 +270,14 @@ class PdoBuilder(BlockBuilder):
     def _build(self, first: int, consume: bool) -> RunStreams:
         warn: list[Diagnostic] = []
         t0 = self._t0 if self._t0 is not None else 0.0
+        sync_t = (np.concatenate(self._sync_t) if self._sync_t
+                  else np.zeros(0))  # fmt: skip
+        if consume:
+            self._sync_t.clear()
+        clock = (sync_t, sync_clock(sync_t, self.layout.rate_hz, self.layout.source))
         nodes = {}
         for n in self.layout.nodes:
-            built = self._node(n, self._parts[n.node_id], first, consume, t0, warn)
+            built = self._node(n, self._parts[n.node_id], first, consume, t0, warn, clock)
             if built is not None:
                 nodes[n.support] = built
         warn.extend(Diagnostic("description_stored", note) for note in self.layout.notes)
@@ -194,22 +286,33 @@ class PdoBuilder(BlockBuilder):
         return out
 
     def _node(self, n: PdoNode, parts: _Parts, first: int, consume: bool, t0: float,
-              warn: list[Diagnostic]) -> NodeStream | None:  # fmt: skip
+              warn: list[Diagnostic], clock: tuple[NDArray[np.float64],
+                                                   NDArray[np.int64] | None]
+              ) -> NodeStream | None:  # fmt: skip
         """One support's stream from its module's kept TPDOs (``consume``: let go as
-        used)."""
+        used; ``clock``: the SYNCs' times and each one's beat, :func:`sync_clock`)."""
         said = _said(n, parts, t0, warn)
-        k, keep, moved, dropped = _indices(parts.joined(parts.k, first, consume).astype(np.int64))
+        t_rx = parts.joined(parts.t, first, consume)
+        k_rx = parts.joined(parts.k, first, consume).astype(np.int64)
+        k_st, stamped = _by_stamp(k_rx, t_rx, clock[0])
+        k, keep, moved, dropped, off, gone = _placed(k_st, clock[1])
+        moved += stamped
+        if off or gone:
+            warn.append(Diagnostic(
+                "sync_late", f"node {n.node_id}: {off + gone} sample(s) taken on a SYNC off "
+                "the beat (the host's SYNC stalled, then caught up): each placed at its own "
+                f"time, {gone} left out (SYNCs a burst put nearest one beat); the clock is "
+                "the SYNCs' own", float(off + gone)))  # fmt: skip
         if moved or dropped:
             warn.append(Diagnostic("tpdo_late", f"node {n.node_id}: {moved} TPDO(s) came after "
-                                   f"the next SYNC (put back on their own), {dropped} in a "
+                                   f"the next SYNC (put back on their own, by their stamps or "
+                                   f"as the only one late), {dropped} in a "
                                    "backlog on one SYNC (left out: which SYNC each answered is "
                                    "not known)", float(moved + dropped)))  # fmt: skip
-        index, t = kept(k, keep), kept(parts.joined(parts.t, first, consume), keep)
+        index, t = kept(k, keep), kept(t_rx, keep)
         if not len(index):
             return None  # nothing from this module: the measuring path says so
         layout, name = self.layout, f"node {n.node_id}"
-        check_clock(layout.rate_hz, recorded_rate(index, t), layout.source,
-                    "bus.canopen.rate_hz")  # fmt: skip
         status = [kept(parts.joined(st, first, consume), keep) if st else None
                   for st in parts.status]  # fmt: skip
         accel_ok, mark_ok, flags = _status(n, status, len(index))
@@ -229,7 +332,10 @@ class PdoBuilder(BlockBuilder):
                                    "marked not valid (AI status), left out",
                                    float(invalid)))  # fmt: skip
         late = [LATE_FLAG] if dropped > LATE_SHARE * (len(index) + dropped) else []
+        if off + gone > LATE_SHARE * len(k_rx):
+            late.append(OFF_BEAT_FLAG)
         return replace(stream, samples=len(index), invalid_samples=invalid,
+                       off_beat_samples=off + gone,
                        flags=tuple(dict.fromkeys([*flags, *said, *late])))  # fmt: skip
 
 

@@ -25,7 +25,7 @@ from stand.cli.common import (
 from stand.cli.panel import ProgressLine, scene_masses
 from stand.config import config_toml
 from stand.core import unbalance_from_polar
-from stand.drivers.bus import describe_bus, open_bus, open_player_bus, play
+from stand.drivers.bus import describe_bus, keep_stamps, open_bus, open_player_bus, play
 from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_recording
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
@@ -188,7 +188,8 @@ def _play(args: argparse.Namespace, scene: Any, sim: Any) -> None:
             print(f"the scene's modules answer on {describe_bus(kwargs)}: set them up and "
                   "send SYNC (stand record --config CFG with the same bus options); Ctrl-C "
                   "stops", file=sys.stderr)  # fmt: skip
-            sent = modules.serve(bus, sim.frames)
+            sent = modules.serve(bus, sim.frames, scene.nodes.rate_hz,
+                                 stamps=lambda: keep_stamps(bus, kwargs))  # fmt: skip
     finally:
         bus.shutdown()
     print(f"sent {sent} frames", file=sys.stderr)

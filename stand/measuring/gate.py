@@ -17,7 +17,7 @@ import numpy as np
 
 from stand.core.dsp import median
 from stand.core.fitsums import block_fits
-from stand.drivers.streams import LATE_FLAG, LATE_SHARE, NodeStream
+from stand.drivers.streams import LATE_FLAG, LATE_SHARE, OFF_BEAT_FLAG, NodeStream
 from stand.errors import MeasurementError, SensorFaultError
 from stand.i18n.words import said
 
@@ -101,7 +101,18 @@ def check_timing(s: NodeStream) -> None:
     """Refuse a node whose samples' times are not known: a CANopen module whose TPDOs came
     in backlogs for more than :data:`stand.drivers.streams.LATE_SHARE` of them
     (flag ``late_backlog``): placed by guess they would lag the 1x, a shift no interval
-    holds."""
+    holds; or whose SYNCs came off the beat for as many (flag ``sync_off_beat``): the
+    gaps and bursts of a host that lost the pace hide the mark's edges."""
+    if OFF_BEAT_FLAG in s.flags:
+        total = s.samples + s.off_beat_samples
+        raise MeasurementError(
+            f"{s.off_beat_samples} of its samples were taken on a SYNC off the clock's beat "
+            f"({100 * s.off_beat_samples / max(total, 1):.0f} %, more than "
+            f"{100 * LATE_SHARE:.0f} %): the host did not keep the SYNC's pace (a loaded "
+            "machine; a SYNC sent by a program's thread), so too few whole revolutions are "
+            "left to count the mark by; record again with the interface's or the kernel's "
+            "cyclic transmit (SocketCAN's broadcast manager), or on a lighter machine"
+        )
     if LATE_FLAG not in s.flags:
         return
     total = s.samples + s.duplicate_frames

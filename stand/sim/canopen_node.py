@@ -16,6 +16,7 @@ with another process (``stand simulate SCENE --bus``), the scene's TPDOs in turn
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -28,6 +29,9 @@ HOST_WAIT_S = 60.0
 """``serve`` waits this long for a host to set the modules up and start its SYNC [s]."""
 HOST_GONE_S = 3.0
 """``serve`` stops when the host's SYNCs stop for this long [s]."""
+STAMP_AFTER_SYNC_S = 1e-6
+"""A TPDO :meth:`SimulatedModules.serve` sends is stamped this long after its SYNC, per
+node (the host's own SYNC stamps in a catch-up burst lie 5 us apart and more)."""
 ABORT_NOT_MAPPABLE = 0x06040041
 """CiA 301's SDO abort code "object cannot be mapped to the PDO"."""
 
@@ -94,13 +98,21 @@ class SimulatedModules:
 
         self.network.subscribe(sync_id, on_sync)
 
-    def serve(self, bus: Any, frames: Any) -> int:
+    def serve(self, bus: Any, frames: Any, rate_hz: float,
+              stamps: Callable[[], bool] | None = None) -> int:  # fmt: skip
         """On ``bus`` (another process's host, as a real stand's): answer the host's set-up
         over SDO; once every module is started (NMT operational), answer each SYNC with
-        each module's next TPDO of the scene's ``frames`` in a loop of its own (no
-        dispatch: a 2 kHz SYNC leaves 0.5 ms), until they run out and the host's SYNCs
-        stop for :data:`HOST_GONE_S`, or none set the modules up within
-        :data:`HOST_WAIT_S`.  Returns the TPDOs sent."""
+        each module's TPDO of the scene's ``frames`` sampled when that SYNC came (its time
+        from the host's first SYNC, at ``rate_hz``: a SYNC the host sent late gets the
+        sample of its own time, as a module samples on SYNC), in a loop of its own (no
+        dispatch: a 2 kHz SYNC leaves 0.5 ms), until the scene's samples run out and the
+        host's SYNCs stop for :data:`HOST_GONE_S`, or none set the modules up within
+        :data:`HOST_WAIT_S`.  ``stamps``, called once the set-up is done: have the bus
+        send each frame's own time (True where it can): each TPDO then carries the time it
+        answers, within its SYNC's window however late this process is: the SYNC's own
+        plus :data:`STAMP_AFTER_SYNC_S` per node (a host catching up sends its SYNCs
+        microseconds apart, and the answer must sit before the next one).
+        Returns the TPDOs sent."""
         import can
 
         payloads = [
@@ -116,18 +128,22 @@ class SimulatedModules:
                 return 0
             time.sleep(0.005)
         self.detach()  # the set-up is done: the SYNCs are answered below, straight
-        sent, k, last = 0, 0, time.monotonic()
+        wire = stamps() if stamps is not None else False
+        sent, first, last = 0, None, time.monotonic()
         total = min(len(p) for _, p in payloads)
         while time.monotonic() - last < HOST_GONE_S:
             msg = bus.recv(0.1)
             if msg is None or msg.arbitration_id != SYNC_ID or msg.is_extended_id:
                 continue
             last = time.monotonic()
-            if k < total:
-                for cob, queue in payloads:
-                    bus.send(can.Message(arbitration_id=cob, data=queue[k], is_extended_id=False))
+            first = msg.timestamp if first is None else first
+            k = round((msg.timestamp - first) * rate_hz)  # the sample of the SYNC's time
+            if 0 <= k < total:
+                for j, (cob, queue) in enumerate(payloads):
+                    at = msg.timestamp + STAMP_AFTER_SYNC_S * (j + 1) if wire else 0.0
+                    bus.send(can.Message(timestamp=at, arbitration_id=cob, data=queue[k],
+                                         is_extended_id=False))  # fmt: skip
                     sent += 1
-                k += 1
         return sent
 
     def detach(self) -> None:

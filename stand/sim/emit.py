@@ -280,7 +280,31 @@ def _sample_times(scene: Scene, t_start: float, ppm: list[float],
         true_rate = rate * (1 + ppm[i] * 1e-6)
         n = math.floor((scene.run.seconds - offset[i]) * true_rate)
         times.append(t_start + offset[i] + np.arange(max(n, 0)) / true_rate)
-    if simulated(scene.nodes.protocol).clocked_by_sync and scene.nodes.sync_jitter_s > 0:
-        late = rng_of(scene, "sync_jitter", 0).normal(0.0, scene.nodes.sync_jitter_s, len(times[0]))
+    nodes = scene.nodes
+    if simulated(nodes.protocol).clocked_by_sync and nodes.sync_jitter_s > 0:
+        late = rng_of(scene, "sync_jitter", 0).normal(0.0, nodes.sync_jitter_s, len(times[0]))
         times = [t + late[: len(t)] for t in times]
+    if simulated(nodes.protocol).clocked_by_sync and nodes.sync_stall_s > 0:
+        times = [stalled(t, nodes.sync_stall_s, nodes.sync_stall_every_s) for t in times]
     return times
+
+
+SYNC_BURST_S = 0.3e-3
+"""A SYNC and two 8-byte TPDOs on the wire at 1 Mbit/s [s]: how close a SYNC producer
+catching up can send its SYNCs (each module still answers before the next)."""
+
+
+def stalled(due: FloatArray, stall_s: float, every_s: float) -> FloatArray:
+    """When a SYNC producer on an absolute schedule (python-can's cyclic task: each SYNC
+    due one period after the last one's due time) sends its SYNCs ``due`` [s] when its
+    host stalls for the last ``stall_s`` of every ``every_s`` (from the first due time):
+    a SYNC due in a stall goes out when the stall ends, and the late ones a
+    :data:`SYNC_BURST_S` apart until the schedule is caught up."""
+    if not len(due):
+        return due
+    phase = (due - due[0]) % every_s
+    released = np.where(phase > every_s - stall_s, due - phase + every_s, due)
+    k = np.arange(len(due)) * SYNC_BURST_S
+    backlog = np.maximum.accumulate(released - k) + k
+    out: FloatArray = np.where(backlog > released + 1e-9, backlog, released)  # on time: as due
+    return out

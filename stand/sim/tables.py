@@ -115,9 +115,17 @@ class NodesTable(_Table):
     or 8)."""
     sync_jitter_s: Annotated[float, Field(ge=0.0, le=1e-3)] = 0.0
     """``canopen`` only: the SYNC's timing jitter (rms): the modules sample when it comes."""
+    sync_stall_s: Annotated[float, Field(ge=0.0, le=0.5)] = 0.0
+    """``canopen`` only: the host that produces the SYNC stalls this long once every
+    ``sync_stall_every_s`` (a loaded machine): the SYNCs due meanwhile go out when it ends,
+    a bus cycle apart, until the producer's schedule is caught up."""
+    sync_stall_every_s: Annotated[float, Field(ge=0.05, le=60.0)] = 1.0
 
     @model_validator(mode="after")
     def _fd_frame(self) -> NodesTable:
+        if self.sync_stall_s >= self.sync_stall_every_s:
+            raise ValueError(f"sync_stall_s ({self.sync_stall_s:g} s) must be shorter than "
+                             f"sync_stall_every_s ({self.sync_stall_every_s:g} s)")  # fmt: skip
         if self.scans_per_frame > 1 and 8 * self.scans_per_frame not in FD_LENGTHS:
             lengths = ", ".join(map(str, FD_LENGTHS[8:]))
             raise ValueError(f"scans_per_frame: {self.scans_per_frame} x 8 bytes is not a CAN "

@@ -4,6 +4,7 @@ spread against the Cramer-Rao bound; bad EDS and mappings."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -86,28 +87,43 @@ def test_lost_and_late_tpdos_keep_their_place(
 def test_backlogs_are_left_out_and_too_many_refuse_the_node(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """Node 1's TPDOs come three at a time after the SYNC of the last (a host that fell
-    behind): which SYNC each answered is not known, so all three are left out, never
-    placed by guess; a few such backlogs leave the answer in its circles, more than a
-    fifth of the TPDOs refuse the node in one line, naming the share."""
+    """Node 1's TPDOs come three at a time after the SYNC of the last, stamped as they
+    arrive (a host that fell behind): which SYNC each answered is not known, so all three
+    are left out, never placed by guess; a few such backlogs leave the answer in its
+    circles, more than a fifth of the TPDOs refuse the node in one line, naming the share.
+    The same backlogs with each TPDO's wire time (a bus stamping in hardware, a simulated
+    module stamping when it answered): each is put back on the SYNC its stamp follows, and
+    the answer is the whole run's."""
     run = tmp_path / "c.h5"
     assert main(["simulate", str(short_scene(tmp_path, "demo-canopen")), "--out", str(run)]) == 0
 
-    def backlog(share: float, step: int):  # type: ignore[no-untyped-def]
+    def backlog(share: float, step: int, wire: bool = False):  # type: ignore[no-untyped-def]
         def change(frames):  # type: ignore[no-untyped-def]
             node1 = np.flatnonzero(frames.can_id == 0x181)
-            pos = np.arange(len(frames), dtype=float)
+            pos, t = np.arange(len(frames), dtype=float), frames.t_s.copy()
             groups = node1[: 3 * int(share * len(node1) / 3)].reshape(-1, 3)
             for g in groups[::step]:
                 pos[g[0]], pos[g[1]] = pos[g[2]] - 0.2, pos[g[2]] - 0.1  # after g[2]'s SYNC
-            return frames.take(np.argsort(pos, kind="stable"))
+                if not wire:
+                    t[g[0]] = t[g[1]] = t[g[2]]  # stamped on arrival
+            moved = dataclasses.replace(frames, t_s=t)
+            return moved.take(np.argsort(pos, kind="stable"))
 
         return change
 
     few, many = tmp_path / "few.h5", tmp_path / "many.h5"
     _rewrite(run, few, backlog(0.9, 20))  # every 20th group of three: about 4.5 %
     _rewrite(run, many, backlog(0.3, 1))  # 30 % of them
+    stamped = tmp_path / "stamped.h5"
+    _rewrite(run, stamped, backlog(0.3, 1, wire=True))
     capsys.readouterr()
+    whole = solve_json(run, capsys)
+    placed = solve_json(stamped, capsys)
+    assert placed["planes"] == whole["planes"]
+    said = [w for w in placed["warnings"] if "by their stamps" in w]
+    # two of each three put back (the third arrived after its own SYNC), none left out
+    assert said and ", 0 in a backlog" in said[0], said
+    assert int(said[0].split(": ")[1].split(" ")[0]) == 2 * len(range(0, 1200, 3)), said
     out = solve_json(few, capsys)
     holds_the_demo(out)
     said = [w for w in out["warnings"] if "in a backlog on one SYNC" in w]

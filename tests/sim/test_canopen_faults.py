@@ -89,7 +89,7 @@ def test_late_tpdos_are_put_back_and_said(
 ) -> None:
     _, out = _solved(tmp_path, "late_probability = 0.02", capsys)
     holds_the_demo(out)
-    assert _said(out, "node 1:", "came after the next SYNC (put back on their own)")
+    assert _said(out, "node 1:", "came after the next SYNC (put back on their own,")
 
 
 @pytest.mark.realtime
