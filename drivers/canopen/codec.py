@@ -82,18 +82,25 @@ def sync_clock(sync_t: NDArray[np.float64], rate_hz: float, source: str
         return None
     period, at0 = line
     check_clock(rate_hz, 1.0 / period, source, "bus.canopen.rate_hz")
-    where = (sync_t - at0) / period
-    own = np.arange(len(sync_t))
+    off = sync_t - at0
+    off /= period
+    off -= np.arange(len(sync_t), dtype=np.float64)  # each SYNC off its own beat [periods]
+    on = np.abs(off) <= ON_BEAT
+    late = np.flatnonzero(~on)
+    if not len(late):
+        return None  # every SYNC on its own beat (the common case: no copy made)
+    where = off[late] + late
     beat = np.rint(where).astype(np.int64)
     near = np.abs(where - beat)
-    beat = np.where(np.abs(where - own) <= ON_BEAT, own, beat)  # on time: its own beat
-    usable = (beat == own) | (near <= NEAR_BEAT)
+    ok = (near <= NEAR_BEAT) & (beat >= 0)
+    ok &= ~((beat < len(on)) & np.take(on, beat, mode="clip"))  # an on-time SYNC's beat
     order = np.lexsort((near, beat))  # by beat, the nearest first
     first = np.ones(len(order), bool)
     first[1:] = beat[order][1:] != beat[order][:-1]
-    first &= usable[order]
-    out = np.full(len(beat), -1, np.int64)
-    out[order[first]] = beat[order[first]]
+    nearest = np.zeros(len(late), bool)
+    nearest[order[first]] = True
+    out = np.arange(len(sync_t), dtype=np.int64)
+    out[late] = np.where(ok & nearest, beat, -1)
     return out
 
 
@@ -133,11 +140,17 @@ def _by_stamp(k: NDArray[np.int64], t: NDArray[np.float64],
     :data:`MAX_LATE_SYNCS` back.  On a recording whose stamps follow the arrival, as a
     host's receive stamps do, this is the arrival's SYNC, always.  Returns the SYNCs and
     how many TPDOs their stamps put back."""
-    if not len(k) or len(sync_t) < 2 or bool(np.any(np.diff(sync_t) < 0)):
+    if not len(k) or len(sync_t) < 2:
         return k, 0
-    by_t = np.searchsorted(sync_t, t, side="right") - 1
-    use = (by_t >= 0) & (by_t < k) & (k - by_t <= MAX_LATE_SYNCS)
-    out: NDArray[np.int64] = np.where(use, by_t, k)
+    early = t < np.take(sync_t, k, mode="clip")  # stamped before the SYNC it came after
+    early &= (k >= 0) & (k < len(sync_t))
+    if not early.any() or bool(np.any(np.diff(sync_t) < 0)):
+        return k, 0  # the stamps follow the arrival (the common case), or tell nothing
+    at = np.flatnonzero(early)
+    by_t = np.searchsorted(sync_t, t[at], side="right") - 1
+    use = (by_t >= 0) & (k[at] - by_t <= MAX_LATE_SYNCS)
+    out = k.copy()
+    out[at[use]] = by_t[use]
     return out, int(np.count_nonzero(use))
 
 
@@ -151,7 +164,7 @@ def _placed(k: NDArray[np.int64], beats: NDArray[np.int64] | None
     if beats is None:
         return k, keep, moved, dropped, 0, 0
     inside = keep & (k < len(beats))
-    index = np.where(inside, beats[np.minimum(k, len(beats) - 1)], -1)
+    index = np.where(inside, np.take(beats, k, mode="clip"), -1)
     off = int(np.count_nonzero(inside & (index >= 0) & (index != k)))
     gone = int(np.count_nonzero(inside & (index < 0)))
     return index, keep & (index >= 0), moved, dropped, off, gone
