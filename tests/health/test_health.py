@@ -26,12 +26,27 @@ def series(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     each correction put on within 2 % and 2 deg (the shipped scene production-drift; its
     description's 200 rotors are the docs' demo: 40 after the change are what the alarm
     and the refit need, and 60 fewer spare the suite 20 s)."""
+    import fcntl
+    import os
+    import shutil
+
+    # built once for the session, under a lock, by the first xdist worker that needs it
+    # (70 s: the suite's longest fixture); each worker's tests get a copy of its archive
+    base = tmp_path_factory.getbasetemp()
+    shared = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "health-series"
+    with open(f"{shared}.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (shared / "built").exists():
+            (shared / "runs").mkdir(parents=True, exist_ok=True)
+            url = f"sqlite:///{shared / 'a.sqlite'}"
+            args = ["simulate", "production-drift", "--series", "140", "--out-dir",
+                    str(shared / "runs"), "--archive", url]  # fmt: skip
+            assert main(args) == 0
+            (shared / "built").touch()
     d = tmp_path_factory.mktemp("series")
-    url = f"sqlite:///{d / 'a.sqlite'}"
-    (d / "runs").mkdir()
-    args = ["simulate", "production-drift", "--series", "140", "--out-dir", str(d / "runs")]
-    assert main([*args, "--archive", url]) == 0
-    return d, url
+    shutil.copy(shared / "a.sqlite", d / "a.sqlite")
+    shutil.copytree(shared / "runs", d / "runs")
+    return d, f"sqlite:///{d / 'a.sqlite'}"
 
 
 def test_support_1_softening_is_raised_within_20_rotors_and_named(
