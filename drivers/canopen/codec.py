@@ -87,8 +87,8 @@ def sync_clock(sync_t: NDArray[np.float64], rate_hz: float, source: str
     off -= np.arange(len(sync_t), dtype=np.float64)  # each SYNC off its own beat [periods]
     on = np.abs(off) <= ON_BEAT
     late = np.flatnonzero(~on)
-    if not len(late):
-        return None  # every SYNC on its own beat (the common case: no copy made)
+    if not len(late) or bool(np.any(np.diff(sync_t) < 0)):
+        return None  # every SYNC on its own beat (the common case), or stamps out of order
     where = off[late] + late
     beat = np.rint(where).astype(np.int64)
     near = np.abs(where - beat)
