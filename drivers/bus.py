@@ -128,16 +128,21 @@ simulated node's frames carry their wire time (:func:`play`'s ``wire_stamps``)."
 def keep_stamps(bus: Any, kwargs: dict[str, Any]) -> bool:
     """From now on, have ``bus`` (opened with ``kwargs``) send a message's own timestamp
     (its wire time), where its interface can (:data:`KEEPS_STAMPS`); whether it does."""
-    keeps = kwargs.get("interface") in KEEPS_STAMPS
+    keeps = keeps_stamps(kwargs)
     if keeps:
         bus.preserve_timestamps = True
     return keeps
 
 
+def keeps_stamps(kwargs: dict[str, Any]) -> bool:
+    """Whether the interface ``kwargs`` names can send a sender's own stamps."""
+    return kwargs.get("interface") in KEEPS_STAMPS
+
+
 def open_player_bus(kwargs: dict[str, Any]) -> tuple[Any, bool]:
     """The simulated nodes' side of the bus ``kwargs`` names (:func:`open_bus`), and
     whether it keeps the stamps :func:`play` gives (on :data:`KEEPS_STAMPS` interfaces)."""
-    keeps = kwargs.get("interface") in KEEPS_STAMPS
+    keeps = keeps_stamps(kwargs)
     return open_bus({**kwargs, "preserve_timestamps": True} if keeps else kwargs), keeps
 
 
