@@ -56,7 +56,10 @@ def test_one_measurement_at_a_time_and_a_hand_stop(station: Station) -> None:
     station.start("demo-auger", "demo", Job(serial="B-8"))
     station.stop()  # at once: too little data for an answer, and the screen says why
     s = station.wait(30)
-    assert s.phase == "failed" and "reference edges" in s.error
+    # the stop may come before a node's first samples or after its first few: either way
+    # the run is refused and the screen names what was missing
+    assert s.phase == "failed"
+    assert "reference edges" in s.error or "no samples" in s.error, s.error
 
 
 @pytest.mark.realtime
