@@ -6,13 +6,14 @@ separation margin (API 684), and the Bode and polar plots."""
 from __future__ import annotations
 
 import argparse
+import cmath
 import math
 from typing import Any
 
 from stand.cli.common import add_force_argument
 from stand.cli.format import dump_json
 from stand.errors import MeasurementError
-from stand.field.runup import RunupAnalysis, analyse_runup
+from stand.field.runup import RunupAnalysis, SecondOrder, analyse_runup
 from stand.solve.recordings import read_run
 
 RPM = 30 / math.pi
@@ -68,6 +69,23 @@ def _peak(r: Any) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def _x2(x: SecondOrder) -> dict[str, Any]:
+    """A support's 2x: its largest, and at the balancing speed against the 1x there."""
+    at = x.at_balancing_m_s2
+    return {
+        "peak_m_s2": round(x.peak_m_s2, 6), "peak_radius95_m_s2": round(x.peak_radius95_m_s2, 6),
+        "peak_rpm": round(x.peak_omega_rad_s * RPM, 1),
+        "at_balancing_m_s2": None if at is None else round(abs(at), 6),
+        "at_balancing_phase_deg": None if at is None else round(math.degrees(cmath.phase(at))
+                                                                % 360, 2),
+        "at_balancing_radius95_m_s2": None if x.at_balancing_radius95_m_s2 is None
+        else round(x.at_balancing_radius95_m_s2, 6),
+        "share_of_1x_at_balancing_pct": None if at is None or not x.one_x_at_balancing_m_s2
+        else round(100 * abs(at) / x.one_x_at_balancing_m_s2, 3),
+        "points_at_balancing": x.blocks_at_balancing,
+    }  # fmt: skip
+
+
 def _modes(a: RunupAnalysis) -> list[dict[str, Any]]:
     """The fitted modes, each against the model's nearest and the balancing speed."""
     if a.modes is None:
@@ -106,8 +124,9 @@ def as_json(a: RunupAnalysis) -> dict[str, Any]:
                 "support": c.support,
                 "points": len(c.omega_rad_s),
                 "peaks": [_peak(r) for r in c.resonances],
+                "x2": _x2(x2),
             }
-            for c in a.curves
+            for c, x2 in zip(a.curves, a.second, strict=True)
         ],
         "warnings": list(a.warnings),
     }
@@ -115,6 +134,8 @@ def as_json(a: RunupAnalysis) -> dict[str, Any]:
 
 def _print(a: RunupAnalysis, plots: list[str]) -> None:
     lo, hi = (w * RPM for w in a.omega_range_rad_s)
+    if a.direction == "coast-down":  # the speeds in the order the run went through them
+        lo, hi = hi, lo
     print(f"{a.direction} from {lo:.0f} to {hi:.0f} rpm at {a.sweep_rad_s2 * RPM:.1f} rpm/s, "
           f"{a.revs_per_block} revolution(s) a point")  # fmt: skip
     print("mode  [rpm]   zeta     AF   model [rpm]  zeta    margin  API 684 asks  (as steady)")
@@ -130,6 +151,16 @@ def _print(a: RunupAnalysis, plots: list[str]) -> None:
                   f"{r.zeta:.4f} (half-power), {circle} (circle fit), AF "
                   f"{r.amplification:.1f}")  # fmt: skip
     print(f"balancing speed {a.balancing_omega_rad_s * RPM:.0f} rpm")
+    for x in a.second:
+        j = _x2(x)
+        at = (
+            "not reached in the run"
+            if j["at_balancing_m_s2"] is None
+            else f"{j['at_balancing_m_s2']:.4f} +- {j['at_balancing_radius95_m_s2']:.4f} m/s^2 "
+            f"at the balancing speed ({j['share_of_1x_at_balancing_pct']:.1f} % of the 1x)"
+        )
+        print(f"support {x.support}: 2x {at}; at most {j['peak_m_s2']:.4f} +- "
+              f"{j['peak_radius95_m_s2']:.4f} m/s^2 at {j['peak_rpm']:.0f} rpm")  # fmt: skip
     for w in a.warnings:
         print(f"  warning: {w}")
     for p in plots:

@@ -13,11 +13,12 @@ edge are left out of the fit), a fit that leaves more than the points' noise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from stand.config import Config
+from stand.core.dsp import radius_factor
 from stand.core.model import StandParameters
 from stand.core.resonance import (
     ModalFit,
@@ -32,7 +33,7 @@ from stand.core.resonance import (
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.errors import MeasurementError
 from stand.measuring.gate import node_segment
-from stand.measuring.track import track_1x
+from stand.measuring.track import track_1x, track_orders
 
 REVS_PER_BLOCK = 1
 """Revolutions in each order-tracking block: the curve's resolution in speed."""
@@ -54,13 +55,17 @@ did not behave as a linear one with these modes (a loose part, a rub, a wrong co
 @dataclass(frozen=True)
 class SupportCurve:
     """One support's order-tracked 1x: block speeds [rad/s], 1x acceleration [m/s^2],
-    its standard error per component [m/s^2], and the resonances its shape shows."""
+    its standard error per component [m/s^2], and the resonances its shape shows; its 2x
+    acceleration phasor at the same blocks [m/s^2] and that one's standard error (empty
+    where not tracked)."""
 
     support: int
     omega_rad_s: np.ndarray
     accel_m_s2: np.ndarray
     se_m_s2: np.ndarray
     resonances: tuple[Resonance, ...]
+    x2_m_s2: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    x2_se_m_s2: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass(frozen=True)
@@ -88,6 +93,47 @@ class Margin:
 
 
 @dataclass(frozen=True)
+class SecondOrder:
+    """One support's 2x: its largest amplitude over the run [m/s^2] with that block's
+    95 % radius and speed [rad/s]; at the balancing speed (the blocks within
+    :data:`AT_SPEED` of it, their phasors averaged) its phasor [m/s^2], 95 % radius, the
+    1x there and how many blocks; ``None`` there when the run has no block that close."""
+
+    support: int
+    peak_m_s2: float
+    peak_radius95_m_s2: float
+    peak_omega_rad_s: float
+    at_balancing_m_s2: complex | None
+    at_balancing_radius95_m_s2: float | None
+    one_x_at_balancing_m_s2: float | None
+    blocks_at_balancing: int
+
+
+AT_SPEED = 0.01
+"""A block within this fraction of the balancing speed counts as at it (the 2x there)."""
+
+
+def second_order(c: SupportCurve, w_bal: float) -> SecondOrder:
+    """The 2x of the support's curve ``c`` over the run and at the speed ``w_bal``
+    [rad/s] (see :class:`SecondOrder`; radii :func:`stand.core.dsp.radius_factor` at
+    infinite degrees of freedom: each block holds hundreds of samples)."""
+    k95 = radius_factor(math.inf)
+    amp = np.abs(c.x2_m_s2)
+    k = int(np.argmax(amp))
+    near = np.abs(c.omega_rad_s - w_bal) <= AT_SPEED * w_bal
+    n = int(np.count_nonzero(near))
+    if n == 0:
+        return SecondOrder(c.support, float(amp[k]), k95 * float(c.x2_se_m_s2[k]),
+                           float(c.omega_rad_s[k]), None, None, None, 0)  # fmt: skip
+    se = float(np.sqrt(np.sum(c.x2_se_m_s2[near] ** 2))) / n  # the mean's, per component
+    return SecondOrder(
+        c.support, float(amp[k]), k95 * float(c.x2_se_m_s2[k]), float(c.omega_rad_s[k]),
+        complex(np.mean(c.x2_m_s2[near])), k95 * se, float(np.abs(np.mean(c.accel_m_s2[near]))),
+        n,
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
 class RunupAnalysis:
     """A run-up's (or coast-down's) resonances, the model's modes and the margins."""
 
@@ -104,6 +150,7 @@ class RunupAnalysis:
     margins: tuple[Margin, ...]
     warnings: tuple[str, ...]
     waterfalls: tuple[Waterfall, ...] = ()
+    second: tuple[SecondOrder, ...] = ()
 
 
 def _lost_marks(s: NodeStream) -> list[tuple[float, float]]:
@@ -124,7 +171,8 @@ def _lost_marks(s: NodeStream) -> list[tuple[float, float]]:
 
 def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str]) -> SupportCurve:
     """One support's curve, ordered by speed, the blocks about a lost mark left out."""
-    w, A, se = track_1x(s, gamma_rad, REVS_PER_BLOCK)
+    w, A, se = track_1x(s, gamma_rad, REVS_PER_BLOCK)  # the 1x alone: its least noise
+    _, (_, (A2, se2)) = track_orders(s, gamma_rad, REVS_PER_BLOCK, (1, 2))  # the same blocks
     keep = np.ones(len(w), bool)
     for lo, hi in _lost_marks(s):
         out = (w >= 0.98 * lo) & (w <= 1.02 * hi)
@@ -132,14 +180,15 @@ def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str]) -> Su
         warn.append(f"support {support}: the reference mark was lost between "
                     f"{lo * 30 / math.pi:.0f} and {hi * 30 / math.pi:.0f} rpm: "
                     f"{int(np.count_nonzero(out))} block(s) there left out")  # fmt: skip
-    w, A, se = w[keep], A[keep], se[keep]
+    w, A, se, A2, se2 = w[keep], A[keep], se[keep], A2[keep], se2[keep]
     if len(w) < MIN_BLOCKS:
         raise MeasurementError(f"support {support}: a run-up too short to read: {len(w)} "
                                f"blocks of {REVS_PER_BLOCK} revolutions, {MIN_BLOCKS} at "
                                "least")  # fmt: skip
     order = np.argsort(w, kind="stable")
     w, A, se = w[order], A[order], se[order]
-    return SupportCurve(support, w, A, se, tuple(resonances(w, response_shape(w, A))))
+    shape = tuple(resonances(w, response_shape(w, A)))
+    return SupportCurve(support, w, A, se, shape, A2[order], se2[order])
 
 
 SLICE_REVS = 16
@@ -290,6 +339,7 @@ def analyse_runup(
         model_zeta=tuple(float(x) for x in zeta_model), balancing_omega_rad_s=w_bal,
         margins=tuple(margins), warnings=tuple(warn),
         waterfalls=tuple(waterfall(streams.nodes[i], i) for i in (1, 2)),
+        second=tuple(second_order(c, w_bal) for c in curves),
     )  # fmt: skip
 
 

@@ -1,4 +1,5 @@
 """A run-up's pictures: the Bode plot (each support's 1x amplitude and phase against speed,
+its 2x amplitude thin,
 the modes fitted, the model's modes, the balancing speed), the polar plot (each support's
 response shape ``-A / w^4`` in the complex plane, the modes marked) and the waterfall
 (each support's spectrum against speed, the orders 1 to 4 drawn)."""
@@ -24,6 +25,9 @@ def _bode(plt: Any, a: Any) -> Any:
     for c, colour in zip(a.curves, ("tab:blue", "tab:orange"), strict=True):
         rpm = c.omega_rad_s * RPM
         amp.semilogy(rpm, np.abs(c.accel_m_s2), color=colour, label=f"support {c.support}")
+        if len(c.x2_m_s2):
+            amp.semilogy(rpm, np.abs(c.x2_m_s2), color=colour, lw=0.7, ls="-.",
+                         label=f"support {c.support}, 2x")  # fmt: skip
         ph.plot(rpm, np.degrees(np.unwrap(np.angle(c.accel_m_s2))), color=colour)
     for w in a.model_omega_rad_s:
         amp.axvline(w * RPM, color="0.5", ls="--", lw=1)
@@ -33,7 +37,7 @@ def _bode(plt: Any, a: Any) -> Any:
                 label=f"balancing speed {a.balancing_omega_rad_s * RPM:.0f} rpm")  # fmt: skip
     amp.plot([], [], color="0.5", ls="--", label="the model's modes")
     amp.plot([], [], color="black", ls=":", label="the modes fitted")
-    amp.set_ylabel("1x acceleration [m/s^2]")
+    amp.set_ylabel("1x (and 2x) acceleration [m/s^2]")
     amp.set_title(f"Bode plot of the {a.direction} (a point every {a.revs_per_block} "
                   "revolution(s))")  # fmt: skip
     amp.legend(fontsize=8)

@@ -79,8 +79,10 @@ def scene_speed(scene: Scene) -> tuple[SceneSpeed, float]:
         scene.run.settle_s if scene.needs_integration and not (e.run_up or e.autobalancer) else 0.0
     )
     t_start = hold  # a run-up is recorded from standstill
-    sp = e.speed
+    sp, cd = e.speed, e.coast_down
     speed = SceneSpeed(
+        coast_at_s=t_start + ramp + cd.after_s if cd else 0.0,
+        coast_s=cd.ramp_s if cd else 0.0,
         omega0_rad_s=float(rpm_to_rad_s(scene.run.rpm)),
         end_s=t_start + scene.run.seconds,
         ramp_s=ramp,

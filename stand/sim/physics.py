@@ -42,12 +42,15 @@ from stand.errors import ModelError
 
 @dataclass(frozen=True)
 class SceneSpeed:
-    """Shaft speed: linear ramp from standstill, a hold, then ripple and drift.
+    """Shaft speed: linear ramp from standstill, a hold, then ripple and drift; then,
+    where ``coast_s`` is given, a linear coast-down to standstill.
 
     ``w(t) = w0 t / ramp_s`` for ``t < ramp_s``; ``w0`` until
     ``ramp_s + hold_s``; then ``w0 (1 + ripple sin(2 pi f tau) + drift tau)``
-    with ``tau`` the time since.  ``theta`` is its exact integral from
-    ``theta0_rad``.  Implements :class:`stand.core.transient.Speed`.
+    with ``tau`` the time since.  From ``coast_at_s`` on, ``w_c (1 - s / coast_s)``
+    with ``w_c`` the speed then and ``s`` the time since, zero once it stands.
+    ``theta`` is its exact integral from ``theta0_rad``.  Implements
+    :class:`stand.core.transient.Speed`.
     """
 
     omega0_rad_s: float
@@ -58,13 +61,14 @@ class SceneSpeed:
     ripple_hz: float = 1.0
     drift_per_s: float = 0.0
     theta0_rad: float = 0.0
+    coast_at_s: float = 0.0
+    coast_s: float = 0.0
 
     @property
     def _t1(self) -> float:
         return self.ramp_s + self.hold_s
 
-    def omega(self, t: ArrayLike) -> FloatArray:
-        t = np.asarray(t, dtype=float)
+    def _omega(self, t: FloatArray) -> FloatArray:
         tau = np.maximum(t - self._t1, 0.0)
         steady = self.omega0_rad_s * (1 + self.drift_per_s * tau)
         if self.ripple:  # (a term left out where it is zero: the integrators call these often)
@@ -77,8 +81,7 @@ class SceneSpeed:
         result: FloatArray = steady
         return result
 
-    def alpha(self, t: ArrayLike) -> FloatArray:
-        t = np.asarray(t, dtype=float)
+    def _alpha(self, t: FloatArray) -> FloatArray:
         tau = t - self._t1
         f = 2 * math.pi * self.ripple_hz
         steady: FloatArray | float = self.omega0_rad_s * self.drift_per_s
@@ -89,8 +92,7 @@ class SceneSpeed:
             result = np.where(t < self.ramp_s, self.omega0_rad_s / self.ramp_s, result)
         return result
 
-    def theta(self, t: ArrayLike) -> FloatArray:
-        t = np.asarray(t, dtype=float)
+    def _theta(self, t: FloatArray) -> FloatArray:
         w0 = self.omega0_rad_s
         f = 2 * math.pi * self.ripple_hz
         tau = np.maximum(t - self._t1, 0.0)
@@ -104,6 +106,41 @@ class SceneSpeed:
             ramp = self.theta0_rad + 0.5 * w0 * np.clip(t, 0.0, None) ** 2 / self.ramp_s
             result = np.where(t < self.ramp_s, ramp, result)
         return result
+
+    def _coasting(self, t: FloatArray) -> tuple[FloatArray, float, float]:
+        """The time into the coast-down at ``t`` (clipped to it: negative before, at most
+        ``coast_s``), and the speed [rad/s] and angle [rad] where it began."""
+        tc = np.array(self.coast_at_s)
+        s = np.minimum(t - self.coast_at_s, self.coast_s)
+        return s, float(self._omega(tc)), float(self._theta(tc))
+
+    def omega(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        if self.coast_s <= 0:
+            return self._omega(t)
+        s, wc, _ = self._coasting(t)
+        out: FloatArray = np.where(s >= 0, wc * (1 - s / self.coast_s), self._omega(t))
+        return out
+
+    def alpha(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        if self.coast_s <= 0:
+            return self._alpha(t)
+        s, wc, _ = self._coasting(t)
+        braking = (s >= 0) & (t - self.coast_at_s < self.coast_s)
+        out: FloatArray = np.where(
+            braking, -wc / self.coast_s, np.where(s >= 0, 0.0, self._alpha(t))
+        )
+        return out
+
+    def theta(self, t: ArrayLike) -> FloatArray:
+        t = np.asarray(t, dtype=float)
+        if self.coast_s <= 0:
+            return self._theta(t)
+        s, wc, thc = self._coasting(t)
+        coast = thc + wc * (s - 0.5 * s * s / self.coast_s)
+        out: FloatArray = np.where(s >= 0, coast, self._theta(t))
+        return out
 
     @property
     def max_omega_rad_s(self) -> float:

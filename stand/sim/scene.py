@@ -95,7 +95,23 @@ class Scene(BaseModel):
         if self.run.physics != "auto":
             return self.run.physics == "integrate"
         e = self.effects
-        return e.run_up is not None or e.nonlinear or e.autobalancer is not None
+        return e.sweeps or e.nonlinear or e.autobalancer is not None
+
+
+def _coasts_in_time(scene: Scene, source: str) -> None:
+    """A coast-down's recording ends before the rotor stands (the nodes' reference mark
+    stops with it: a recording past it would end in a silence no measurement reads)."""
+    e = scene.effects
+    if e.coast_down is None:
+        return
+    stands = (e.run_up.ramp_s if e.run_up else 0.0) + e.coast_down.after_s + e.coast_down.ramp_s
+    if scene.run.seconds >= stands:
+        raise ConfigError(
+            f"the rotor stands still {stands:g} s into the recording (the coast-down's "
+            f"after_s + ramp_s): [run] seconds = {scene.run.seconds:g} must end before",
+            source=source,
+            key="run.seconds",
+        )
 
 
 def scenes_dir() -> Path:
@@ -128,12 +144,13 @@ def load_scene(name_or_path: str | Path) -> tuple[Scene, StandParameters, str]:
         )
     _, data = read_toml(path)
     scene = validate(Scene, data, str(path))
-    if scene.run.physics == "closed_form" and (scene.effects.run_up or scene.effects.nonlinear):
+    if scene.run.physics == "closed_form" and (scene.effects.sweeps or scene.effects.nonlinear):
         raise ConfigError(
-            'physics = "closed_form" cannot simulate a run-up or a nonlinear support',
+            'physics = "closed_form" cannot simulate a run-up, a coast-down or a nonlinear support',
             source=str(path),
             key="run.physics",
         )
+    _coasts_in_time(scene, str(path))
     # a shaft table gives the rotor's values (and the rotor bends)
     scene = scene.model_copy(update={"rotor": with_shaft(scene.config(), str(path)).rotor})
     for key in ("distributed", "axial"):

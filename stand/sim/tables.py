@@ -167,6 +167,16 @@ class RunUp(_Table):
     ramp_s: Positive
 
 
+class CoastDown(_Table):
+    """After ``after_s`` at ``[run] rpm`` (from its steady state, or from the run-up's
+    top), the drive lets go and a brake holds the deceleration: the speed falls linearly
+    to standstill in ``ramp_s`` (a transient; the recording ends at ``[run] seconds``,
+    which must come before the standstill)."""
+
+    ramp_s: Positive
+    after_s: NonNegative = 1.0
+
+
 class Sensor(_Table):
     """Sensor gain and group delay [s]: the phase lag grows with speed, ``w * delay``."""
 
@@ -337,6 +347,7 @@ class Effects(_Table):
     clock: Clock | None = None
     speed: SpeedEffect | None = None
     run_up: RunUp | None = None
+    coast_down: CoastDown | None = None
     sensor: Sensor | None = None
     edge_jitter: EdgeJitter | None = None
     lost_frames: LostFrames | None = None
@@ -360,6 +371,11 @@ class Effects(_Table):
     def named(self) -> list[str]:
         """The effects the scene names, in table order."""
         return [name for name, value in self if value is not None]
+
+    @property
+    def sweeps(self) -> bool:
+        """A run-up or a coast-down: the speed sweeps, the physics is integrated in time."""
+        return self.run_up is not None or self.coast_down is not None
 
     @property
     def nonlinear(self) -> bool:

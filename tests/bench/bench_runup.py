@@ -3,8 +3,9 @@
     .venv/bin/python tests/bench/bench_runup.py
 
 1. The shipped ``demo-runup`` (the demo stand, supports damped 200 N s/m) run up to 600
-   rpm at 5, 20 and 60 rpm/s: each mode ``stand runup`` fits against the model's
-   eigenvalue, its error, the damping, and what reading the sweep as steady states gives.
+   rpm at 5, 20 and 60 rpm/s, and ``demo-coastdown`` braked from it at those rates: each
+   mode ``stand runup`` fits against the model's eigenvalue, its error, the damping, and
+   what reading the sweep as steady states gives.
 2. Reading a 60 s run-up at 4 kHz (two nodes): the order tracking and the fit, best of 3
    (the run already decoded), and the peak memory of ``stand runup`` against the run
    file's size.
@@ -27,16 +28,21 @@ from stand.solve.recordings import read_run
 RPM = 30 / math.pi
 
 
-def _scene(folder: Path, rate_rpm_s: float, top_rpm: float = 600.0) -> Path:
+def _scene(folder: Path, rate_rpm_s: float, top_rpm: float = 600.0, down: bool = False) -> Path:
+    """demo-runup at this sweep, or demo-coastdown (recorded down to a tenth of the top)."""
     ramp = top_rpm / rate_rpm_s
-    text = Path(str(shipped_scenes()["demo-runup"])).read_text()
-    text = (
-        text.replace("ramp_s = 30.0", f"ramp_s = {ramp}")
-        .replace("seconds = 31.0", f"seconds = {ramp + 1.0}")
-        .replace("rpm = 600.0", f"rpm = {top_rpm}")
-    )
-    path = folder / f"r{rate_rpm_s:g}.toml"
-    path.write_text(text)
+    if down:
+        text = Path(str(shipped_scenes()["demo-coastdown"])).read_text()
+        text = text.replace("ramp_s = 30.0", f"ramp_s = {ramp}").replace(
+            "seconds = 28.0", f"seconds = {1.0 + 0.9 * ramp}"
+        )
+    else:
+        text = Path(str(shipped_scenes()["demo-runup"])).read_text()
+        text = text.replace("ramp_s = 30.0", f"ramp_s = {ramp}").replace(
+            "seconds = 31.0", f"seconds = {ramp + 1.0}"
+        )
+    path = folder / f"{'c' if down else 'r'}{rate_rpm_s:g}.toml"
+    path.write_text(text.replace("rpm = 600.0", f"rpm = {top_rpm}"))
     return path
 
 
@@ -54,15 +60,16 @@ def main() -> None:
             "| zeta error | read as steady [rpm] | its error |"
         )
         print("|---|---|---|---|---|---|---|---|---|---|")
-        for rate in (5.0, 20.0, 60.0):
-            run = folder / f"r{rate:g}.h5"
-            _run(["simulate", str(_scene(folder, rate)), "--out", str(run)])
+        for rate, down in [(r, d) for d in (False, True) for r in (5.0, 20.0, 60.0)]:
+            run = folder / f"{down}{rate:g}.h5"
+            _run(["simulate", str(_scene(folder, rate, down=down)), "--out", str(run)])
             out = json.loads(_run(["runup", str(run), "--json"]))
             for k, m in enumerate(out["modes"], 1):
                 err = m["rpm"] / m["model_rpm"] - 1
                 zerr = m["zeta"] / m["model_zeta"] - 1
                 steady = m["steady_reading_rpm"]
-                print(f"| {rate:g} | {k} | {m['rpm']:.2f} | {m['model_rpm']:.2f} | {err:+.2%} "
+                print(f"| {-rate if down else rate:g} | {k} | {m['rpm']:.2f} "
+                      f"| {m['model_rpm']:.2f} | {err:+.2%} "
                       f"| {m['zeta']:.4f} | {m['model_zeta']:.4f} | {zerr:+.1%} "
                       f"| {steady:.1f} | {steady / m['model_rpm'] - 1:+.2%} |")  # fmt: skip
         run = folder / "r60s.h5"

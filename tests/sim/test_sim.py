@@ -209,6 +209,32 @@ def test_run_up_starts_at_rest_and_settles_to_the_closed_form() -> None:
     assert abs(got - A_true(sc)[0]) < 2e-4 * abs(A_true(sc)[0])
 
 
+def test_a_coast_down_is_its_speeds_exact_integral_and_stands_at_the_end() -> None:
+    """Run up in 2 s, 1 s at the top, braked to standstill in 3 s: the speed and the angle
+    continuous at each joint (within 1e-9 of them across 2e-9 s), ``omega`` the slope of
+    ``theta`` and ``alpha`` of ``omega`` between the joints (central differences over 1 ms
+    are exact on these quadratic pieces but for rounding: 1e-7 relative), and nothing moves
+    once it stands."""
+    from stand.sim.physics import SceneSpeed
+
+    w0 = 900 * math.pi / 30
+    sp = SceneSpeed(w0, 8.0, ramp_s=2.0, coast_at_s=3.0, coast_s=3.0)
+    assert sp.omega(np.array([2.0, 3.0, 4.5, 6.0, 7.0])).tolist() == pytest.approx(
+        [w0, w0, w0 / 2, 0.0, 0.0], abs=1e-12
+    )
+    for joint in (2.0, 3.0, 6.0):
+        for law in (sp.omega, sp.theta):
+            assert abs(law(joint + 1e-9) - law(joint - 1e-9)) < 1e-9 * w0 * 8
+    t = np.random.default_rng(0).uniform(0.01, 7.99, 500)
+    t = t[np.min(np.abs(t[:, None] - np.array([2.0, 3.0, 6.0])), axis=1) > 2e-3]
+    h = 1e-3
+    slope = (sp.theta(t + h) - sp.theta(t - h)) / (2 * h)
+    np.testing.assert_allclose(slope, sp.omega(t), rtol=1e-7, atol=1e-7 * w0)
+    slope = (sp.omega(t + h) - sp.omega(t - h)) / (2 * h)
+    np.testing.assert_allclose(slope, sp.alpha(t), rtol=1e-7, atol=1e-7 * w0)
+    assert sp.theta(7.9) == sp.theta(6.0) and sp.alpha(6.5) == 0.0
+
+
 @pytest.mark.parametrize("effect", ["friction", "clearance"])
 def test_nonlinear_supports_at_zero_are_the_linear_stand(effect: str) -> None:
     zero = {"friction": {"force_n": 0.0}, "clearance": {"gap_m": 0.0}}[effect]
@@ -294,9 +320,9 @@ def test_shipped_scenes_run_and_give_their_phasors_back(name: str) -> None:
         return
     r = rebuild(sim.frames)
     assert sorted(r.nodes) == [1, 2] and r.bad_frames == 0
-    if sc.effects.run_up or sc.effects.autobalancer:
-        return  # its steady tail is checked in test_run_up_starts_at_rest..., the balls'
-        # settled state in test_balls_scene.py
+    if sc.effects.sweeps or sc.effects.autobalancer:
+        return  # its steady tail is checked in test_run_up_starts_at_rest..., a sweep's
+        # modes in tests/field/test_runup.py, the balls' settled state in test_balls_scene.py
     for i in (1, 2):
         got = fit(r.nodes[i], sc.stand.reference_angle_deg)[1]
         want = sim.truth["A_m_s2"][i - 1]  # type: ignore[index]
