@@ -1,7 +1,7 @@
 """``stand runup RUN``: a recorded run-up or coast-down read as the stand's frequency
-response: each support's order-tracked 1x, the resonances (speed, damping by half-power and
+response: each support's order-tracked 1x and 2x, the resonances (speed, damping by half-power and
 by circle fit, amplification factor) against the model's modes, the balancing speed's
-separation margin (API 684), and the Bode and polar plots."""
+separation margin (API 684), the Bode, polar and waterfall plots and a page of it all."""
 
 from __future__ import annotations
 
@@ -10,10 +10,11 @@ import cmath
 import math
 from typing import Any
 
-from stand.cli.common import add_force_argument
+from stand.cli.common import add_force_argument, write_text_output
 from stand.cli.format import dump_json
 from stand.errors import MeasurementError
 from stand.field.runup import RunupAnalysis, SecondOrder, analyse_runup
+from stand.files import check_output
 from stand.solve.recordings import read_run
 
 RPM = 30 / math.pi
@@ -27,7 +28,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "speed)")  # fmt: skip
     p.add_argument("--plots", metavar="DIR",
                    help="write bode.png, polar.png and waterfall.png into DIR")  # fmt: skip
-    add_force_argument(p, "the plots")
+    p.add_argument("--report", metavar="PAGE.html",
+                   help="write the run-up's page: the modes, the supports' peaks and 2x, "
+                   "what was said, the plots inline")  # fmt: skip
+    add_force_argument(p, "the plots and the page")
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
@@ -36,6 +40,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.rpm is not None and not (math.isfinite(args.rpm) and 1.0 <= args.rpm <= 1e6):
         raise UsageError(f"--rpm must be within 1 to 1e6, got {args.rpm}")
+    if args.report:  # refused before anything is read or written
+        check_output(args.report, force=args.force, inputs=[args.run])
     got = read_run(args.run, args.config)
     try:
         a = analyse_runup(got.streams, got.cfg, got.params, args.rpm)
@@ -48,10 +54,16 @@ def run(args: argparse.Namespace) -> int:
         plots = runup_plots(a, args.plots, args.force)
     out = as_json(a)
     out["plots"] = plots
+    if args.report:
+        from stand.report.runup_page import render_runup
+
+        page = render_runup(out, a, args.run)
+        write_text_output(args.report, page, force=args.force, inputs=[args.run])
+        out["report"] = args.report
     if args.json:
         dump_json(out)
     else:
-        _print(a, plots)
+        _print(a, plots, out)
     return 0
 
 
@@ -132,7 +144,7 @@ def as_json(a: RunupAnalysis) -> dict[str, Any]:
     }
 
 
-def _print(a: RunupAnalysis, plots: list[str]) -> None:
+def _print(a: RunupAnalysis, plots: list[str], out: dict[str, Any]) -> None:
     lo, hi = (w * RPM for w in a.omega_range_rad_s)
     if a.direction == "coast-down":  # the speeds in the order the run went through them
         lo, hi = hi, lo
@@ -165,3 +177,5 @@ def _print(a: RunupAnalysis, plots: list[str]) -> None:
         print(f"  warning: {w}")
     for p in plots:
         print(f"wrote {p}")
+    if out.get("report"):
+        print(f"wrote {out['report']}")

@@ -92,6 +92,14 @@ def _waterfall(plt: Any, a: Any) -> Any:
     return fig
 
 
+DRAWINGS = (
+    ("bode.png", "Bode plot: each support's 1x (and 2x) against speed", _bode),
+    ("polar.png", "Polar plot: each support's response shape", _polar),
+    ("waterfall.png", "Waterfall: each support's spectrum against speed", _waterfall),
+)
+"""Each picture: its file name, its title on a page, and what draws it."""
+
+
 def runup_plots(analysis: Any, folder: str, force: bool) -> list[str]:
     """Write ``bode.png``, ``polar.png`` and ``waterfall.png`` into ``folder`` (made if
     missing; each file safely: a temporary name, then the file; never over one without
@@ -103,8 +111,7 @@ def runup_plots(analysis: Any, folder: str, force: bool) -> list[str]:
 
     Path(folder).mkdir(parents=True, exist_ok=True)
     written = []
-    for name, draw in (("bode.png", _bode), ("polar.png", _polar),
-                       ("waterfall.png", _waterfall)):  # fmt: skip
+    for name, _, draw in DRAWINGS:
         fig = draw(plt, analysis)
         path = str(Path(folder) / name)
         with output(path, force=force) as tmp:

@@ -275,3 +275,34 @@ def test_half_power_and_circle_fit_read_one_modes_damping(zeta: float) -> None:
         1 / (2 * zeta), rel=0.03)  # fmt: skip
     assert r.circle_omega_rad_s == pytest.approx(wn, rel=1e-3)
     assert r.circle_zeta == pytest.approx(zeta, rel=0.03)
+
+
+def test_the_run_ups_page_holds_its_figures_and_plots_and_replaces_nothing(
+    runup: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--report``: one self-contained page with the modes as --json gives them, each
+    support's 2x, the three plots inline (PNG data, nothing loaded from outside); an
+    existing page is refused before anything is read or written (the plots' folder is not
+    made), and the run itself is never written over."""
+    import base64
+    import re
+
+    page = tmp_path / "r.html"
+    out = _json(["runup", str(runup), "--report", str(page)], capsys)
+    text = page.read_text(encoding="utf-8")
+    assert out["report"] == str(page)
+    for m in out["modes"]:
+        assert f"<td>{m['rpm']:.1f}</td>" in text and f"<td>{m['zeta']:.4f}</td>" in text
+    assert text.count("2x") >= 2 and 'src="http' not in text
+    pictures = re.findall(r'src="data:image/png;base64,([^"]+)"', text)
+    assert len(pictures) == 3
+    assert all(base64.b64decode(p)[:8] == b"\x89PNG\r\n\x1a\n" for p in pictures)
+    before = page.read_bytes()
+    capsys.readouterr()
+    assert main(["runup", str(runup), "--report", str(page), "--plots",
+                 str(tmp_path / "plots")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(page) in err, err
+    assert page.read_bytes() == before and not (tmp_path / "plots").exists()
+    assert main(["runup", str(runup), "--report", str(runup), "--force"]) == 2
+    assert "input" in capsys.readouterr().err
