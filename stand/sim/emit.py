@@ -83,6 +83,9 @@ def scene_speed(scene: Scene) -> tuple[SceneSpeed, float]:
     speed = SceneSpeed(
         coast_at_s=t_start + ramp + cd.after_s if cd else 0.0,
         coast_s=cd.ramp_s if cd else 0.0,
+        base_omega_rad_s=float(rpm_to_rad_s(e.run_up.base_rpm))
+        if e.run_up and e.run_up.base_rpm
+        else 0.0,
         omega0_rad_s=float(rpm_to_rad_s(scene.run.rpm)),
         end_s=t_start + scene.run.seconds,
         ramp_s=ramp,

@@ -45,7 +45,8 @@ class SceneSpeed:
     """Shaft speed: linear ramp from standstill, a hold, then ripple and drift; then,
     where ``coast_s`` is given, a linear coast-down to standstill.
 
-    ``w(t) = w0 t / ramp_s`` for ``t < ramp_s``; ``w0`` until
+    ``w(t) = w0 t / ramp_s`` for ``t < ramp_s`` (or the torque-limited profile above
+    ``base_omega_rad_s``: :meth:`_ramp`); ``w0`` until
     ``ramp_s + hold_s``; then ``w0 (1 + ripple sin(2 pi f tau) + drift tau)``
     with ``tau`` the time since.  From ``coast_at_s`` on, ``w_c (1 - s / coast_s)``
     with ``w_c`` the speed then and ``s`` the time since, zero once it stands.
@@ -63,6 +64,7 @@ class SceneSpeed:
     theta0_rad: float = 0.0
     coast_at_s: float = 0.0
     coast_s: float = 0.0
+    base_omega_rad_s: float = 0.0
 
     @property
     def _t1(self) -> float:
@@ -76,10 +78,26 @@ class SceneSpeed:
                 2 * math.pi * self.ripple_hz * tau
             )
         if self.ramp_s > 0:
-            ramp = self.omega0_rad_s * np.clip(t, 0.0, None) / self.ramp_s
-            steady = np.where(t < self.ramp_s, ramp, steady)
+            steady = np.where(t < self.ramp_s, self._ramp(t)[0], steady)
         result: FloatArray = steady
         return result
+
+    def _ramp(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Speed [rad/s], acceleration [rad/s^2] and angle turned [rad] at ``t`` (clipped to
+        the ramp) on the run-up: linear; or, with ``base_omega_rad_s`` below the top, the
+        torque-limited profile an inverter gives: a constant acceleration ``a`` to the base
+        speed ``w_b``, then constant power (``w w' = a w_b``: ``w^2`` grows linearly),
+        ``a = (w_b^2 + w0^2) / (2 w_b ramp_s)`` so that ``w0`` is reached at ``ramp_s``."""
+        w0, tr, wb = self.omega0_rad_s, self.ramp_s, self.base_omega_rad_s
+        t = np.clip(t, 0.0, tr)
+        if not 0 < wb < w0:
+            a = w0 / tr
+            return a * t, np.full_like(t, a), 0.5 * a * t * t
+        a = (wb * wb + w0 * w0) / (2 * wb * tr)
+        tb = wb / a
+        w = np.where(t < tb, a * t, np.sqrt(wb * wb + 2 * a * wb * np.maximum(t - tb, 0.0)))
+        th = np.where(t < tb, 0.5 * a * t * t, 0.5 * a * tb * tb + (w**3 - wb**3) / (3 * a * wb))
+        return w, np.where(t < tb, a, a * wb / np.maximum(w, 1e-300)), th
 
     def _alpha(self, t: FloatArray) -> FloatArray:
         tau = t - self._t1
@@ -89,22 +107,22 @@ class SceneSpeed:
             steady = steady + self.omega0_rad_s * self.ripple * f * np.cos(f * tau)
         result: FloatArray = np.where(tau >= 0, steady, 0.0)
         if self.ramp_s > 0:
-            result = np.where(t < self.ramp_s, self.omega0_rad_s / self.ramp_s, result)
+            result = np.where(t < self.ramp_s, self._ramp(t)[1], result)
         return result
 
     def _theta(self, t: FloatArray) -> FloatArray:
         w0 = self.omega0_rad_s
         f = 2 * math.pi * self.ripple_hz
         tau = np.maximum(t - self._t1, 0.0)
-        at_t1 = self.theta0_rad + w0 * (0.5 * self.ramp_s + self.hold_s)
+        up = float(self._ramp(np.array(self.ramp_s))[2]) if self.ramp_s > 0 else 0.0
+        at_t1 = self.theta0_rad + up + w0 * self.hold_s
         steady = at_t1 + w0 * (tau + 0.5 * self.drift_per_s * tau * tau)
         if self.ripple:
             steady = steady + w0 * self.ripple * (1 - np.cos(f * tau)) / f
-        hold = self.theta0_rad + w0 * (0.5 * self.ramp_s + (t - self.ramp_s))
+        hold = self.theta0_rad + up + w0 * (t - self.ramp_s)
         result: FloatArray = np.where(t < self._t1, hold, steady)
         if self.ramp_s > 0:
-            ramp = self.theta0_rad + 0.5 * w0 * np.clip(t, 0.0, None) ** 2 / self.ramp_s
-            result = np.where(t < self.ramp_s, ramp, result)
+            result = np.where(t < self.ramp_s, self.theta0_rad + self._ramp(t)[2], result)
         return result
 
     def _coasting(self, t: FloatArray) -> tuple[FloatArray, float, float]:

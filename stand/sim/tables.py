@@ -162,9 +162,13 @@ class SpeedEffect(_Table):
 
 
 class RunUp(_Table):
-    """Start from standstill, reach ``[run] rpm`` linearly in ``ramp_s`` (a transient)."""
+    """Start from standstill, reach ``[run] rpm`` in ``ramp_s`` (a transient): linearly, or
+    with ``base_rpm`` below it as a torque-limited inverter drive does (constant torque to
+    the motor's base speed, constant power above: the acceleration falls as base / speed).
+    """
 
     ramp_s: Positive
+    base_rpm: Positive | None = None
 
 
 class CoastDown(_Table):

@@ -235,6 +235,33 @@ def test_a_coast_down_is_its_speeds_exact_integral_and_stands_at_the_end() -> No
     assert sp.theta(7.9) == sp.theta(6.0) and sp.alpha(6.5) == 0.0
 
 
+def test_a_torque_limited_run_up_keeps_its_power_above_the_base_speed() -> None:
+    """Base speed 300 of 900 rpm, 6 s: a constant acceleration to 300 rpm, then ``w w'``
+    constant (constant power) to 900 rpm at 6 s; the speed and angle continuous at the
+    joints, ``omega`` the slope of ``theta`` and ``alpha`` of ``omega`` (central
+    differences over 1 ms: the square root's curvature costs at most 1e-6 relative), and
+    the hold after it turns at 900 rpm from where the ramp ended."""
+    from stand.sim.physics import SceneSpeed
+
+    w0, wb = 900 * math.pi / 30, 300 * math.pi / 30
+    sp = SceneSpeed(w0, 10.0, ramp_s=6.0, base_omega_rad_s=wb)
+    a = (wb * wb + w0 * w0) / (2 * wb * 6.0)
+    tb = wb / a
+    assert sp.omega(np.array([tb, 6.0, 8.0])).tolist() == pytest.approx([wb, w0, w0], rel=1e-12)
+    for joint in (tb, 6.0):
+        for law in (sp.omega, sp.theta):
+            assert abs(law(joint + 1e-9) - law(joint - 1e-9)) < 1e-9 * w0 * 10
+    t = np.random.default_rng(1).uniform(0.01, 9.99, 500)
+    t = t[np.min(np.abs(t[:, None] - np.array([tb, 6.0])), axis=1) > 2e-3]
+    h = 1e-3
+    slope = (sp.theta(t + h) - sp.theta(t - h)) / (2 * h)
+    np.testing.assert_allclose(slope, sp.omega(t), rtol=1e-6, atol=1e-7 * w0)
+    slope = (sp.omega(t + h) - sp.omega(t - h)) / (2 * h)
+    np.testing.assert_allclose(slope, sp.alpha(t), rtol=1e-6, atol=1e-7 * w0)
+    above = (t > tb) & (t < 6.0)
+    np.testing.assert_allclose(sp.omega(t[above]) * sp.alpha(t[above]), a * wb, rtol=1e-12)
+
+
 @pytest.mark.parametrize("effect", ["friction", "clearance"])
 def test_nonlinear_supports_at_zero_are_the_linear_stand(effect: str) -> None:
     zero = {"friction": {"force_n": 0.0}, "clearance": {"gap_m": 0.0}}[effect]
