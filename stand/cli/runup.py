@@ -26,6 +26,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rpm", type=float, metavar="RPM",
                    help="the balancing speed whose margins are asked (default: the run's top "
                    "speed)")  # fmt: skip
+    p.add_argument("--vold-kalman", type=float, metavar="HZ", dest="vk_hz",
+                   help="track the 1x with a Vold-Kalman filter of this half-power bandwidth "
+                   "[Hz] (for a sweep too fast for revolution blocks; default: blocks of one "
+                   "revolution)")  # fmt: skip
     p.add_argument("--plots", metavar="DIR",
                    help="write bode.png, polar.png and waterfall.png into DIR")  # fmt: skip
     p.add_argument("--report", metavar="PAGE.html",
@@ -40,11 +44,13 @@ def run(args: argparse.Namespace) -> int:
 
     if args.rpm is not None and not (math.isfinite(args.rpm) and 1.0 <= args.rpm <= 1e6):
         raise UsageError(f"--rpm must be within 1 to 1e6, got {args.rpm}")
+    if args.vk_hz is not None and not (math.isfinite(args.vk_hz) and 0.01 <= args.vk_hz <= 1e3):
+        raise UsageError(f"--vold-kalman must be within 0.01 to 1000 Hz, got {args.vk_hz}")
     if args.report:  # refused before anything is read or written
         check_output(args.report, force=args.force, inputs=[args.run])
     got = read_run(args.run, args.config)
     try:
-        a = analyse_runup(got.streams, got.cfg, got.params, args.rpm)
+        a = analyse_runup(got.streams, got.cfg, got.params, args.rpm, args.vk_hz)
     except MeasurementError as exc:  # named with the run it is about
         raise MeasurementError(f"{args.run}: {exc}") from exc
     plots: list[str] = []
@@ -128,6 +134,8 @@ def as_json(a: RunupAnalysis) -> dict[str, Any]:
         "sweep_rpm_per_s": round(a.sweep_rad_s2 * RPM, 3),
         "range_rpm": [round(w * RPM, 1) for w in a.omega_range_rad_s],
         "revolutions_per_point": a.revs_per_block,
+        "tracking": "revolution blocks" if a.vk_hz is None else "Vold-Kalman",
+        "vold_kalman_hz": a.vk_hz,
         "balancing_rpm": round(a.balancing_omega_rad_s * RPM, 1),
         "modes": _modes(a),
         "fit_residual": None if a.modes is None else round(a.modes.chi, 3),
@@ -149,7 +157,9 @@ def _print(a: RunupAnalysis, plots: list[str], out: dict[str, Any]) -> None:
     if a.direction == "coast-down":  # the speeds in the order the run went through them
         lo, hi = hi, lo
     print(f"{a.direction} from {lo:.0f} to {hi:.0f} rpm at {a.sweep_rad_s2 * RPM:.1f} rpm/s, "
-          f"{a.revs_per_block} revolution(s) a point")  # fmt: skip
+          f"{a.revs_per_block} revolution(s) a point"
+          + ("" if a.vk_hz is None else
+             f", the 1x by a Vold-Kalman filter of {a.vk_hz:g} Hz"))  # fmt: skip
     print("mode  [rpm]   zeta     AF   model [rpm]  zeta    margin  API 684 asks  (as steady)")
     for k, m in enumerate(_modes(a), 1):
         print(f"  {k}  {m['rpm']:7.1f}  {m['zeta']:.4f}  {m['amplification_factor']:5.1f}"

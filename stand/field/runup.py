@@ -33,7 +33,7 @@ from stand.core.resonance import (
 from stand.drivers.streams import NodeStream, RunStreams
 from stand.errors import MeasurementError
 from stand.measuring.gate import node_segment
-from stand.measuring.track import track_1x, track_orders
+from stand.measuring.track import track_1x, track_1x_vk, track_orders
 
 REVS_PER_BLOCK = 1
 """Revolutions in each order-tracking block: the curve's resolution in speed."""
@@ -151,6 +151,7 @@ class RunupAnalysis:
     warnings: tuple[str, ...]
     waterfalls: tuple[Waterfall, ...] = ()
     second: tuple[SecondOrder, ...] = ()
+    vk_hz: float | None = None
 
 
 def _lost_marks(s: NodeStream) -> list[tuple[float, float]]:
@@ -169,10 +170,24 @@ def _lost_marks(s: NodeStream) -> list[tuple[float, float]]:
     return out
 
 
-def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str]) -> SupportCurve:
-    """One support's curve, ordered by speed, the blocks about a lost mark left out."""
-    w, A, se = track_1x(s, gamma_rad, REVS_PER_BLOCK)  # the 1x alone: its least noise
-    _, (_, (A2, se2)) = track_orders(s, gamma_rad, REVS_PER_BLOCK, (1, 2))  # the same blocks
+def _track(s: NodeStream, gamma_rad: float, vk_hz: float | None) -> tuple[np.ndarray, ...]:
+    """The node's 1x per block in time order: by revolution blocks (the 1x alone: its
+    least noise), or by the Vold-Kalman filter of ``vk_hz`` averaged over the blocks."""
+    if vk_hz is None:
+        return track_1x(s, gamma_rad, REVS_PER_BLOCK)
+    return track_1x_vk(s, gamma_rad, vk_hz, REVS_PER_BLOCK)
+
+
+def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str],
+           vk_hz: float | None = None) -> SupportCurve:  # fmt: skip
+    """One support's curve, ordered by speed, the blocks about a lost mark left out; its 2x
+    by revolution blocks (with the Vold-Kalman filter's 1x: interpolated to its points)."""
+    w, A, se = _track(s, gamma_rad, vk_hz)
+    wb, (_, (A2, se2)) = track_orders(s, gamma_rad, REVS_PER_BLOCK, (1, 2))
+    if vk_hz is not None:
+        k = np.argsort(wb, kind="stable")
+        A2 = np.interp(w, wb[k], A2[k].real) + 1j * np.interp(w, wb[k], A2[k].imag)
+        se2 = np.interp(w, wb[k], se2[k])
     keep = np.ones(len(w), bool)
     for lo, hi in _lost_marks(s):
         out = (w >= 0.98 * lo) & (w <= 1.02 * hi)
@@ -293,10 +308,13 @@ def _finite(fit: ModalFit) -> bool:
 
 
 def analyse_runup(
-    streams: RunStreams, cfg: Config, p: StandParameters, balancing_rpm: float | None = None
-) -> RunupAnalysis:
+    streams: RunStreams, cfg: Config, p: StandParameters, balancing_rpm: float | None = None,
+    vk_hz: float | None = None,
+) -> RunupAnalysis:  # fmt: skip
     """The run-up of ``streams`` read with the configuration ``cfg`` (its stand model
-    ``p``); ``balancing_rpm`` the speed whose margins are asked (default the run's top).
+    ``p``); ``balancing_rpm`` the speed whose margins are asked (default the run's top);
+    ``vk_hz`` the half-power bandwidth [Hz] of a Vold-Kalman filter that tracks the 1x
+    (default: revolution blocks).
 
     Raises
     ------
@@ -307,12 +325,14 @@ def analyse_runup(
         raise MeasurementError(f"a run-up needs both supports' nodes, got {sorted(streams.nodes)}")
     gamma = math.radians(cfg.stand.reference_angle_deg)
     warn: list[str] = []
-    tracked = track_1x(streams.nodes[1], gamma, REVS_PER_BLOCK)
+    tracked = _track(streams.nodes[1], gamma, vk_hz)
     timed = tracked[0]
     direction = _direction(timed)
-    curves = tuple(_curve(streams.nodes[i], i, gamma, warn) for i in (1, 2))
+    curves = tuple(_curve(streams.nodes[i], i, gamma, warn, vk_hz) for i in (1, 2))
     sweep = _sweep(timed)
     wn_model, zeta_model = model_modes(p)
+    if vk_hz is not None:
+        _bandwidth(vk_hz, sweep, wn_model, zeta_model, warn)
     lo = max(float(c.omega_rad_s[0]) for c in curves)
     hi = min(float(c.omega_rad_s[-1]) for c in curves)
     w_bal = (balancing_rpm or hi * 30 / math.pi) * math.pi / 30
@@ -339,8 +359,22 @@ def analyse_runup(
         model_zeta=tuple(float(x) for x in zeta_model), balancing_omega_rad_s=w_bal,
         margins=tuple(margins), warnings=tuple(warn),
         waterfalls=tuple(waterfall(streams.nodes[i], i) for i in (1, 2)),
-        second=tuple(second_order(c, w_bal) for c in curves),
+        second=tuple(second_order(c, w_bal) for c in curves), vk_hz=vk_hz,
     )  # fmt: skip
+
+
+def _bandwidth(vk_hz: float, sweep: float, wn: np.ndarray, zeta: np.ndarray,
+               warn: list[str]) -> None:  # fmt: skip
+    """Said when the filter is too narrow for the sweep: crossing a mode's half-power band
+    ``2 zeta f_n`` at the sweep [Hz/s] takes ``T``, and a filter narrower than ``1 / T``
+    smooths the peak (lower, later, wider)."""
+    for w, z in zip(wn, zeta, strict=True):
+        need = abs(sweep) / (2 * math.pi) / max(2 * z * w / (2 * math.pi), 1e-12)
+        if vk_hz < need:
+            warn.append(f"the Vold-Kalman filter's {vk_hz:g} Hz is narrower than the "
+                        f"{need:.2f} Hz at which the sweep crosses the mode at "
+                        f"{w * 30 / math.pi:.0f} rpm (its half-power band in {1 / need:.1f} s):"
+                        " the peak is smoothed; widen the filter")  # fmt: skip
 
 
 def _margin(w: float, zeta: float, w_bal: float, warn: list[str]) -> Margin:

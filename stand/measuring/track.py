@@ -16,8 +16,10 @@ import math
 
 import numpy as np
 
+from stand.core import vold_kalman as vk
 from stand.core.dsp import shaft_angle
 from stand.drivers.streams import NodeStream
+from stand.errors import MeasurementError
 from stand.measuring.gate import node_segment
 
 MIN_SAMPLES = 16
@@ -110,6 +112,60 @@ def _joint_fits(
         share = np.where(ok, 0.5 * (inv[:, c, c] + inv[:, s_, s_]), 1.0)
         ses.append(np.sqrt(var * share))  # infinite where the block is too short
     return phasors, n, var, ses
+
+
+def track_1x_vk(
+    s: NodeStream, gamma_rad: float, half_power_hz: float, revs: int = 1
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`track_1x`, the 1x read by a Vold-Kalman filter of the half-power
+    bandwidth ``half_power_hz`` [Hz] (:mod:`stand.core.vold_kalman`) on the node's longest
+    segment, its samples on their uniform grid (a lost sample weighs nothing), then
+    averaged over each block of ``revs`` revolutions; the blocks within the filter's
+    settling at either end left out.  Each block's standard error is its residual's rms
+    times the filter's noise gain (``sqrt(2 sum h^2)``, per component).
+
+    Raises
+    ------
+    MeasurementError
+        The node cannot be measured, or its segment is shorter than the filter settles.
+    """
+    lo, hi, pos, rev = node_segment(s)
+    assert s.rate_hz is not None
+    first, last = int(s.index[lo]), int(s.index[hi - 1])
+    grid = np.arange(first, last + 1)
+    inside, theta, w = shaft_angle(grid.astype(float), pos, rev, gamma_rad)
+    grid = grid[inside]
+    y = np.zeros(len(grid))
+    weight = np.zeros(len(grid))
+    at = np.asarray(s.index[lo:hi]) - first
+    at_in = np.searchsorted(grid - first, at)
+    ok = (at_in < len(grid)) & ((grid - first)[np.minimum(at_in, len(grid) - 1)] == at)
+    y[at_in[ok]], weight[at_in[ok]] = s.accel(lo, hi)[ok], 1.0
+    if half_power_hz < vk.narrowest_hz(s.rate_hz):
+        raise MeasurementError(f"a Vold-Kalman filter of {half_power_hz:g} Hz is narrower than "
+                               f"{vk.narrowest_hz(s.rate_hz):.2f} Hz, the narrowest solved to "
+                               f"float precision at {s.rate_hz:g} Hz")  # fmt: skip
+    settle = vk.settle_samples(half_power_hz, s.rate_hz)
+    if len(grid) <= 2 * settle + 4:
+        raise MeasurementError(f"{len(grid)} samples: too short for a Vold-Kalman filter of "
+                               f"{half_power_hz:g} Hz (it settles in {settle} samples at "
+                               "each end)")  # fmt: skip
+    r = vk.weight_for(half_power_hz, s.rate_hz)
+    A = vk.envelope(y, theta, weight, r)
+    resid2 = np.where(weight > 0, (y - (A * np.exp(1j * theta)).real) ** 2, 0.0)
+    turn = np.floor((theta - theta[0]) / (2 * math.pi * revs)).astype(np.int64)
+    n_blocks = int(turn[-1]) + 1
+    starts = np.searchsorted(turn, np.arange(n_blocks))
+    count = np.diff(np.append(starts, len(turn)))
+    present = np.add.reduceat(weight, starts)
+    mean = np.add.reduceat(A, starts) / np.maximum(count, 1)
+    speed = np.add.reduceat(w, starts) / np.maximum(count, 1)
+    rms = np.sqrt(np.add.reduceat(resid2, starts) / np.maximum(present - 1, 1))
+    se = rms * math.sqrt(2 * vk.noise_gain(r))
+    ends = (starts >= settle) & (starts + count <= len(turn) - settle)
+    whole = ends & (present >= MIN_SAMPLES)
+    whole[-1:] = False  # the last block may hold less than its revolutions
+    return speed[whole] * s.rate_hz, mean[whole], se[whole]
 
 
 def track_1x(

@@ -25,14 +25,6 @@ from stand.sim import load_scene, shipped_scenes
 RPM = 30 / math.pi
 
 
-@pytest.fixture(scope="module")
-def runup(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The shipped demo-runup (0 to 600 rpm at 20 rpm/s, supports damped 200 N s/m)."""
-    out = tmp_path_factory.mktemp("runup") / "r.h5"
-    assert main(["simulate", "demo-runup", "--out", str(out)]) == 0
-    return out
-
-
 def _json(args: list[str], capsys: pytest.CaptureFixture[str]) -> dict:
     capsys.readouterr()
     assert main([*args, "--json"]) == 0
