@@ -111,8 +111,8 @@ def run(args: argparse.Namespace) -> int:
     _same_family(believed, args.config, scene, label)
     sim = simulate(scene, params, progress=ProgressLine(f"simulating {label}").simulated)
     print(
-        f"{Path(source).stem}: {len(sim.frames)} frames, {scene.run.seconds:g} s at "
-        f"{scene.run.rpm:g} rpm ({sim.physics.replace('_', ' ')}, {sim.wall_s:.2f} s)",
+        f"{Path(source).stem}: {len(sim.frames)} frames, {scene.run.seconds:g} s {_speed(scene)}"
+        f" ({sim.physics.replace('_', ' ')}, {sim.wall_s:.2f} s)",
         file=sys.stderr,
     )
     if args.out:
@@ -223,6 +223,18 @@ def _series(args: argparse.Namespace) -> int:
     )
     print(f"{done} rotors balanced, corrected and checked; their data in {url}")
     return 0
+
+
+def _speed(scene: Any) -> str:
+    """The scene's speed in words: steady, run up, braked."""
+    e, rpm = scene.effects, scene.run.rpm
+    said = f"at {rpm:g} rpm"
+    if e.run_up is not None:
+        said = f"run up to {rpm:g} rpm in {e.run_up.ramp_s:g} s"
+    if e.coast_down is not None:
+        said += (f", braked to standstill in {e.coast_down.ramp_s:g} s after "
+                 f"{e.coast_down.after_s:g} s at the top")  # fmt: skip
+    return said
 
 
 def _out_dir(args: argparse.Namespace, what: str) -> Path:
