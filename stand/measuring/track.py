@@ -35,6 +35,14 @@ def track_orders(
     [m/s^2] with that phasor's standard error per component [m/s^2]: one least-squares
     fit per block of ``1`` and ``cos k theta, sin k theta`` for every ``k`` at once (``a =
     Re(A e^{i k theta})``), so that no order's content is left in another's residual.
+    Where more than the 1x is asked, the 1x's change across the block is fitted too (its
+    slope, ``u cos theta, u sin theta`` with ``u`` the block's fraction from its middle):
+    in a sweep through a resonance the 1x changes within one revolution, and a 1x that
+    changes is also a 0x and a 2x (side bands a revolution's frequency apart).
+
+    The samples are taken :data:`CHUNK_SAMPLES` at a time and each block's normal
+    equations summed across the chunks (sums add up), so that a long run never holds more
+    than a chunk's columns.
 
     Raises
     ------
@@ -43,75 +51,102 @@ def track_orders(
     """
     lo, hi, pos, rev = node_segment(s)
     assert s.rate_hz is not None
-    index = np.asarray(s.index[lo:hi], dtype=float)
-    inside, theta, w = shaft_angle(index, pos, rev, gamma_rad)
-    a = s.accel(lo, hi)[inside]
-    turn = np.floor((theta - theta[0]) / (2 * math.pi * revs)).astype(np.int64) if len(theta) \
-        else np.zeros(0, np.int64)  # fmt: skip
-    n_blocks = int(turn[-1]) + 1 if len(turn) else 0
-    starts = np.searchsorted(turn, np.arange(n_blocks))
-    speed = np.add.reduceat(w, starts) / np.maximum(np.diff(np.append(starts, len(w))), 1) \
-        if n_blocks else np.zeros(0)  # fmt: skip
-    # where more than the 1x is asked, the 1x's change across the block is fitted too (its
-    # slope, u cos theta and u sin theta with u the block's fraction from its middle): in a
-    # sweep through a resonance the 1x changes within one revolution, and a 1x that
-    # changes is also a 0x and a 2x (sidebands a revolution's frequency apart) that would
-    # read as the 2x
-    u = (theta - theta[0]) / (2 * math.pi * revs) - turn - 0.5 if len(orders) > 1 else None
-    A, n, _, se = _joint_fits(theta, a, starts, n_blocks, orders, u)
+    cols = [(0, False, False)] + [(k, sn, False) for k in orders for sn in (False, True)]
+    if len(orders) > 1:  # the first order's slope across the block (after the orders)
+        cols += [(orders[0], False, True), (orders[0], True, True)]
+    sums = _BlockSums(len(cols))
+    theta0 = None
+    for c0 in range(lo, hi, CHUNK_SAMPLES):
+        c1 = min(c0 + CHUNK_SAMPLES, hi)
+        inside, theta, w = shaft_angle(np.asarray(s.index[c0:c1], dtype=float), pos, rev,
+                                       gamma_rad)  # fmt: skip
+        if not len(theta):
+            continue
+        theta0 = float(theta[0]) if theta0 is None else theta0
+        place = (theta - theta0) / (2 * math.pi * revs)
+        turn = np.floor(place).astype(np.int64)
+        X = [_column(spec, theta, place - turn - 0.5) for spec in cols]
+        sums.add(turn, X, s.accel(c0, c1)[inside], w)
+    A, n, _, se, speed = sums.fits(len(orders))
     whole = n >= MIN_SAMPLES  # the same blocks whatever the orders asked
     whole[-1:] = False  # the last block may hold less than its revolutions
     out = [(A[j][whole], se[j][whole]) for j in range(len(orders))]
     return speed[whole] * s.rate_hz, out
 
 
-def _joint_fits(
-    theta: np.ndarray, a: np.ndarray, starts: np.ndarray, n_blocks: int, orders: tuple[int, ...],
-    u: np.ndarray | None = None,
-) -> tuple[list[np.ndarray], np.ndarray, np.ndarray, list[np.ndarray]]:  # fmt: skip
-    """Per block: each order's phasor, the sample count, the residual variance per sample
-    and each order's standard error per component (the mean of its cos and sin
-    coefficients' variances from the normal equations' inverse); with ``u`` (each sample's
-    place in its block, -0.5 to 0.5) the first order's slope across the block fitted too,
-    its phasor then the block's middle's.  The columns are made once, the normal
-    equations summed one product at a time (a temporary of one row)."""
-    # each column: (order, sine?, times u?); order 0 the constant
-    cols = [(0, False, False)] + [(k, sn, False) for k in orders for sn in (False, True)]
-    if u is not None:  # the first order's slope across the block (after the orders)
-        cols += [(orders[0], False, True), (orders[0], True, True)]
+CHUNK_SAMPLES = 32_768
+"""Samples whose angles and fit columns are made at once (seven columns of them: 1.8 MB)."""
 
-    def column(i: int) -> np.ndarray:
-        k, sine, slope = cols[i]
-        x: np.ndarray = np.sin(k * theta) if sine else np.cos(k * theta)
-        return x * u if slope and u is not None else x
 
-    p = len(cols)
-    sizes = np.diff(np.append(starts, len(a)))
-    has = sizes > 0
-    at = starts[has]
-    G, b = np.zeros((n_blocks, p, p)), np.zeros((n_blocks, p))
-    X = [column(i) for i in range(p)]  # p rows of the samples' length (7 at most)
-    for i in range(p):
-        b[has, i] = np.add.reduceat(X[i] * a, at) if len(at) else 0.0
-        for j in range(i, p):
-            G[has, i, j] = G[has, j, i] = np.add.reduceat(X[i] * X[j], at) if len(at) else 0
-    aa = np.zeros(n_blocks)
-    aa[has] = np.add.reduceat(a * a, at) if len(at) else 0.0
-    n = np.where(has, sizes, 0)
-    ok = n >= p + 5
-    coef, inv = np.zeros((n_blocks, p)), np.zeros((n_blocks, p, p))
-    if ok.any():
-        inv[ok] = np.linalg.inv(G[ok])
-        coef[ok] = np.einsum("bij,bj->bi", inv[ok], b[ok])
-    resid = aa - np.einsum("bi,bi->b", coef, b)
-    var = np.where(ok, np.maximum(resid, 0) / np.maximum(n - p, 1), np.inf)
-    phasors, ses = [], []
-    for j in range(len(orders)):
-        c, s_ = 1 + 2 * j, 2 + 2 * j
-        phasors.append(coef[:, c] - 1j * coef[:, s_])
-        share = np.where(ok, 0.5 * (inv[:, c, c] + inv[:, s_, s_]), 1.0)
-        ses.append(np.sqrt(var * share))  # infinite where the block is too short
-    return phasors, n, var, ses
+def _column(spec: tuple[int, bool, bool], theta: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """One fit column: ``cos`` or ``sin`` of ``k theta`` (``k = 0``: the constant), times
+    ``u`` for a slope column."""
+    k, sine, slope = spec
+    x: np.ndarray = np.sin(k * theta) if sine else np.cos(k * theta)
+    return x * u if slope else x
+
+
+class _BlockSums:
+    """Per block the normal equations ``X'X``, ``X'a``, ``a'a``, the sample count and the
+    speed's sum, added chunk by chunk (a block may straddle two chunks)."""
+
+    def __init__(self, p: int) -> None:
+        self.p = p
+        self.G, self.b = np.zeros((0, p, p)), np.zeros((0, p))
+        self.aa, self.n, self.w = np.zeros(0), np.zeros(0), np.zeros(0)
+
+    def _grow(self, blocks: int) -> None:
+        have = len(self.n)
+        if blocks <= have:
+            return
+        more = blocks - have
+        self.G = np.concatenate((self.G, np.zeros((more, self.p, self.p))))
+        self.b = np.concatenate((self.b, np.zeros((more, self.p))))
+        self.aa, self.n, self.w = (np.concatenate((x, np.zeros(more)))
+                                   for x in (self.aa, self.n, self.w))  # fmt: skip
+
+    def add(self, turn: np.ndarray, X: list[np.ndarray], a: np.ndarray, w: np.ndarray) -> None:
+        """Add a chunk's samples: their blocks ``turn`` (sorted), columns, values, speeds."""
+        t0 = int(turn[0])
+        self._grow(int(turn[-1]) + 1)
+        rel = turn - t0
+        m = int(rel[-1]) + 1
+
+        def bins(v: np.ndarray) -> np.ndarray:
+            return np.bincount(rel, weights=v, minlength=m)
+
+        at = slice(t0, t0 + m)
+        self.aa[at] += bins(a * a)
+        self.n[at] += np.bincount(rel, minlength=m)
+        self.w[at] += bins(w)
+        for i in range(self.p):
+            self.b[at, i] += bins(X[i] * a)
+            for j in range(i, self.p):
+                g = bins(X[i] * X[j])
+                self.G[at, i, j] += g
+                if j != i:
+                    self.G[at, j, i] += g
+
+    def fits(self, n_orders: int) -> tuple[list[np.ndarray], np.ndarray, np.ndarray,
+                                           list[np.ndarray], np.ndarray]:  # fmt: skip
+        """Each order's phasor, the count, the residual variance, each order's standard
+        error per component (the mean of its cos and sin coefficients' variances from the
+        inverse) and the blocks' mean speed [rad per sample]."""
+        p, n = self.p, self.n
+        ok = n >= p + 5
+        coef, inv = np.zeros((len(n), p)), np.zeros((len(n), p, p))
+        if ok.any():
+            inv[ok] = np.linalg.inv(self.G[ok])
+            coef[ok] = np.einsum("bij,bj->bi", inv[ok], self.b[ok])
+        resid = self.aa - np.einsum("bi,bi->b", coef, self.b)
+        var = np.where(ok, np.maximum(resid, 0) / np.maximum(n - p, 1), np.inf)
+        phasors, ses = [], []
+        for j in range(n_orders):
+            c, s_ = 1 + 2 * j, 2 + 2 * j
+            phasors.append(coef[:, c] - 1j * coef[:, s_])
+            share = np.where(ok, 0.5 * (inv[:, c, c] + inv[:, s_, s_]), 1.0)
+            ses.append(np.sqrt(var * share))  # infinite where the block is too short
+        return phasors, n.astype(np.int64), var, ses, self.w / np.maximum(n, 1)
 
 
 def track_1x_vk(
