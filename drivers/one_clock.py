@@ -91,12 +91,28 @@ class Signal:
 
 def revolutions(edges: NDArray[np.float64]) -> tuple[NDArray[np.int64], int]:
     """Each edge's revolution number, counting the turns an edge was lost in (a gap in the
-    samples can hide one): the steps between edges in whole median periods; and how many
-    edges are missing."""
+    samples can hide one); and how many edges are missing.
+
+    Each step between edges is counted in whole periods of the speed its neighbours turn
+    at (the mean of the two beside it in revolutions per sample, at the ends the nearest
+    two's line), twice, the second time with the first's counts: a run-up or a coast-down
+    changes its period from one revolution to the next, so one period for the whole run
+    (its median) would count a slow start's revolutions as many.  Fewer than four edges:
+    their median period."""
     if len(edges) < 2:
         return np.arange(len(edges), dtype=np.int64), 0
     d = np.diff(edges)
-    steps = np.maximum(1, np.rint(d / np.median(d))).astype(np.int64)
+    if len(d) < 3:
+        steps = np.maximum(1, np.rint(d / np.median(d))).astype(np.int64)
+    else:
+        steps = np.ones(len(d), np.int64)
+        for _ in range(2):
+            v = steps / d  # revolutions per sample over each step
+            near = np.empty_like(v)
+            near[1:-1] = 0.5 * (v[:-2] + v[2:])
+            near[0] = 2 * v[1] - v[2] if 2 * v[1] - v[2] > 0 else v[1]
+            near[-1] = 2 * v[-2] - v[-3] if 2 * v[-2] - v[-3] > 0 else v[-2]
+            steps = np.maximum(1, np.rint(d * near)).astype(np.int64)
     return np.concatenate(([0], np.cumsum(steps))), int(np.sum(steps - 1))
 
 
