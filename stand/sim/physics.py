@@ -78,9 +78,15 @@ class SceneSpeed:
                 2 * math.pi * self.ripple_hz * tau
             )
         if self.ramp_s > 0:
-            steady = np.where(t < self.ramp_s, self._ramp(t)[0], steady)
+            ramp = (self._ramp(t)[0] if self._torque_limited
+                    else self.omega0_rad_s * np.clip(t, 0.0, None) / self.ramp_s)  # fmt: skip
+            steady = np.where(t < self.ramp_s, ramp, steady)
         result: FloatArray = steady
         return result
+
+    @property
+    def _torque_limited(self) -> bool:
+        return 0 < self.base_omega_rad_s < self.omega0_rad_s
 
     def _ramp(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Speed [rad/s], acceleration [rad/s^2] and angle turned [rad] at ``t`` (clipped to
@@ -107,14 +113,17 @@ class SceneSpeed:
             steady = steady + self.omega0_rad_s * self.ripple * f * np.cos(f * tau)
         result: FloatArray = np.where(tau >= 0, steady, 0.0)
         if self.ramp_s > 0:
-            result = np.where(t < self.ramp_s, self._ramp(t)[1], result)
+            ramp = self._ramp(t)[1] if self._torque_limited else self.omega0_rad_s / self.ramp_s
+            result = np.where(t < self.ramp_s, ramp, result)
         return result
 
     def _theta(self, t: FloatArray) -> FloatArray:
         w0 = self.omega0_rad_s
         f = 2 * math.pi * self.ripple_hz
         tau = np.maximum(t - self._t1, 0.0)
-        up = float(self._ramp(np.array(self.ramp_s))[2]) if self.ramp_s > 0 else 0.0
+        up = 0.5 * w0 * self.ramp_s  # the angle the ramp turned
+        if self._torque_limited:
+            up = float(self._ramp(np.array(self.ramp_s))[2])
         at_t1 = self.theta0_rad + up + w0 * self.hold_s
         steady = at_t1 + w0 * (tau + 0.5 * self.drift_per_s * tau * tau)
         if self.ripple:
@@ -122,7 +131,9 @@ class SceneSpeed:
         hold = self.theta0_rad + up + w0 * (t - self.ramp_s)
         result: FloatArray = np.where(t < self._t1, hold, steady)
         if self.ramp_s > 0:
-            result = np.where(t < self.ramp_s, self.theta0_rad + self._ramp(t)[2], result)
+            ramp = (self._ramp(t)[2] if self._torque_limited
+                    else 0.5 * w0 * np.clip(t, 0.0, None) ** 2 / self.ramp_s)  # fmt: skip
+            result = np.where(t < self.ramp_s, self.theta0_rad + ramp, result)
         return result
 
     def _coasting(self, t: FloatArray) -> tuple[FloatArray, float, float]:
