@@ -30,7 +30,15 @@ from stand.drivers.runs.recording import JOB_ATTR, STAND_ATTR, Recording, write_
 from stand.drivers.runs.run_format import TEST_UNBALANCE_ATTR
 from stand.errors import UsageError
 from stand.files import check_output
-from stand.sim import load_scene, scene_modules, shipped_scenes, simulate, turned, with_masses
+from stand.sim import (
+    Scene,
+    load_scene,
+    scene_modules,
+    shipped_scenes,
+    simulate,
+    turned,
+    with_masses,
+)
 from stand.sim.scene import unbalance_kg_m
 from stand.solve import load_config_text
 from stand.solve.acquisition import acquisition_of
@@ -225,7 +233,7 @@ def _series(args: argparse.Namespace) -> int:
     return 0
 
 
-def _speed(scene: Any) -> str:
+def _speed(scene: Scene) -> str:
     """The scene's speed in words: steady, run up, braked."""
     e, rpm = scene.effects, scene.run.rpm
     said = f"at {rpm:g} rpm"

@@ -178,11 +178,18 @@ def _track(s: NodeStream, gamma_rad: float, vk_hz: float | None) -> tuple[np.nda
     return track_1x_vk(s, gamma_rad, vk_hz, REVS_PER_BLOCK)
 
 
-def _curve(s: NodeStream, support: int, gamma_rad: float, warn: list[str],
-           vk_hz: float | None = None) -> SupportCurve:  # fmt: skip
-    """One support's curve, ordered by speed, the blocks about a lost mark left out; its 2x
-    by revolution blocks (with the Vold-Kalman filter's 1x: interpolated to its points)."""
-    w, A, se = _track(s, gamma_rad, vk_hz)
+def _curve(
+    s: NodeStream,
+    support: int,
+    gamma_rad: float,
+    warn: list[str],
+    tracked: tuple[np.ndarray, ...],
+    vk_hz: float | None = None,
+) -> SupportCurve:
+    """One support's curve from its 1x ``tracked`` in time order (:func:`_track`), ordered
+    by speed, the blocks about a lost mark left out; its 2x by revolution blocks (with the
+    Vold-Kalman filter's 1x: interpolated to its points)."""
+    w, A, se = tracked
     wb, (_, (A2, se2)) = track_orders(s, gamma_rad, REVS_PER_BLOCK, (1, 2))
     if vk_hz is not None:
         k = np.argsort(wb, kind="stable")
@@ -325,10 +332,11 @@ def analyse_runup(
         raise MeasurementError(f"a run-up needs both supports' nodes, got {sorted(streams.nodes)}")
     gamma = math.radians(cfg.stand.reference_angle_deg)
     warn: list[str] = []
-    tracked = _track(streams.nodes[1], gamma, vk_hz)
+    each = {i: _track(streams.nodes[i], gamma, vk_hz) for i in (1, 2)}  # once a node
+    tracked = each[1]
     timed = tracked[0]
     direction = _direction(timed)
-    curves = tuple(_curve(streams.nodes[i], i, gamma, warn, vk_hz) for i in (1, 2))
+    curves = tuple(_curve(streams.nodes[i], i, gamma, warn, each[i], vk_hz) for i in (1, 2))
     sweep = _sweep(timed)
     wn_model, zeta_model = model_modes(p)
     if vk_hz is not None:

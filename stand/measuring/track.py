@@ -166,20 +166,17 @@ def track_1x_vk(
     """
     lo, hi, pos, rev = node_segment(s)
     assert s.rate_hz is not None
-    first, last = int(s.index[lo]), int(s.index[hi - 1])
-    grid = np.arange(first, last + 1)
-    inside, theta, w = shaft_angle(grid.astype(float), pos, rev, gamma_rad)
-    grid = grid[inside]
-    y = np.zeros(len(grid))
-    weight = np.zeros(len(grid))
-    at = np.asarray(s.index[lo:hi]) - first
-    at_in = np.searchsorted(grid - first, at)
-    ok = (at_in < len(grid)) & ((grid - first)[np.minimum(at_in, len(grid) - 1)] == at)
-    y[at_in[ok]], weight[at_in[ok]] = s.accel(lo, hi)[ok], 1.0
     if half_power_hz < vk.narrowest_hz(s.rate_hz):
         raise MeasurementError(f"a Vold-Kalman filter of {half_power_hz:g} Hz is narrower than "
                                f"{vk.narrowest_hz(s.rate_hz):.2f} Hz, the narrowest solved to "
                                f"float precision at {s.rate_hz:g} Hz")  # fmt: skip
+    grid = np.arange(int(s.index[lo]), int(s.index[hi - 1]) + 1)
+    inside, theta, w = shaft_angle(grid.astype(float), pos, rev, gamma_rad)
+    grid = grid[inside]  # one stretch: the samples between the first and the last edge
+    y, weight = np.zeros(len(grid)), np.zeros(len(grid))
+    at = np.asarray(s.index[lo:hi]) - (int(grid[0]) if len(grid) else 0)
+    ok = (at >= 0) & (at < len(grid))
+    y[at[ok]], weight[at[ok]] = s.accel(lo, hi)[ok], 1.0
     settle = vk.settle_samples(half_power_hz, s.rate_hz)
     if len(grid) <= 2 * settle + 4:
         raise MeasurementError(f"{len(grid)} samples: too short for a Vold-Kalman filter of "

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -121,9 +122,7 @@ class SceneSpeed:
         w0 = self.omega0_rad_s
         f = 2 * math.pi * self.ripple_hz
         tau = np.maximum(t - self._t1, 0.0)
-        up = 0.5 * w0 * self.ramp_s  # the angle the ramp turned
-        if self._torque_limited:
-            up = float(self._ramp(np.array(self.ramp_s))[2])
+        up = self._ramp_turned
         at_t1 = self.theta0_rad + up + w0 * self.hold_s
         steady = at_t1 + w0 * (tau + 0.5 * self.drift_per_s * tau * tau)
         if self.ripple:
@@ -136,12 +135,25 @@ class SceneSpeed:
             result = np.where(t < self.ramp_s, self.theta0_rad + ramp, result)
         return result
 
+    @cached_property
+    def _ramp_turned(self) -> float:
+        """The angle the run-up turned [rad] (once: the integrators call the law often)."""
+        if self.ramp_s <= 0:
+            return 0.0
+        if not self._torque_limited:
+            return 0.5 * self.omega0_rad_s * self.ramp_s
+        return float(self._ramp(np.array(self.ramp_s))[2])
+
+    @cached_property
+    def _coast_start(self) -> tuple[float, float]:
+        """The speed [rad/s] and angle [rad] where the coast-down begins (once)."""
+        tc = np.array(self.coast_at_s)
+        return float(self._omega(tc)), float(self._theta(tc))
+
     def _coasting(self, t: FloatArray) -> tuple[FloatArray, float, float]:
         """The time into the coast-down at ``t`` (clipped to it: negative before, at most
         ``coast_s``), and the speed [rad/s] and angle [rad] where it began."""
-        tc = np.array(self.coast_at_s)
-        s = np.minimum(t - self.coast_at_s, self.coast_s)
-        return s, float(self._omega(tc)), float(self._theta(tc))
+        return np.minimum(t - self.coast_at_s, self.coast_s), *self._coast_start
 
     def omega(self, t: ArrayLike) -> FloatArray:
         t = np.asarray(t, dtype=float)
